@@ -1,0 +1,1 @@
+"""SITL aPad: kinematic omnidirectional vehicle, docking slots, primitives, MAVLink vehicle endpoint."""

@@ -1,0 +1,1 @@
+"""Ground-control station: link, aPad API, planner, scenario loop, metrics, logs, TUI, CLI."""

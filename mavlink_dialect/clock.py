@@ -1,0 +1,188 @@
+"""Mission time and the one scheduler that drives the world.
+
+Time is an integer count of microseconds. `sleep` belongs to the clock: the wall clock really
+waits (on the transports' sockets, so messages are handled as they arrive), the virtual clock
+runs every periodic task and every message delivery up to `t + dt` as fast as the CPU allows
+and returns. A mission script written as `while busy(): clock.sleep(1)` runs unchanged on both.
+
+Models never see this module: they take `dt` as an argument. Runners register their periodic
+`Task`s and their receive `Poller`s with a `Scheduler`.
+"""
+
+from __future__ import annotations
+
+import select
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Protocol
+
+US_PER_S = 1_000_000
+# A lockstep instant that keeps producing messages forever is a bug (two parties echoing).
+MAX_DRAIN_ROUNDS = 10_000
+
+
+def seconds_to_us(t_s: float) -> int:
+    return int(round(t_s * US_PER_S))
+
+
+@dataclass
+class Task:
+    """A callback run every `period_us` of mission time, first at `next_us`."""
+
+    name: str
+    period_us: int
+    callback: Callable[[int], None]  # receives the mission time now_us
+    next_us: int
+    order: int  # registration order: ties run in the order tasks were added
+    active: bool = True
+
+
+class Poller(Protocol):
+    def poll(self) -> bool:
+        """Handle whatever has arrived; True if anything was handled."""
+        ...
+
+    def fileno(self) -> int | None: ...
+
+
+@dataclass
+class Scheduler:
+    """Periodic tasks plus receive pollers; the clocks decide how time passes between them."""
+
+    tasks: list[Task] = field(default_factory=list)
+    pollers: list[Poller] = field(default_factory=list)
+
+    def every(self, period_s: float, callback: Callable[[int], None], name: str, start_us: int = 0) -> Task:
+        period_us = seconds_to_us(period_s)
+        if period_us <= 0:
+            raise ValueError(f"task {name!r}: period must be positive, got {period_s} s")
+        task = Task(name, period_us, callback, start_us, len(self.tasks))
+        self.tasks.append(task)
+        return task
+
+    def add_poller(self, poller: Poller) -> None:
+        self.pollers.append(poller)
+
+    def remove_poller(self, poller: Poller) -> None:
+        if poller in self.pollers:
+            self.pollers.remove(poller)
+
+    def next_due_us(self) -> int | None:
+        due = [t.next_us for t in self.tasks if t.active]
+        return min(due) if due else None
+
+    def run_due(self, now_us: int) -> None:
+        """Run every task due at or before `now_us`, earliest first; deliver messages after each."""
+        while True:
+            due = [t for t in self.tasks if t.active and t.next_us <= now_us]
+            if not due:
+                return
+            task = min(due, key=lambda t: (t.next_us, t.order))
+            task.next_us += task.period_us
+            task.callback(now_us)
+            self.drain()
+
+    def drain(self) -> None:
+        """Poll every receiver until nothing more arrives (in-memory delivery is immediate)."""
+        for _ in range(MAX_DRAIN_ROUNDS):
+            progressed = False
+            for poller in list(self.pollers):
+                progressed |= poller.poll()
+            if not progressed:
+                return
+        raise RuntimeError("lockstep livelock: messages kept arriving within one instant")
+
+
+class Clock(Protocol):
+    scheduler: Scheduler
+
+    @property
+    def now_us(self) -> int: ...
+
+    def time(self) -> float:
+        """Mission time in seconds."""
+        ...
+
+    def sleep(self, dt_s: float) -> None: ...
+
+
+class VirtualClock:
+    """Lockstep time: `sleep(dt)` runs the world to `t + dt` at CPU speed. Deterministic."""
+
+    def __init__(self, scheduler: Scheduler | None = None, start_us: int = 0) -> None:
+        self.scheduler = scheduler or Scheduler()
+        self._now_us = start_us
+
+    @property
+    def now_us(self) -> int:
+        return self._now_us
+
+    def time(self) -> float:
+        return self._now_us / US_PER_S
+
+    def sleep(self, dt_s: float) -> None:
+        self.advance_to(self._now_us + seconds_to_us(max(dt_s, 0.0)))
+
+    def advance_to(self, target_us: int) -> None:
+        sched = self.scheduler
+        sched.drain()
+        while True:
+            due = sched.next_due_us()
+            if due is None or due > target_us:
+                break
+            # Tasks already overdue (added with an old start) run now; time never goes back.
+            self._now_us = max(self._now_us, due)
+            sched.run_due(self._now_us)
+        self._now_us = max(self._now_us, target_us)
+        sched.drain()
+
+
+class WallClock:
+    """Field time: `sleep(dt)` waits on the transports and runs tasks as they fall due."""
+
+    # Pollers without a file descriptor (in-memory pairs) are checked at least this often.
+    POLL_INTERVAL_S = 0.005
+    # A task more than this late (the laptop was suspended) is re-phased, not run in a burst.
+    MAX_LAG_US = US_PER_S
+
+    def __init__(
+        self,
+        scheduler: Scheduler | None = None,
+        start_us: int = 0,
+        monotonic: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.scheduler = scheduler or Scheduler()
+        self._monotonic = monotonic
+        self._origin_s = monotonic() - start_us / US_PER_S
+
+    @property
+    def now_us(self) -> int:
+        return int((self._monotonic() - self._origin_s) * US_PER_S)
+
+    def time(self) -> float:
+        return self._monotonic() - self._origin_s
+
+    def sleep(self, dt_s: float) -> None:
+        sched = self.scheduler
+        deadline_us = self.now_us + seconds_to_us(max(dt_s, 0.0))
+        while True:
+            sched.drain()
+            now = self.now_us
+            for task in sched.tasks:
+                if task.active and now - task.next_us > self.MAX_LAG_US:
+                    task.next_us = now
+            sched.run_due(now)
+            now = self.now_us
+            if now >= deadline_us:
+                return
+            due = sched.next_due_us()
+            wake_us = deadline_us if due is None else min(due, deadline_us)
+            timeout_s = max(wake_us - now, 0) / US_PER_S
+            fds = [fd for fd in (p.fileno() for p in sched.pollers) if fd is not None]
+            if len(fds) < len(sched.pollers):
+                timeout_s = min(timeout_s, self.POLL_INTERVAL_S)
+            if fds:
+                select.select(fds, [], [], timeout_s)
+            else:
+                time.sleep(timeout_s)

@@ -1,0 +1,247 @@
+"""Byte transports shared by every MAVLink party: UDP, TCP, serial and an in-memory pair.
+
+A transport moves opaque bytes; framing and parsing belong to `Codec`. All reads are
+non-blocking (`receive()` returns what has arrived); a real-time loop waits on `fileno()`
+with `select`, a lockstep loop simply polls.
+
+Address strings name the medium; whether we listen or connect is the caller's choice:
+
+    udp:HOST:PORT        udpin:/udpout: are accepted too (pymavlink's spelling)
+    tcp:HOST:PORT        tcpin: listens
+    serial:DEVICE[:BAUD] e.g. serial:/dev/ttyUSB0:57600
+"""
+
+from __future__ import annotations
+
+import socket
+from collections import deque
+from typing import Protocol
+
+MAX_DATAGRAM = 65535
+
+
+class AddressError(ValueError):
+    """A transport address that cannot be parsed or opened; the message is one line for the user."""
+
+
+class Transport(Protocol):
+    label: str
+
+    def send(self, data: bytes) -> None: ...
+
+    def receive(self) -> list[bytes]: ...
+
+    def fileno(self) -> int | None: ...
+
+    def close(self) -> None: ...
+
+
+class MemoryTransport:
+    """One end of an in-memory pair; `send` appends to the peer's inbox. Used in lockstep."""
+
+    def __init__(self, label: str) -> None:
+        self.label = label
+        self.inbox: deque[bytes] = deque()
+        self.peer: MemoryTransport | None = None
+        self.closed = False
+
+    def send(self, data: bytes) -> None:
+        if self.peer is not None and not self.peer.closed and not self.closed:
+            self.peer.inbox.append(bytes(data))
+
+    def receive(self) -> list[bytes]:
+        out = list(self.inbox)
+        self.inbox.clear()
+        return out
+
+    def fileno(self) -> int | None:
+        return None
+
+    def close(self) -> None:
+        self.closed = True
+
+
+def memory_pair(label: str = "mem") -> tuple[MemoryTransport, MemoryTransport]:
+    a, b = MemoryTransport(f"{label}:a"), MemoryTransport(f"{label}:b")
+    a.peer, b.peer = b, a
+    return a, b
+
+
+class UdpTransport:
+    """UDP. Listening: answer every peer heard so far (several GCSs may share a vehicle).
+    Connecting: send to the given host:port and accept replies from anywhere."""
+
+    def __init__(self, host: str, port: int, listen: bool) -> None:
+        self.label = f"udp:{host}:{port}"
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        self.peers: list[tuple[str, int]] = []
+        if listen:
+            self.sock.bind((host, port))
+        else:
+            self.sock.bind(("0.0.0.0", 0))
+            self.peers.append((host, port))
+        self.sock.setblocking(False)
+
+    @property
+    def local_port(self) -> int:
+        return int(self.sock.getsockname()[1])
+
+    def send(self, data: bytes) -> None:
+        for peer in self.peers:
+            try:
+                self.sock.sendto(data, peer)
+            except OSError:
+                pass  # a peer that went away (ICMP unreachable) must not stop the loop
+
+    def receive(self) -> list[bytes]:
+        out = []
+        while True:
+            try:
+                data, addr = self.sock.recvfrom(MAX_DATAGRAM)
+            except (BlockingIOError, InterruptedError):
+                return out
+            except OSError:  # ECONNREFUSED surfaced from an earlier send
+                continue
+            if addr not in self.peers:
+                self.peers.append(addr)
+            out.append(data)
+
+    def fileno(self) -> int | None:
+        return self.sock.fileno()
+
+    def close(self) -> None:
+        self.sock.close()
+
+
+class TcpTransport:
+    """TCP. Connecting: one stream to host:port. Listening: accept clients, send to all."""
+
+    def __init__(self, host: str, port: int, listen: bool) -> None:
+        self.label = f"tcp:{host}:{port}"
+        self.server: socket.socket | None = None
+        self.clients: list[socket.socket] = []
+        if listen:
+            self.server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+            self.server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            self.server.bind((host, port))
+            self.server.listen(4)
+            self.server.setblocking(False)
+        else:
+            conn = socket.create_connection((host, port), timeout=5.0)
+            conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            conn.setblocking(False)
+            self.clients.append(conn)
+
+    def _accept(self) -> None:
+        while self.server is not None:
+            try:
+                conn, _ = self.server.accept()
+            except (BlockingIOError, InterruptedError):
+                return
+            conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            conn.setblocking(False)
+            self.clients.append(conn)
+
+    def send(self, data: bytes) -> None:
+        for conn in list(self.clients):
+            try:
+                conn.sendall(data)
+            except BlockingIOError:
+                pass  # a peer too slow to keep up loses this frame, like a radio would
+            except OSError:
+                self._drop(conn)
+
+    def receive(self) -> list[bytes]:
+        self._accept()
+        out = []
+        for conn in list(self.clients):
+            while True:
+                try:
+                    data = conn.recv(MAX_DATAGRAM)
+                except (BlockingIOError, InterruptedError):
+                    break
+                except OSError:
+                    self._drop(conn)
+                    break
+                if not data:
+                    self._drop(conn)
+                    break
+                out.append(data)
+        return out
+
+    def _drop(self, conn: socket.socket) -> None:
+        conn.close()
+        if conn in self.clients:
+            self.clients.remove(conn)
+
+    def fileno(self) -> int | None:
+        if self.server is not None and not self.clients:
+            return self.server.fileno()
+        return self.clients[0].fileno() if self.clients else None
+
+    def close(self) -> None:
+        for conn in self.clients:
+            conn.close()
+        if self.server is not None:
+            self.server.close()
+
+
+class SerialTransport:
+    """A serial port or pty (telemetry radio); pyserial does the line settings."""
+
+    def __init__(self, device: str, baud: int) -> None:
+        import serial  # pyserial: only needed for this medium
+
+        self.label = f"serial:{device}:{baud}"
+        try:
+            self.port = serial.Serial(device, baudrate=baud, timeout=0, write_timeout=0)
+        except serial.SerialException as exc:
+            raise AddressError(f"cannot open serial port {device}: {exc}") from None
+
+    def send(self, data: bytes) -> None:
+        import serial
+
+        try:
+            self.port.write(data)
+        except serial.SerialTimeoutException:
+            pass  # output buffer full: the radio drops the frame
+
+    def receive(self) -> list[bytes]:
+        waiting = self.port.in_waiting
+        return [self.port.read(waiting)] if waiting else []
+
+    def fileno(self) -> int | None:
+        return int(self.port.fileno())
+
+    def close(self) -> None:
+        self.port.close()
+
+
+def _host_port(address: str, rest: str) -> tuple[str, int]:
+    host, sep, port = rest.rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise AddressError(f"bad address {address!r}: expected HOST:PORT after the scheme")
+    return host, int(port)
+
+
+def open_transport(address: str, listen: bool = False) -> Transport:
+    """Open the transport an address string names (see the module docstring)."""
+    scheme, sep, rest = address.partition(":")
+    if not sep:
+        raise AddressError(f"bad address {address!r}: expected udp:HOST:PORT, tcp:HOST:PORT or serial:DEVICE[:BAUD]")
+    try:
+        if scheme in ("udp", "udpin", "udpout"):
+            host, port = _host_port(address, rest)
+            return UdpTransport(host, port, listen=listen or scheme == "udpin")
+        if scheme in ("tcp", "tcpin"):
+            host, port = _host_port(address, rest)
+            return TcpTransport(host, port, listen=listen or scheme == "tcpin")
+        if scheme == "serial":
+            device, _, baud = rest.partition(":")
+            if baud and not baud.isdigit():
+                raise AddressError(f"bad address {address!r}: baud rate must be a number")
+            return SerialTransport(device, int(baud) if baud else 57600)
+    except OSError as exc:
+        raise AddressError(f"cannot open {address}: {exc.strerror or exc}") from None
+    raise AddressError(f"bad address {address!r}: unknown scheme {scheme!r} (udp, tcp, serial)")
