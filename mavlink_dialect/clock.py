@@ -23,7 +23,7 @@ MAX_DRAIN_ROUNDS = 10_000
 
 
 def seconds_to_us(t_s: float) -> int:
-    return int(round(t_s * US_PER_S))
+    return round(t_s * US_PER_S)
 
 
 @dataclass

@@ -13,6 +13,7 @@ Address strings name the medium; whether we listen or connect is the caller's ch
 
 from __future__ import annotations
 
+import contextlib
 import socket
 from collections import deque
 from typing import Protocol
@@ -89,10 +90,9 @@ class UdpTransport:
 
     def send(self, data: bytes) -> None:
         for peer in self.peers:
-            try:
+            # A peer that went away (ICMP unreachable) must not stop the loop.
+            with contextlib.suppress(OSError):
                 self.sock.sendto(data, peer)
-            except OSError:
-                pass  # a peer that went away (ICMP unreachable) must not stop the loop
 
     def receive(self) -> list[bytes]:
         out = []
@@ -202,10 +202,8 @@ class SerialTransport:
     def send(self, data: bytes) -> None:
         import serial
 
-        try:
+        with contextlib.suppress(serial.SerialTimeoutException):  # buffer full: the radio drops it
             self.port.write(data)
-        except serial.SerialTimeoutException:
-            pass  # output buffer full: the radio drops the frame
 
     def receive(self) -> list[bytes]:
         waiting = self.port.in_waiting

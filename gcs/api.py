@@ -1,0 +1,212 @@
+"""The aPad API mission scripts use, in the spirit of the paper's Listing 1.
+
+    loc = api.get_location(24)
+    api.go_to((loc.lat, loc.lon))
+    while api.goto_status(apad_id) == Progress.IN_PROGRESS:
+        clock.sleep(1)
+    api.docking(True, 2, 24)
+
+Everything is keyed by aPad system id; with a single aPad the id may be omitted. Commands go
+over the MAVLink command protocol (ACK, timeout, retry) and raise `CommandError` on refusal.
+The planner, the scenario loop and the operator console are written on this API.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+from gcs.link import CommandError, Link, PrimitiveView, SlotView, VehicleView
+from mavlink_dialect import (
+    MAV_CMD_APAD_DOCK,
+    MAV_CMD_APAD_UNDOCK,
+    MusselCommand,
+    MusselState,
+    Primitive,
+    Progress,
+    mavlink,
+)
+from mavlink_dialect.clock import Clock
+
+ARDUROVER_HOLD = 4
+ARDUROVER_GUIDED = 15
+
+__all__ = ["ApadApi", "CommandError", "Location", "MusselView", "Progress"]
+
+
+class Location(NamedTuple):
+    lat: float  # deg, WGS84
+    lon: float  # deg, WGS84
+
+
+@dataclass
+class MusselView:
+    """The latest AMUSSEL_STATUS heard for one aMussel (simulated or real)."""
+
+    mussel_id: int
+    location: Location
+    depth_m: float
+    battery_frac: float
+    battery_mv: int
+    state: MusselState
+    simulated: bool
+    time_us: int
+
+
+@dataclass
+class _Expectation:
+    """The primitive last commanded: kind and its key (target degE7, or slot and aMussel)."""
+
+    kind: Primitive
+    a: int
+    b: int
+    seen: bool = False  # the aPad has reported on this very primitive
+
+    def matches(self, status: PrimitiveView) -> bool:
+        if status.primitive != self.kind:
+            return False
+        if self.kind == Primitive.GOTO:
+            return (status.target_lat_e7, status.target_lon_e7) == (self.a, self.b)
+        if self.kind == Primitive.DOCK:
+            return (status.slot, status.mussel_id) == (self.a, self.b)
+        if self.kind == Primitive.UNDOCK:
+            return status.slot == self.a
+        return True
+
+
+class UnknownMussel(KeyError):
+    def __str__(self) -> str:
+        return f"no status heard from aMussel {self.args[0]}"
+
+
+class ApadApi:
+    def __init__(self, link: Link, clock: Clock, default_apad: int | None = None) -> None:
+        self.link = link
+        self.clock = clock
+        self.default_apad = default_apad
+        self.mussels: dict[int, MusselView] = {}
+        # What we last asked each aPad to do: a status report counts only once it is about that.
+        self._expected: dict[int, _Expectation] = {}
+        link.attach(self._handle)
+
+    def _handle(self, msg: mavlink.MAVLink_message) -> None:
+        kind = msg.get_type()
+        if kind == "PRIMITIVE_STATUS":
+            expected = self._expected.get(msg.get_srcSystem())
+            if expected is not None and expected.matches(self.link.vehicles[msg.get_srcSystem()].primitive):
+                expected.seen = True
+        elif kind == "AMUSSEL_STATUS":
+            self.mussels[msg.mussel_id] = MusselView(
+                msg.mussel_id, Location(msg.lat / 1e7, msg.lon / 1e7), msg.depth, msg.battery,
+                msg.battery_voltage, MusselState(msg.state), bool(msg.simulated), msg.time_us,
+            )
+
+    # --- vehicles ---------------------------------------------------------------------------
+
+    def apad(self, apad_id: int | None = None) -> VehicleView:
+        """The view of one aPad; without an id, the only (or default) one."""
+        if apad_id is None:
+            apad_id = self.default_apad
+        if apad_id is None:
+            if len(self.link.vehicles) != 1:
+                raise LookupError(f"{len(self.link.vehicles)} aPads known: pass apad_id")
+            return next(iter(self.link.vehicles.values()))
+        try:
+            return self.link.vehicles[apad_id]
+        except KeyError:
+            raise LookupError(f"aPad {apad_id} has not been heard") from None
+
+    def wait_apad(self, timeout_s: float = 10.0, apad_id: int | None = None) -> int:
+        """Wait for an aPad's heartbeat and first position; return its system id."""
+        view = self.link.wait_vehicle(timeout_s, apad_id if apad_id is not None else self.default_apad)
+        deadline = self.clock.time() + timeout_s
+        while view.lat_deg is None:
+            if self.clock.time() > deadline:
+                raise TimeoutError(f"aPad {view.system_id} sent no position within {timeout_s:g} s")
+            self.clock.sleep(0.05)
+        return view.system_id
+
+    def position(self, apad_id: int | None = None) -> Location:
+        view = self.apad(apad_id)
+        if view.lat_deg is None or view.lon_deg is None:
+            raise LookupError(f"aPad {view.system_id} has sent no position yet")
+        return Location(view.lat_deg, view.lon_deg)
+
+    def battery_v(self, apad_id: int | None = None) -> float | None:
+        return self.apad(apad_id).battery_v
+
+    def slots(self, apad_id: int | None = None) -> list[SlotView]:
+        return [self.apad(apad_id).slots[s] for s in range(1, 5)]
+
+    # --- aMussels ---------------------------------------------------------------------------
+
+    def get_location(self, mussel_id: int) -> Location:
+        """Last received position of an aMussel."""
+        try:
+            return self.mussels[mussel_id].location
+        except KeyError:
+            raise UnknownMussel(mussel_id) from None
+
+    def command_mussel(self, mussel_id: int, command: MusselCommand, apad_id: int | None = None) -> None:
+        """Relay an instruction (surface / sink) to an aMussel through an aPad."""
+        target = self.apad(apad_id).system_id
+        self.link.send(mavlink.MAVLink_amussel_command_message(target, mussel_id, int(command)))
+
+    # --- primitives -------------------------------------------------------------------------
+
+    def go_to(
+        self,
+        latlon: tuple[float, float] | Location,
+        speed: float = -1.0,
+        radius: float = 0.0,
+        apad_id: int | None = None,
+    ) -> None:
+        """Go To Point: speed in m/s (<= 0: the aPad's default), victory radius in m (0: default)."""
+        sysid = self.apad(apad_id).system_id
+        lat_e7, lon_e7 = round(latlon[0] * 1e7), round(latlon[1] * 1e7)
+        self._expected[sysid] = _Expectation(Primitive.GOTO, lat_e7, lon_e7)
+        self.link.command_int(
+            sysid, mavlink.MAV_CMD_DO_REPOSITION, mavlink.MAV_FRAME_GLOBAL_INT,
+            (speed, float(mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE), radius, float("nan")),
+            lat_e7, lon_e7,
+        )
+
+    def hold(self, apad_id: int | None = None) -> None:
+        """Hold Position (dynamic positioning) where the aPad is now."""
+        sysid = self.apad(apad_id).system_id
+        self._expected[sysid] = _Expectation(Primitive.HOLD, 0, 0)
+        self.link.command_long(
+            sysid, mavlink.MAV_CMD_DO_SET_MODE,
+            (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, ARDUROVER_HOLD),
+        )
+
+    def docking(self, dock: bool, slot: int, mussel_id: int = 0, apad_id: int | None = None) -> None:
+        """Dock `mussel_id` into `slot` (1..4), or undock the slot (mussel_id 0: whatever is there)."""
+        sysid = self.apad(apad_id).system_id
+        if dock:
+            self._expected[sysid] = _Expectation(Primitive.DOCK, slot, mussel_id)
+            self.link.command_long(sysid, MAV_CMD_APAD_DOCK, (slot, mussel_id))
+        else:
+            self._expected[sysid] = _Expectation(Primitive.UNDOCK, slot, 0)
+            self.link.command_long(sysid, MAV_CMD_APAD_UNDOCK, (slot, mussel_id))
+
+    def primitive_status(self, apad_id: int | None = None) -> Progress:
+        """Progress of the primitive last commanded through this API (IN_PROGRESS == 1).
+
+        Until the aPad reports on that very primitive (a status may still be in flight from
+        before the command) the answer is IN_PROGRESS, so a Listing-1 loop never exits early;
+        once it has, a report about another primitive means ours was preempted: FAILED.
+        """
+        view = self.apad(apad_id)
+        expected = self._expected.get(view.system_id)
+        if expected is None:
+            return view.primitive.progress
+        if not expected.seen:
+            return Progress.IN_PROGRESS
+        return view.primitive.progress if expected.matches(view.primitive) else Progress.FAILED
+
+    def goto_status(self, apad_id: int | None = None) -> Progress:
+        return self.primitive_status(apad_id)
+
+    def docking_status(self, apad_id: int | None = None) -> Progress:
+        return self.primitive_status(apad_id)
