@@ -75,12 +75,13 @@ class UdpTransport:
     def __init__(self, host: str, port: int, listen: bool) -> None:
         self.label = f"udp:{host}:{port}"
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         self.peers: list[tuple[str, int]] = []
-        if listen:
-            self.sock.bind((host, port))
-        else:
-            self.sock.bind(("0.0.0.0", 0))
+        try:
+            self.sock.bind((host, port) if listen else ("0.0.0.0", 0))
+        except OSError:
+            self.sock.close()
+            raise
+        if not listen:
             self.peers.append((host, port))
         self.sock.setblocking(False)
 
@@ -122,11 +123,16 @@ class TcpTransport:
         self.server: socket.socket | None = None
         self.clients: list[socket.socket] = []
         if listen:
-            self.server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-            self.server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-            self.server.bind((host, port))
-            self.server.listen(4)
-            self.server.setblocking(False)
+            server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+            try:
+                server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+                server.bind((host, port))
+                server.listen(4)
+            except OSError:
+                server.close()
+                raise
+            server.setblocking(False)
+            self.server = server
         else:
             conn = socket.create_connection((host, port), timeout=5.0)
             conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
