@@ -1,0 +1,42 @@
+"""The mission's event log: JSON lines with mission time, kept in memory for the console too."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TextIO
+
+
+@dataclass
+class Event:
+    t_s: float  # mission time
+    kind: str
+    fields: dict[str, Any] = field(default_factory=dict)
+
+    def line(self) -> str:
+        return json.dumps({"t_s": round(self.t_s, 3), "event": self.kind, **self.fields}, sort_keys=False)
+
+
+class EventLog:
+    """Append-only; every event is flushed so a killed process loses nothing already logged."""
+
+    def __init__(self, path: Path | None = None, keep: int = 10_000) -> None:
+        self.events: list[Event] = []
+        self.keep = keep
+        self._file: TextIO | None = path.open("a", encoding="utf-8") if path else None
+
+    def emit(self, t_s: float, kind: str, **fields: Any) -> Event:
+        event = Event(t_s, kind, fields)
+        self.events.append(event)
+        if len(self.events) > self.keep:
+            del self.events[: len(self.events) - self.keep]
+        if self._file is not None:
+            self._file.write(event.line() + "\n")
+            self._file.flush()
+        return event
+
+    def close(self) -> None:
+        if self._file is not None:
+            self._file.close()
+            self._file = None

@@ -1,0 +1,280 @@
+"""Scenario files (TOML): what a mission run is, validated into frozen dataclasses.
+
+A bad file gets one `ScenarioError` line naming the file, the field and what is wrong.
+Paths inside a scenario are relative to the scenario file. Durations are numbers of seconds
+or strings with a unit: "90s", "40m", "1.5h".
+"""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+MISSIONS_DIR = Path(__file__).resolve().parent.parent / "missions"
+_DURATION = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*(s|m|min|h)?\s*$")
+_UNIT_S = {None: 1.0, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0}
+
+
+class ScenarioError(ValueError):
+    """One line for the user: file, field, what is wrong."""
+
+
+def parse_duration_s(text: str | float | int) -> float:
+    """Seconds from 2400, "2400s", "40m", "40min" or "0.5h"; ValueError otherwise."""
+    if isinstance(text, bool):
+        raise ValueError("expected a duration")
+    if isinstance(text, int | float):
+        seconds = float(text)
+    else:
+        match = _DURATION.match(text)
+        if not match:
+            raise ValueError(f"{text!r} is not a duration (use e.g. 2400, \"40m\", \"90s\", \"1h\")")
+        seconds = float(match.group(1)) * _UNIT_S[match.group(2)]
+    if seconds <= 0:
+        raise ValueError("duration must be positive")
+    return seconds
+
+
+@dataclass(frozen=True)
+class FleetConfig:
+    count: int
+    area: Path  # GeoJSON polygon the aMussels live in
+    start_config: Path | None  # saved ids/positions/batteries; None: generate from the seed
+    battery_min: float
+    battery_max: float
+    discharge: str  # battery profile names (mussel_sim.battery)
+    charge: str
+    drift_cm: float  # half-width of the per-step uniform random drift, per axis
+    acoustic_range_m: float
+    surfacing_time_s: float
+    sinking_time_s: float
+    status_rate_hz: float
+    sensors_rate_hz: float
+    sensor_field: str  # "anoxic_patch" or "dummy"
+
+
+@dataclass(frozen=True)
+class ApadConfig:
+    system_id: int
+    home_lat_deg: float
+    home_lon_deg: float
+    speed_mps: float
+    victory_radius_m: float
+    dock_reach_m: float
+    dock_time_s: float
+    undock_time_s: float
+    battery_end_v: float  # the mission ends when the aPad battery falls to this
+
+
+@dataclass(frozen=True)
+class MissionConfig:
+    duration_s: float
+    theta: float  # aMussel time scale: simulated seconds per mission second
+    pool_threshold: float  # below this battery an aMussel is a charging candidate
+    charged_threshold: float  # docked aMussels are released above this
+    min_pool: int  # idle until this many candidates
+    collect_strategy: str
+    redeploy_strategy: str
+    distance_scale: float  # planner cost scale factors
+    energy_scale: float
+
+
+@dataclass(frozen=True)
+class EnvironmentConfig:
+    current_east_mps: float  # uniform water current, felt by the aPad and the aMussels alike
+    current_north_mps: float
+
+
+@dataclass(frozen=True)
+class Scenario:
+    name: str
+    path: Path
+    seed: int
+    fleet: FleetConfig
+    apad: ApadConfig
+    mission: MissionConfig
+    environment: EnvironmentConfig
+
+    def with_overrides(
+        self,
+        strategy: str | None = None,
+        seed: int | None = None,
+        duration_s: float | None = None,
+        theta: float | None = None,
+    ) -> Scenario:
+        mission = self.mission
+        if strategy is not None:
+            mission = replace(mission, collect_strategy=strategy)
+        if duration_s is not None:
+            mission = replace(mission, duration_s=duration_s)
+        if theta is not None:
+            mission = replace(mission, theta=theta)
+        return replace(self, mission=mission, seed=self.seed if seed is None else seed)
+
+
+class _Table:
+    """Typed, range-checked reads from one TOML table; leftovers are reported as unknown fields."""
+
+    def __init__(self, path: Path, data: dict[str, Any], prefix: str) -> None:
+        self.path, self.data, self.prefix = path, dict(data), prefix
+
+    def fail(self, key: str, what: str) -> ScenarioError:
+        return ScenarioError(f"{self.path}: {self.prefix}{key}: {what}")
+
+    def _take(self, key: str, default: Any) -> Any:
+        if key in self.data:
+            return self.data.pop(key)
+        if default is _REQUIRED:
+            raise self.fail(key, "missing")
+        return default
+
+    def number(self, key: str, default: Any = None, lo: float | None = None, hi: float | None = None) -> float:
+        value = self._take(key, default)
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise self.fail(key, f"expected a number, got {value!r}")
+        if (lo is not None and value < lo) or (hi is not None and value > hi):
+            raise self.fail(key, f"{value} is outside [{lo}, {hi}]")
+        return float(value)
+
+    def integer(self, key: str, default: Any = None, lo: int | None = None, hi: int | None = None) -> int:
+        value = self._take(key, default)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.fail(key, f"expected an integer, got {value!r}")
+        if (lo is not None and value < lo) or (hi is not None and value > hi):
+            raise self.fail(key, f"{value} is outside [{lo}, {hi}]")
+        return value
+
+    def text(self, key: str, default: Any = None, choices: tuple[str, ...] | None = None) -> str:
+        value = self._take(key, default)
+        if not isinstance(value, str):
+            raise self.fail(key, f"expected a string, got {value!r}")
+        if choices is not None and value not in choices:
+            raise self.fail(key, f"{value!r} is not one of {', '.join(choices)}")
+        return value
+
+    def duration(self, key: str, default: Any = None) -> float:
+        value = self._take(key, default)
+        try:
+            return parse_duration_s(value)
+        except ValueError as exc:
+            raise self.fail(key, str(exc)) from None
+
+    def file(self, key: str, default: Any = None) -> Path | None:
+        value = self._take(key, default)
+        if value is None:
+            return None
+        if not isinstance(value, str):
+            raise self.fail(key, f"expected a file path, got {value!r}")
+        resolved = (self.path.parent / value).resolve()
+        if not resolved.is_file():
+            raise self.fail(key, f"no such file: {resolved}")
+        return resolved
+
+    def pair(self, key: str, default: Any = None) -> tuple[float, float]:
+        value = self._take(key, default)
+        if (
+            not isinstance(value, list | tuple) or len(value) != 2
+            or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
+        ):
+            raise self.fail(key, f"expected two numbers [a, b], got {value!r}")
+        return float(value[0]), float(value[1])
+
+    def sub(self, key: str) -> _Table:
+        value = self._take(key, {})
+        if not isinstance(value, dict):
+            raise self.fail(key, "expected a table")
+        return _Table(self.path, value, f"{self.prefix}{key}.")
+
+    def done(self) -> None:
+        for key in self.data:
+            raise self.fail(key, "unknown field")
+
+
+_REQUIRED = object()
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario file; a bare name like "pool12" is looked up in missions/."""
+    path = Path(path)
+    if not path.exists() and path.suffix == "" and (MISSIONS_DIR / f"{path}.toml").exists():
+        path = MISSIONS_DIR / f"{path}.toml"
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ScenarioError(f"{path}: no such scenario file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ScenarioError(f"{path}: cannot read: {exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
+
+    from gcs.planner import COLLECT, REDEPLOY
+    from mussel_sim.battery import CHARGE_PROFILES, DISCHARGE_PROFILES
+
+    root = _Table(path, data, "")
+    top = root.sub("scenario")
+    name = top.text("name", path.stem)
+    seed = top.integer("seed", 1, lo=0)
+    top.done()
+
+    m = root.sub("mission")
+    mission = MissionConfig(
+        duration_s=m.duration("duration", "40m"),
+        theta=m.number("theta", 30.0, lo=1e-3, hi=1e4),
+        pool_threshold=m.number("pool_threshold", 0.8, lo=0.0, hi=1.0),
+        charged_threshold=m.number("charged_threshold", 0.99, lo=0.0, hi=1.0),
+        min_pool=m.integer("min_pool", 4, lo=1, hi=4),
+        collect_strategy=m.text("collect_strategy", "cautious", COLLECT),
+        redeploy_strategy=m.text("redeploy_strategy", "greedy", REDEPLOY),
+        distance_scale=m.number("distance_scale", 1.0, lo=0.0),
+        energy_scale=m.number("energy_scale", 0.0, lo=0.0),
+    )
+    m.done()
+
+    e = root.sub("environment")
+    current = e.pair("current_mps", [0.0, 0.0])
+    environment = EnvironmentConfig(current[0], current[1])
+    e.done()
+
+    f = root.sub("fleet")
+    battery = f.pair("start_battery", [0.6, 1.0])
+    fleet = FleetConfig(
+        count=f.integer("count", _REQUIRED, lo=1, hi=65535),
+        area=f.file("area", _REQUIRED),  # type: ignore[arg-type]
+        start_config=f.file("start_config", None),
+        battery_min=battery[0],
+        battery_max=battery[1],
+        discharge=f.text("discharge", "active", tuple(DISCHARGE_PROFILES)),
+        charge=f.text("charge", "secondary", tuple(CHARGE_PROFILES)),
+        drift_cm=f.number("drift_cm", 0.5, lo=0.0, hi=100.0),
+        acoustic_range_m=f.number("acoustic_range_m", 100.0, lo=0.0),
+        surfacing_time_s=f.number("surfacing_time_s", 20.0, lo=0.0),
+        sinking_time_s=f.number("sinking_time_s", 20.0, lo=0.0),
+        status_rate_hz=f.number("status_rate_hz", 1.0, lo=0.01, hi=50.0),
+        sensors_rate_hz=f.number("sensors_rate_hz", 0.2, lo=0.01, hi=50.0),
+        sensor_field=f.text("sensor_field", "anoxic_patch", ("anoxic_patch", "dummy")),
+    )
+    if not 0.0 <= fleet.battery_min <= fleet.battery_max <= 1.0:
+        raise f.fail("start_battery", "expected 0 <= min <= max <= 1")
+    f.done()
+
+    a = root.sub("apad")
+    home = a.pair("home", _REQUIRED)
+    if not (-90 <= home[0] <= 90 and -180 <= home[1] <= 180):
+        raise a.fail("home", f"{list(home)} is not [lat, lon] in degrees")
+    apad = ApadConfig(
+        system_id=a.integer("system_id", 1, lo=1, hi=249),
+        home_lat_deg=home[0],
+        home_lon_deg=home[1],
+        speed_mps=a.number("speed_mps", 0.5, lo=0.01, hi=5.0),
+        victory_radius_m=a.number("victory_radius_m", 1.0, lo=0.05, hi=50.0),
+        dock_reach_m=a.number("dock_reach_m", 2.0, lo=0.1, hi=50.0),
+        dock_time_s=a.number("dock_time_s", 10.0, lo=0.0, hi=600.0),
+        undock_time_s=a.number("undock_time_s", 5.0, lo=0.0, hi=600.0),
+        battery_end_v=a.number("battery_end_v", 11.0, lo=10.5, hi=16.0),
+    )
+    a.done()
+    root.done()
+    return Scenario(name, path.resolve(), seed, fleet, apad, mission, environment)

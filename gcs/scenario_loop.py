@@ -1,0 +1,338 @@
+"""The energy-sharing scenario loop (the paper's Fig. 7), written on the aPad API.
+
+Idle wait -> plan collection -> collect (go to, call up, dock) x up to 4 -> charging wait ->
+plan redeployment -> redeploy (go to the original position, undock, sink) -> idle wait ...
+
+It commands the aPad exactly as a field script would, waiting with `clock.sleep`, so the same
+code runs in lockstep and in the field. The operator (console or script) controls it through
+`LoopControl`: pause, stop, strategy switch. The mission ends on mission time, on the aPad
+battery threshold, or on an operator stop; it never ends mid-dock.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from enum import StrEnum
+
+import numpy as np
+
+from gcs.api import ApadApi, CommandError, Location, MusselView
+from gcs.events import EventLog
+from gcs.planner import CostWeights, PlanInput, plan
+from gcs.scenario import MissionConfig
+from mavlink_dialect import Latch, MusselCommand, MusselState, Progress
+from mavlink_dialect.clock import Clock
+from mussel_sim.geo import distance_m
+
+
+class Phase(StrEnum):
+    IDLE_WAIT = "idle wait"
+    PLAN_COLLECT = "plan collection"
+    COLLECT = "collect"
+    CHARGING_WAIT = "charging wait"
+    PLAN_REDEPLOY = "plan redeployment"
+    REDEPLOY = "redeploy"
+    ENDED = "ended"
+
+
+class EndReason(StrEnum):
+    MISSION_TIME = "mission time"
+    APAD_BATTERY = "aPad battery"
+    OPERATOR = "operator stop"
+
+
+class MissionEnded(Exception):
+    def __init__(self, reason: EndReason) -> None:
+        super().__init__(str(reason))
+        self.reason = reason
+
+
+@dataclass
+class LoopControl:
+    """What the operator may change while the loop runs (set from any thread)."""
+
+    paused: bool = False
+    stop: bool = False
+    strategy: str | None = None  # a new collection strategy, taken at the next planning step
+    lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+
+
+@dataclass
+class LoopStatus:
+    """What the loop is doing, for the console and the results."""
+
+    phase: Phase = Phase.IDLE_WAIT
+    strategy: str = ""
+    route: list[int] = field(default_factory=list)
+    target_mussel: int = 0
+    cost_m: float = 0.0  # the paper's movement cost: aPad-to-setpoint distance summed over Go To commands
+    cycles: int = 0  # completed collect-charge-redeploy cycles
+    end_reason: EndReason | None = None
+
+
+@dataclass(frozen=True)
+class LoopSettings:
+    mission: MissionConfig
+    acoustic_range_m: float
+    dock_reach_m: float
+    battery_end_v: float
+    surfacing_timeout_s: float = 120.0  # an aMussel that does not float by then is skipped
+    poll_s: float = 0.5  # how often waits look again (mission time)
+
+
+class EnergySharingLoop:
+    def __init__(
+        self,
+        api: ApadApi,
+        clock: Clock,
+        settings: LoopSettings,
+        homes: dict[int, Location],
+        apad_id: int,
+        events: EventLog | None = None,
+        control: LoopControl | None = None,
+    ) -> None:
+        self.api = api
+        self.clock = clock
+        self.settings = settings
+        self.homes = homes  # original positions the aMussels go back to
+        self.apad_id = apad_id
+        self.events = events or EventLog()
+        self.control = control or LoopControl()
+        self.status = LoopStatus(strategy=settings.mission.collect_strategy)
+        self._weights = CostWeights(settings.mission.distance_scale, settings.mission.energy_scale)
+
+    # --- the loop ---------------------------------------------------------------------------
+
+    def run(self) -> EndReason:
+        """Run until the mission ends; the aPad is left holding, never mid-dock."""
+        self._log("mission_start", strategy=self.status.strategy)
+        try:
+            while True:
+                self._idle_wait()
+                route = self._plan_collection()
+                if route:
+                    self._collect(route)
+                if self._docked():
+                    self._charging_wait()
+                    self._redeploy(self._plan_redeployment())
+                    self.status.cycles += 1
+        except MissionEnded as ended:
+            self.status.end_reason = ended.reason
+        self._set_phase(Phase.ENDED)
+        self._finish()
+        assert self.status.end_reason is not None
+        self._log("mission_end", reason=str(self.status.end_reason), cost_m=round(self.status.cost_m, 3))
+        return self.status.end_reason
+
+    def _idle_wait(self) -> None:
+        self._set_phase(Phase.IDLE_WAIT)
+        self._command(self.api.hold)
+        mission = self.settings.mission
+
+        def pool_full() -> bool:
+            if self.status.strategy == "none":
+                return False
+            need = min(mission.min_pool, len(self._free_slots()))
+            return need > 0 and len(self._candidates()) >= need
+
+        self._wait_until(pool_full)
+
+    def _plan_collection(self) -> list[int]:
+        self._set_phase(Phase.PLAN_COLLECT)
+        self._take_strategy_switch()
+        candidates = self._candidates()
+        position = self.api.position(self.apad_id)
+        inp = PlanInput(
+            apads={self.apad_id: (position.lat, position.lon)},
+            capacity={self.apad_id: len(self._free_slots())},
+            mussel_ids=np.array([m.mussel_id for m in candidates], np.int64),
+            lat_deg=np.array([m.location.lat for m in candidates]),
+            lon_deg=np.array([m.location.lon for m in candidates]),
+            battery_frac=np.array([m.battery_frac for m in candidates]),
+        )
+        route = plan(self.status.strategy, inp, self._weights)[self.apad_id]
+        self.status.route = route
+        self._log("plan_collection", strategy=self.status.strategy, route=route)
+        return route
+
+    def _collect(self, route: list[int]) -> None:
+        self._set_phase(Phase.COLLECT)
+        for mussel_id in route:
+            free = self._free_slots()
+            if not free:
+                break
+            self.status.target_mussel = mussel_id
+            called = self._call_up_if_in_range(mussel_id)
+            self._go_to(self.api.get_location(mussel_id))
+            if not called and not self._call_up_if_in_range(mussel_id):
+                self._log("skip", mussel=mussel_id, why="no aPad within acoustic range")
+                continue
+            if not self._wait_until(lambda m=mussel_id: self._state(m) == MusselState.FLOATING,
+                                    self.settings.surfacing_timeout_s):
+                self._log("skip", mussel=mussel_id, why="did not surface", state=self._state(mussel_id).name)
+                continue
+            # It surfaced where it was last localised underwater, give or take drift: close in.
+            if self._distance_to(mussel_id) > 0.8 * self.settings.dock_reach_m:
+                self._go_to(self.api.get_location(mussel_id))
+            if self._dock(free[0], mussel_id):
+                self._log("docked", mussel=mussel_id, slot=free[0])
+            else:
+                self._command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
+                self._log("skip", mussel=mussel_id, why="docking failed")
+        self.status.target_mussel = 0
+
+    def _charging_wait(self) -> None:
+        self._set_phase(Phase.CHARGING_WAIT)
+        self._command(self.api.hold)
+        threshold = self.settings.mission.charged_threshold
+
+        def charged() -> bool:
+            return all(self._battery(m) >= threshold for m in self._docked().values())
+
+        self._wait_until(charged)
+
+    def _plan_redeployment(self) -> list[tuple[int, int]]:
+        """Route of (slot, aMussel id) back to the original positions."""
+        self._set_phase(Phase.PLAN_REDEPLOY)
+        docked = self._docked()  # slot -> mussel
+        ids = list(docked.values())
+        position = self.api.position(self.apad_id)
+        inp = PlanInput(
+            apads={self.apad_id: (position.lat, position.lon)},
+            capacity={self.apad_id: len(ids)},
+            mussel_ids=np.array(ids, np.int64),
+            lat_deg=np.array([self.homes[m].lat for m in ids]),
+            lon_deg=np.array([self.homes[m].lon for m in ids]),
+            battery_frac=np.array([self._battery(m) for m in ids]),
+        )
+        route = plan(self.settings.mission.redeploy_strategy, inp, self._weights)[self.apad_id]
+        slot_of = {m: s for s, m in docked.items()}
+        self.status.route = route
+        self._log("plan_redeployment", strategy=self.settings.mission.redeploy_strategy, route=route)
+        return [(slot_of[m], m) for m in route]
+
+    def _redeploy(self, route: list[tuple[int, int]]) -> None:
+        self._set_phase(Phase.REDEPLOY)
+        for slot, mussel_id in route:
+            self.status.target_mussel = mussel_id
+            self._go_to(self.homes[mussel_id])
+            self._undock(slot, mussel_id)
+            self._command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
+            self._log("released", mussel=mussel_id, slot=slot)
+        self.status.target_mussel = 0
+
+    # --- primitives with waiting ------------------------------------------------------------
+
+    def _go_to(self, target: Location) -> None:
+        here = self.api.position(self.apad_id)
+        self.status.cost_m += float(distance_m(here.lat, here.lon, target.lat, target.lon))
+        self._command(self.api.go_to, target, apad_id=self.apad_id)
+        self._wait_until(lambda: self.api.goto_status(self.apad_id) != Progress.IN_PROGRESS)
+
+    def _dock(self, slot: int, mussel_id: int) -> bool:
+        try:
+            self.api.docking(True, slot, mussel_id, self.apad_id)
+        except CommandError as exc:
+            self._log("command_failed", what=str(exc))
+            return False
+        # Never abandon a dock half-way: the wait ignores the end of the mission.
+        self._wait_until(lambda: self.api.docking_status(self.apad_id) != Progress.IN_PROGRESS, interruptible=False)
+        return self.api.docking_status(self.apad_id) == Progress.DONE
+
+    def _undock(self, slot: int, mussel_id: int) -> None:
+        self._command(self.api.docking, False, slot, mussel_id, self.apad_id)
+        self._wait_until(lambda: self.api.docking_status(self.apad_id) != Progress.IN_PROGRESS, interruptible=False)
+
+    def _command(self, fn: Callable[..., None], *args: object, **kwargs: object) -> None:
+        """Run an API command; a refused one is logged and retried once the operator or time allows."""
+        while True:
+            try:
+                fn(*args, **kwargs)
+                return
+            except CommandError as exc:
+                self._log("command_failed", what=str(exc))
+                self._sleep(self.settings.poll_s * 4)
+
+    # --- waiting, ending, pausing -----------------------------------------------------------
+
+    def _wait_until(self, done: Callable[[], bool], timeout_s: float | None = None, interruptible: bool = True) -> bool:
+        deadline = None if timeout_s is None else self.clock.time() + timeout_s
+        while not done():
+            if deadline is not None and self.clock.time() >= deadline:
+                return False
+            self._sleep(self.settings.poll_s, interruptible)
+        return True
+
+    def _sleep(self, dt_s: float, interruptible: bool = True) -> None:
+        if interruptible:
+            self._check_end()
+        self.clock.sleep(dt_s)
+        while self.control.paused and not self.control.stop:
+            self.clock.sleep(dt_s)
+
+    def _check_end(self) -> None:
+        if self.control.stop:
+            raise MissionEnded(EndReason.OPERATOR)
+        if self.clock.time() >= self.settings.mission.duration_s:
+            raise MissionEnded(EndReason.MISSION_TIME)
+        battery_v = self.api.battery_v(self.apad_id)
+        if battery_v is not None and battery_v <= self.settings.battery_end_v:
+            raise MissionEnded(EndReason.APAD_BATTERY)
+
+    def _finish(self) -> None:
+        """Leave the aPad holding (a dock in progress was already waited out)."""
+        try:
+            self.api.hold(self.apad_id)
+        except CommandError as exc:
+            self._log("command_failed", what=str(exc))
+
+    # --- fleet knowledge, from what the GCS has heard ---------------------------------------
+
+    def _candidates(self) -> list[MusselView]:
+        """The charging pool: active aMussels below the pool threshold, lowest id first."""
+        threshold = self.settings.mission.pool_threshold
+        return [
+            m for _, m in sorted(self.api.mussels.items())
+            if m.state == MusselState.ACTIVE and m.battery_frac < threshold and m.mussel_id in self.homes
+        ]
+
+    def _free_slots(self) -> list[int]:
+        return [s.slot for s in self.api.slots(self.apad_id) if s.latch == Latch.OPEN and s.mussel_id == 0]
+
+    def _docked(self) -> dict[int, int]:
+        return {s.slot: s.mussel_id for s in self.api.slots(self.apad_id) if s.latch == Latch.LATCHED}
+
+    def _state(self, mussel_id: int) -> MusselState:
+        return self.api.mussels[mussel_id].state
+
+    def _battery(self, mussel_id: int) -> float:
+        return self.api.mussels[mussel_id].battery_frac
+
+    def _distance_to(self, mussel_id: int) -> float:
+        here, there = self.api.position(self.apad_id), self.api.get_location(mussel_id)
+        return float(distance_m(here.lat, here.lon, there.lat, there.lon))
+
+    def _call_up_if_in_range(self, mussel_id: int) -> bool:
+        """Safety: an aMussel is only called to the surface with an aPad within acoustic range."""
+        if self._distance_to(mussel_id) > self.settings.acoustic_range_m:
+            return False
+        self._command(self.api.command_mussel, mussel_id, MusselCommand.SURFACE, self.apad_id)
+        self._log("call_up", mussel=mussel_id)
+        return True
+
+    def _take_strategy_switch(self) -> None:
+        with self.control.lock:
+            new, self.control.strategy = self.control.strategy, None
+        if new and new != self.status.strategy:
+            self._log("strategy_switch", old=self.status.strategy, new=new)
+            self.status.strategy = new
+
+    def _set_phase(self, phase: Phase) -> None:
+        if phase != self.status.phase or phase == Phase.IDLE_WAIT:
+            self.status.phase = phase
+            self._log("phase", phase=str(phase))
+
+    def _log(self, kind: str, **fields: object) -> None:
+        self.events.emit(self.clock.time(), kind, **fields)
