@@ -1,1 +1,72 @@
-"""aMussel fleet simulator: battery, positions and drift, sensors, states, comms. Pure models take dt."""
+"""aMussel fleet simulator: battery, positions and drift, sensors, states, comms. Pure models take dt.
+
+The model is `fleet.step(state, inputs, params, rng, dt_s) -> (state, events)` over numpy arrays;
+`comms.FleetRunner` is the edge that speaks MAVLink for it.
+"""
+
+from mussel_sim.battery import (
+    CHARGE_PROFILES,
+    DISCHARGE_PROFILES,
+    ChargeProfile,
+    DischargeProfile,
+    step_battery,
+    to_millivolts,
+)
+from mussel_sim.drift import GriddedCurrent, NoCurrent, UniformCurrent, random_drift_m
+from mussel_sim.fleet import (
+    FleetInputs,
+    FleetParams,
+    FleetState,
+    StepEvents,
+    initial_state,
+    state_from_arrays,
+    step,
+)
+from mussel_sim.geo import LocalFrame, distance_m, planar_distance_m
+from mussel_sim.placement import Area, area_from_geojson, load_area, place_uniform
+from mussel_sim.recorder import Recorder, UptimeSummary
+from mussel_sim.sensors import AnoxicPatch, DummySensors, SensorReadings
+from mussel_sim.startconfig import (
+    StartConfig,
+    generate_start_config,
+    load_start_config,
+    save_start_config,
+    start_config_from_positions,
+)
+
+__all__ = [
+    "CHARGE_PROFILES",
+    "DISCHARGE_PROFILES",
+    "AnoxicPatch",
+    "Area",
+    "ChargeProfile",
+    "DischargeProfile",
+    "DummySensors",
+    "FleetInputs",
+    "FleetParams",
+    "FleetState",
+    "GriddedCurrent",
+    "LocalFrame",
+    "NoCurrent",
+    "Recorder",
+    "SensorReadings",
+    "StartConfig",
+    "StepEvents",
+    "UniformCurrent",
+    "UptimeSummary",
+    "area_from_geojson",
+    "distance_m",
+    "generate_start_config",
+    "initial_state",
+    "load_area",
+    "load_start_config",
+    "place_uniform",
+    "planar_distance_m",
+    "random_drift_m",
+    "save_start_config",
+    "start_config_from_positions",
+    "state_from_arrays",
+    "step",
+    "step_battery",
+    "to_millivolts",
+]

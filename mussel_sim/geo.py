@@ -43,10 +43,26 @@ class LocalFrame:
         return np.asarray(lat, float), np.asarray(lon, float)
 
 
-def distance_m(lat1_deg: ArrayLike, lon1_deg: ArrayLike, lat2_deg: ArrayLike, lon2_deg: ArrayLike) -> NDArray[np.float64]:
+def distance_m(
+    lat1_deg: ArrayLike, lon1_deg: ArrayLike, lat2_deg: ArrayLike, lon2_deg: ArrayLike
+) -> NDArray[np.float64]:
     """Geodesic distance on the WGS84 ellipsoid, vectorised."""
     _, _, dist = WGS84.inv(
         np.asarray(lon1_deg, float), np.asarray(lat1_deg, float),
         np.asarray(lon2_deg, float), np.asarray(lat2_deg, float),
     )
     return np.asarray(dist, float)
+
+
+def planar_distance_m(
+    x1_m: ArrayLike, y1_m: ArrayLike, x2_m: ArrayLike, y2_m: ArrayLike
+) -> NDArray[np.float64]:
+    """Distance between points of one `LocalFrame`, vectorised with numpy broadcasting.
+
+    The frame is azimuthal equidistant, so its scale error a distance r from the origin is about
+    r^2 / (6 R^2): 1e-7 at 5 km, i.e. 0.01 mm over a 100 m acoustic range. That is why the
+    models compare ranges in the plane (cheap, per step) and keep `distance_m` for reporting.
+    """
+    dx = np.asarray(x2_m, float) - np.asarray(x1_m, float)
+    dy = np.asarray(y2_m, float) - np.asarray(y1_m, float)
+    return np.hypot(dx, dy)
