@@ -144,7 +144,7 @@ def main() -> None:
     console.print(f"reference loop vs vectorised, 500 aMussels x 300 steps: max |du| = {diff:.1e}, states equal")
 
     table = Table(title="aMussel fleet: one 1 Hz step (theta = 30, paper drift, 4 docked)")
-    for col in ("aMussels", "numpy [us/step]", "per-agent loop [us/step]", "speed-up", "note"):
+    for col in ("aMussels", "numpy (us/step)", "per-agent loop (us/step)", "speed-up", "note"):
         table.add_column(col, justify="right" if col != "note" else "left")
     results = {}
     for n in SIZES:
