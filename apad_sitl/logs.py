@@ -1,0 +1,39 @@
+"""The aPad's own logs (the paper logs redundantly, on the aPad too): a .tlog and a JSON-lines event log.
+
+The .tlog is pymavlink's format, readable by `mavlogdump.py` and `mavutil.mavlink_connection`:
+per message an 8-byte big-endian timestamp in microseconds, then the raw MAVLink frame.
+Timestamps are mission time plus `epoch_us` (0 in lockstep; the real-time server passes the
+wall-clock epoch at start so the log carries real dates).
+"""
+
+from __future__ import annotations
+
+import json
+import struct
+from pathlib import Path
+from typing import Any
+
+_STAMP = struct.Struct(">Q")
+
+
+class VehicleLog:
+    def __init__(self, log_dir: Path, stem: str, epoch_us: int = 0) -> None:
+        log_dir.mkdir(parents=True, exist_ok=True)
+        self.tlog_path = log_dir / f"{stem}.tlog"
+        self.events_path = log_dir / f"{stem}.events.jsonl"
+        self.epoch_us = epoch_us
+        self._tlog = open(self.tlog_path, "wb")  # noqa: SIM115 - lives until close()
+        self._events = open(self.events_path, "w", encoding="utf-8")  # noqa: SIM115
+
+    def message(self, time_us: int, frame: bytes) -> None:
+        self._tlog.write(_STAMP.pack(self.epoch_us + time_us) + frame)
+
+    def event(self, time_us: int, event: str, **fields: Any) -> None:
+        record = {"t_s": round(time_us / 1e6, 6), "event": event, **fields}
+        self._events.write(json.dumps(record, separators=(",", ":")) + "\n")
+
+    def close(self) -> None:
+        for f in (self._tlog, self._events):
+            if not f.closed:
+                f.flush()
+                f.close()
