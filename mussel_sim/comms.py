@@ -1,0 +1,264 @@
+"""The fleet's MAVLink edge: publishes every aMussel as the dialect's messages, turns incoming
+traffic into `FleetInputs`, and steps the pure model at 1 Hz of mission time.
+
+The fleet is one MAVLink system (251, component 25) speaking for all its simulated aMussels, the
+way the paper's surface-station node did. It listens to:
+
+- GLOBAL_POSITION_INT from aPads (the sender's system id is the aPad id): docked aMussels follow
+  them, and an aMussel only surfaces with one within acoustic range;
+- DOCK_SLOT_STATUS from aPads: a slot CLOSING or LATCHED on one of our ids docks it; a slot that no
+  longer holds an aMussel we docked there (OPEN, RELEASING, another id) releases it, the falling
+  edge of its charging on which the paper's aMussel sinks;
+- AMUSSEL_COMMAND: SURFACE / SINK for one of our ids;
+- AMUSSEL_STATUS with simulated == 0: a real aMussel. Mixing is allowed, sharing an id is not:
+  `MusselIdCollision` is raised.
+
+Incoming events are queued and become the inputs of the next step, so the model stays pure and a
+run in lockstep is deterministic. Refused surface commands are reported as STATUSTEXT warnings.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from mavlink_dialect import Codec, Latch, MusselCommand, mavlink
+from mavlink_dialect.clock import Scheduler, Task
+from mavlink_dialect.transport import Transport
+from mussel_sim.battery import to_millivolts
+from mussel_sim.fleet import FleetInputs, FleetParams, FleetState, StepEvents, step
+from mussel_sim.geo import LocalFrame
+from mussel_sim.recorder import Recorder
+from mussel_sim.sensors import DummySensors, SensorField
+from mussel_sim.startconfig import MAX_MUSSEL_ID
+
+FLEET_SYSTEM_ID = 251
+FLEET_COMPONENT_ID = 25
+US_PER_S = 1_000_000
+DEG_E7 = 1e7
+STATUSTEXT_MAX = 50
+HOLDING_LATCHES = (int(Latch.CLOSING), int(Latch.LATCHED))
+
+
+class MusselIdCollision(RuntimeError):
+    """A real aMussel reported an id this fleet simulates: the run cannot tell them apart."""
+
+    def __init__(self, mussel_id: int, source_system: int) -> None:
+        super().__init__(
+            f"aMussel id {mussel_id} is simulated by this fleet and also reported by a real aMussel "
+            f"(MAVLink system {source_system}); give the simulated fleet ids that no real node uses"
+        )
+        self.mussel_id = mussel_id
+        self.source_system = source_system
+
+
+@dataclass(frozen=True)
+class CommsConfig:
+    step_period_s: float = 1.0  # the model's 1 Hz of mission time
+    status_rate_hz: float = 1.0  # AMUSSEL_STATUS per aMussel
+    sensors_rate_hz: float = 0.2  # AMUSSEL_SENSORS per aMussel
+    apad_ids: frozenset[int] | None = None  # systems whose GLOBAL_POSITION_INT is an aPad; None: any
+    report_refusals: bool = True  # STATUSTEXT for surface commands refused for safety
+
+
+class FleetRunner:
+    """Owns the current `FleetState` and its I/O; register its tasks with a `Scheduler`.
+
+    `send` receives one encoded MAVLink 2 frame per call. Incoming frames go to `feed(bytes)` (or a
+    parsed message to `handle(msg)`); `poller(transport)` adapts a transport for the scheduler.
+    """
+
+    def __init__(
+        self,
+        state: FleetState,
+        params: FleetParams,
+        rng: np.random.Generator,
+        frame: LocalFrame,
+        codec: Codec,
+        send: Callable[[bytes], None],
+        sensors: SensorField | None = None,
+        config: CommsConfig | None = None,
+        recorder: Recorder | None = None,
+        on_events: Callable[[StepEvents], None] | None = None,
+    ) -> None:
+        if state.n and int(state.ids[-1]) > MAX_MUSSEL_ID:
+            raise ValueError(f"aMussel ids above {MAX_MUSSEL_ID} cannot be sent over MAVLink (uint16 mussel_id)")
+        self.state = state
+        self.params = params
+        self.rng = rng
+        self.frame = frame
+        self.codec = codec
+        self.send = send
+        self.sensors: SensorField = sensors if sensors is not None else DummySensors()
+        self.config = config or CommsConfig()
+        self.recorder = recorder if recorder is not None else Recorder(state.ids)
+        self.on_events = on_events
+        self.last_events: StepEvents | None = None
+        self._ids = {int(i) for i in state.ids}
+        self.apad_positions: dict[int, tuple[float, float]] = {}  # system id -> (lat_deg, lon_deg)
+        self.real_mussel_ids: set[int] = set()
+        # Where we have docked each aMussel, and the reverse: (aPad, slot) -> aMussel id.
+        self._docked_at: dict[int, tuple[int, int]] = {}
+        self._slot_holds: dict[tuple[int, int], int] = {}
+        self._surface: list[int] = []
+        self._sink: list[int] = []
+        self._dock: dict[int, tuple[int, int]] = {}
+        self._release: list[int] = []
+
+    # --- periodic tasks ----------------------------------------------------------------------------
+
+    def register(self, scheduler: Scheduler, start_us: int = 0) -> list[Task]:
+        """Step first (so a publish at the same instant shows the new state), then publish."""
+        cfg = self.config
+        return [
+            scheduler.every(
+                cfg.step_period_s, self.step_task, "mussel-step", start_us + round(cfg.step_period_s * US_PER_S)
+            ),
+            scheduler.every(1.0 / cfg.status_rate_hz, self.publish_status_task, "mussel-status", start_us),
+            scheduler.every(1.0 / cfg.sensors_rate_hz, self.publish_sensors_task, "mussel-sensors", start_us),
+        ]
+
+    def step_task(self, now_us: int) -> None:
+        """Advance the model from its own time to `now_us` with the queued inputs."""
+        dt_us = now_us - self.state.time_us
+        if dt_us <= 0:  # a repeated instant must not step the model twice
+            return
+        self.state, events = step(self.state, self._take_inputs(), self.params, self.rng, dt_us / US_PER_S)
+        self.recorder.record(self.state)
+        self.last_events = events
+        if self.config.report_refusals:
+            self._report(events)
+        if self.on_events is not None:
+            self.on_events(events)
+
+    def publish_status_task(self, now_us: int) -> None:
+        s = self.state
+        lat, lon = self.frame.to_geodetic(s.x_m, s.y_m)
+        lat_e7 = np.round(lat * DEG_E7).astype(np.int64)
+        lon_e7 = np.round(lon * DEG_E7).astype(np.int64)
+        mv = np.round(to_millivolts(s.battery_frac)).astype(np.int64)
+        for i in range(s.n):
+            self._send(
+                mavlink.MAVLink_amussel_status_message(
+                    now_us, int(s.ids[i]), int(lat_e7[i]), int(lon_e7[i]), float(s.depth_m[i]),
+                    float(s.battery_frac[i]), int(mv[i]), int(s.state[i]), 1,
+                )
+            )
+
+    publish_task = publish_status_task
+
+    def publish_sensors_task(self, now_us: int) -> None:
+        s = self.state
+        r = self.sensors.sample(s.x_m, s.y_m, s.depth_m, now_us / US_PER_S)
+        for i in range(s.n):
+            self._send(
+                mavlink.MAVLink_amussel_sensors_message(
+                    now_us, int(s.ids[i]), float(r.dissolved_oxygen_mg_l[i]), float(r.temperature_degc[i]),
+                    float(r.pressure_hpa[i]), float(r.turbidity_ntu[i]),
+                )
+            )
+
+    # --- incoming ---------------------------------------------------------------------------------------
+
+    def feed(self, data: bytes) -> int:
+        """Parse bytes with this runner's codec and handle every message; returns how many."""
+        msgs = self.codec.decode(data)
+        for msg in msgs:
+            self.handle(msg)
+        return len(msgs)
+
+    def handle(self, msg: mavlink.MAVLink_message) -> None:
+        src = int(msg.get_srcSystem())
+        if src == self.codec.system_id:
+            return  # our own traffic echoed back by a router
+        kind = msg.get_type()
+        if kind == "GLOBAL_POSITION_INT":
+            if self.config.apad_ids is None or src in self.config.apad_ids:
+                self.apad_positions[src] = (msg.lat / DEG_E7, msg.lon / DEG_E7)
+        elif kind == "DOCK_SLOT_STATUS":
+            self._slot_status(src, int(msg.slot), int(msg.mussel_id), int(msg.latch))
+        elif kind == "AMUSSEL_COMMAND":
+            mussel_id = int(msg.mussel_id)
+            if mussel_id in self._ids:
+                if msg.command == MusselCommand.SURFACE:
+                    self._surface.append(mussel_id)
+                elif msg.command == MusselCommand.SINK:
+                    self._sink.append(mussel_id)
+        elif kind == "AMUSSEL_STATUS" and msg.simulated == 0:
+            mussel_id = int(msg.mussel_id)
+            if mussel_id in self._ids:
+                raise MusselIdCollision(mussel_id, src)
+            self.real_mussel_ids.add(mussel_id)
+
+    def poller(self, transport: Transport) -> _TransportPoller:
+        """A scheduler poller that feeds whatever `transport` received into this runner."""
+        return _TransportPoller(self, transport)
+
+    # --- internals --------------------------------------------------------------------------------------
+
+    def _slot_status(self, apad: int, slot: int, mussel_id: int, latch: int) -> None:
+        key = (apad, slot)
+        held = mussel_id if latch in HOLDING_LATCHES and mussel_id != 0 else 0
+        prev = self._slot_holds.get(key)
+        if prev is not None and prev != held:
+            del self._slot_holds[key]
+            del self._docked_at[prev]
+            if prev in self._dock:  # docked and let go before any step saw it: nothing happened
+                del self._dock[prev]
+            else:
+                self._release.append(prev)
+        if held and held in self._ids and self._docked_at.get(held) != key:
+            old = self._docked_at.get(held)
+            if old is not None:  # moved to another slot: the old slot no longer claims it
+                self._slot_holds.pop(old, None)
+            self._docked_at[held] = key
+            self._slot_holds[key] = held
+            self._dock[held] = key
+
+    def _take_inputs(self) -> FleetInputs:
+        apads = {}
+        if self.apad_positions:
+            sys_ids = sorted(self.apad_positions)
+            lat = np.array([self.apad_positions[a][0] for a in sys_ids])
+            lon = np.array([self.apad_positions[a][1] for a in sys_ids])
+            x, y = self.frame.to_local(lat, lon)
+            apads = {a: (float(x[k]), float(y[k])) for k, a in enumerate(sys_ids)}
+        inputs = FleetInputs.make(
+            apads=apads,
+            surface=self._surface,
+            sink=self._sink,
+            dock=[(m, a, s) for m, (a, s) in self._dock.items()],
+            release=self._release,
+        )
+        self._surface, self._sink, self._dock, self._release = [], [], {}, []
+        return inputs
+
+    def _report(self, events: StepEvents) -> None:
+        for mussel_id in events.surface_refused_out_of_range_ids:
+            self._warn(f"aMussel {mussel_id}: SURFACE refused, no aPad in {self.params.acoustic_range_m:g} m")
+        for mussel_id in events.surface_refused_depleted_ids:
+            self._warn(f"aMussel {mussel_id}: SURFACE refused, depleted")
+
+    def _warn(self, text: str) -> None:
+        self._send(mavlink.MAVLink_statustext_message(mavlink.MAV_SEVERITY_WARNING, text[:STATUSTEXT_MAX].encode()))
+
+    def _send(self, msg: mavlink.MAVLink_message) -> None:
+        self.send(self.codec.encode(msg))
+
+
+class _TransportPoller:
+    def __init__(self, runner: FleetRunner, transport: Transport) -> None:
+        self.runner = runner
+        self.transport = transport
+
+    def poll(self) -> bool:
+        handled = False
+        for data in self.transport.receive():
+            handled = True
+            self.runner.feed(data)
+        return handled
+
+    def fileno(self) -> int | None:
+        return self.transport.fileno()
