@@ -12,6 +12,7 @@ from mussel_sim.battery import (
     step_battery,
     to_millivolts,
 )
+from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner, MusselIdCollision
 from mussel_sim.drift import GriddedCurrent, NoCurrent, UniformCurrent, random_drift_m
 from mussel_sim.fleet import (
     FleetInputs,
@@ -37,16 +38,21 @@ from mussel_sim.startconfig import (
 __all__ = [
     "CHARGE_PROFILES",
     "DISCHARGE_PROFILES",
+    "FLEET_COMPONENT_ID",
+    "FLEET_SYSTEM_ID",
     "AnoxicPatch",
     "Area",
     "ChargeProfile",
+    "CommsConfig",
     "DischargeProfile",
     "DummySensors",
     "FleetInputs",
     "FleetParams",
+    "FleetRunner",
     "FleetState",
     "GriddedCurrent",
     "LocalFrame",
+    "MusselIdCollision",
     "NoCurrent",
     "Recorder",
     "SensorReadings",
