@@ -20,6 +20,7 @@ from mussel_sim.fleet import (
     FleetState,
     StepEvents,
     initial_state,
+    start_config_of,
     state_from_arrays,
     step,
 )
@@ -71,6 +72,7 @@ __all__ = [
     "random_drift_m",
     "save_start_config",
     "start_config_from_positions",
+    "start_config_of",
     "state_from_arrays",
     "step",
     "step_battery",

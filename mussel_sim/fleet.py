@@ -41,7 +41,7 @@ from mussel_sim.battery import (
 )
 from mussel_sim.drift import NO_CURRENT, PAPER_DRIFT_HALF_WIDTH_M, CurrentField, NoCurrent, random_drift_m
 from mussel_sim.geo import LocalFrame, planar_distance_m
-from mussel_sim.startconfig import StartConfig
+from mussel_sim.startconfig import StartConfig, start_config_from_positions
 
 ACTIVE = np.uint8(MusselState.ACTIVE)
 SURFACING = np.uint8(MusselState.SURFACING)
@@ -168,6 +168,11 @@ def initial_state(config: StartConfig, frame: LocalFrame, params: FleetParams, t
     """Every aMussel of `config` ACTIVE on the seabed (DEPLETED if its battery is 0), sorted by id."""
     x_m, y_m = frame.to_local(config.lat_deg, config.lon_deg)
     return state_from_arrays(config.ids, x_m, y_m, config.battery_frac, params, time_us)
+
+
+def start_config_of(state: FleetState, frame: LocalFrame) -> StartConfig:
+    """The start configuration that reproduces `state`'s ids, positions and batteries (any run, any step)."""
+    return start_config_from_positions(state.ids, state.x_m, state.y_m, state.battery_frac, frame)
 
 
 def state_from_arrays(
@@ -400,6 +405,7 @@ def step(
         x += ve * dt_s
         y += vn * dt_s
     if params.drift_half_width_m > 0:
+        # Always 2n draws, docked or not: the random stream does not depend on what happened.
         drift = random_drift_m(rng, state.n, params.drift_half_width_m)
         x += drift[0]
         y += drift[1]

@@ -10,7 +10,7 @@ import pytest
 import shapely
 from shapely.geometry import box
 
-from mussel_sim.fleet import FleetParams, initial_state
+from mussel_sim.fleet import FleetInputs, FleetParams, initial_state, start_config_of, step
 from mussel_sim.geo import LocalFrame, distance_m, planar_distance_m
 from mussel_sim.placement import area_from_geojson, load_area, place_uniform
 from mussel_sim.startconfig import (
@@ -122,3 +122,19 @@ def test_planar_ranges_agree_with_the_geodesic() -> None:
     lat2, lon2 = frame.to_geodetic(x2, y2)
     np.testing.assert_allclose(planar_distance_m(x1, y1, x2, y2), 100.0)
     np.testing.assert_allclose(distance_m(lat1, lon1, lat2, lon2), 100.0, atol=1e-3)
+
+
+def test_any_step_of_a_run_saves_as_a_start_config(tmp_path: Path) -> None:
+    area = load_area(AREA_PATH)
+    frame = area.frame()
+    params = FleetParams()
+    s = initial_state(generate_start_config(area, 12, frame, np.random.default_rng(1)), frame, params)
+    rng = np.random.default_rng(2)
+    for _ in range(30):
+        s, _ = step(s, FleetInputs(), params, rng, 1.0)
+    save_start_config(tmp_path / "t30.geojson", start_config_of(s, frame))
+    again = initial_state(load_start_config(tmp_path / "t30.geojson"), frame, params)
+    np.testing.assert_array_equal(again.ids, s.ids)
+    np.testing.assert_array_equal(again.battery_frac, s.battery_frac)
+    np.testing.assert_allclose(again.x_m, s.x_m, atol=1e-6)
+    np.testing.assert_allclose(again.y_m, s.y_m, atol=1e-6)
