@@ -95,6 +95,7 @@ class FleetRunner:
         self.config = config or CommsConfig()
         self.recorder = recorder if recorder is not None else Recorder(state.ids)
         self.on_events = on_events
+        self.end_us: int | None = None  # no steps past this mission time (see `register`)
         self.last_events: StepEvents | None = None
         self._ids = {int(i) for i in state.ids}
         self.apad_positions: dict[int, tuple[float, float]] = {}  # system id -> (lat_deg, lon_deg)
@@ -109,9 +110,14 @@ class FleetRunner:
 
     # --- periodic tasks ----------------------------------------------------------------------------
 
-    def register(self, scheduler: Scheduler, start_us: int = 0) -> list[Task]:
-        """Step first (so a publish at the same instant shows the new state), then publish."""
+    def register(self, scheduler: Scheduler, start_us: int = 0, end_us: int | None = None) -> list[Task]:
+        """Step first (so a publish at the same instant shows the new state), then publish.
+
+        With `end_us` the model takes no step past that mission time: a run's uptime covers
+        exactly its duration even if the mission loop finishes a dock after the end.
+        """
         cfg = self.config
+        self.end_us = end_us
         return [
             scheduler.every(
                 cfg.step_period_s, self.step_task, "mussel-step", start_us + round(cfg.step_period_s * US_PER_S)
@@ -124,6 +130,8 @@ class FleetRunner:
         """Advance the model from its own time to `now_us` with the queued inputs."""
         dt_us = now_us - self.state.time_us
         if dt_us <= 0:  # a repeated instant must not step the model twice
+            return
+        if self.end_us is not None and now_us > self.end_us:
             return
         self.state, events = step(self.state, self._take_inputs(), self.params, self.rng, dt_us / US_PER_S)
         self.recorder.record(self.state)

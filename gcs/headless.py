@@ -1,0 +1,87 @@
+"""Headless mission runs: one scenario in lockstep, a `RunResult` and an output folder out.
+
+The output folder holds the GCS .tlog, the aPad's own logs, the event log, `result.json` and
+`traces.npz` (active count and battery traces per step, for reports).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from gcs.results import MusselResult, RunResult
+from gcs.scenario import Scenario
+from gcs.world import World, lockstep_world
+
+ProgressFn = Callable[[float], None]  # receives mission time done, seconds
+
+
+def run_dir(root: Path, scenario: Scenario) -> Path:
+    return root / f"{scenario.name}-{scenario.mission.collect_strategy}-seed{scenario.seed}"
+
+
+def run_mission(scenario: Scenario, out_dir: Path | None = None, progress: ProgressFn | None = None) -> RunResult:
+    """Run one mission in lockstep to its end; write its folder if `out_dir` is given."""
+    wall_start = time.perf_counter()
+    world = lockstep_world(scenario, out_dir)
+    try:
+        if progress is not None:
+            world.clock.scheduler.every(10.0, lambda now_us: progress(now_us / 1e6), "progress")
+        world.api.wait_apad(timeout_s=10.0)
+        loop = world.mission_loop()
+        end = loop.run()
+        result = _result(world, loop.status.cost_m, loop.status.cycles, str(end), time.perf_counter() - wall_start,
+                         out_dir)
+        if out_dir is not None:
+            _write_outputs(world, result, out_dir)
+        return result
+    finally:
+        world.close()
+
+
+def _result(world: World, cost_m: float, cycles: int, end: str, wall_s: float, out_dir: Path | None) -> RunResult:
+    s = world.scenario
+    rec = world.fleet.recorder
+    summary = rec.summary()
+    uptime = rec.uptime_pct()
+    start_battery = dict(zip(world.start.ids.tolist(), world.start.battery_frac.tolist(), strict=True))
+    mussels = [
+        MusselResult(int(i), round(start_battery[int(i)], 6), round(float(u), 4))
+        for i, u in zip(rec.ids, uptime, strict=True)
+    ]
+    travelled = world.vehicle.state.distance_travelled_m if world.vehicle is not None else 0.0
+    stats = world.link.codec.stats
+    return RunResult(
+        scenario=s.name,
+        strategy=s.mission.collect_strategy,
+        seed=s.seed,
+        theta=s.mission.theta,
+        duration_s=s.mission.duration_s,
+        uptime={"avg": round(summary.avg_uptime_pct, 4), "max": round(summary.max_uptime_pct, 4),
+                "min": round(summary.min_uptime_pct, 4)},
+        cost_m=round(cost_m, 3),
+        active_avg=round(summary.avg_active, 4),
+        wall_s=round(wall_s, 3),
+        mussels=mussels,
+        travelled_m=round(travelled, 3),
+        cycles=cycles,
+        end_reason=end,
+        out_dir=str(out_dir) if out_dir is not None else "",
+        messages={"gcs_sent": stats.sent, "fleet_sent": world.fleet.codec.stats.sent,
+                  "apad_sent": world.vehicle.codec.stats.sent if world.vehicle else 0},
+    )
+
+
+def _write_outputs(world: World, result: RunResult, out_dir: Path) -> None:
+    rec = world.fleet.recorder
+    steps, battery = rec.battery_trace()
+    np.savez_compressed(
+        out_dir / "traces.npz",
+        ids=rec.ids, step_time_us=rec.step_time_us(), active_count=rec.active_count(),
+        battery_steps=steps, battery=battery, trace_ids=rec.trace_ids,
+    )
+    (out_dir / "result.json").write_text(json.dumps(result.to_json(), indent=1) + "\n")
