@@ -88,14 +88,28 @@ class _PendingCommand:
 
 
 class Port:
-    """A local party's way onto the link: `send` bytes it encoded, `handler` gets what others sent."""
+    """A local party's way onto the link: `send` bytes it encoded, `handler` gets what others sent.
+
+    A party that still holds the message object it encoded passes it to `send_local` right
+    after `send_bytes`: co-located parties then get the object instead of parsing the bytes back
+    (the bytes still go out, encoded, on every transport).
+    """
 
     def __init__(self, link: Link, handler: Handler | None) -> None:
         self.link = link
         self.handler = handler
 
     def send(self, data: bytes) -> None:
+        """Bytes out on every transport, parsed once for the other local parties."""
         self.link._route_local(self, data)
+
+    def send_bytes(self, data: bytes) -> None:
+        """Bytes out on every transport only; follow with `send_local(msg)`."""
+        for poller in self.link._pollers:
+            poller.transport.send(data)
+
+    def send_local(self, msg: mavlink.MAVLink_message) -> None:
+        self.link._deliver_local(self, msg)
 
 
 class _TransportPoller:
@@ -173,12 +187,14 @@ class Link:
     def _route_local(self, origin: Port, data: bytes) -> None:
         for poller in self._pollers:
             poller.transport.send(data)
-        msgs = self._loopback.decode(data)
-        for msg in msgs:
-            self._record(msg)
-            for port in self._ports:
-                if port is not origin and port.handler is not None:
-                    port.handler(msg)
+        for msg in self._loopback.decode(data):
+            self._deliver_local(origin, msg)
+
+    def _deliver_local(self, origin: Port, msg: mavlink.MAVLink_message) -> None:
+        self._record(msg)
+        for port in self._ports:
+            if port is not origin and port.handler is not None:
+                port.handler(msg)
 
     def _deliver_remote(self, msg: mavlink.MAVLink_message) -> None:
         self._record(msg)

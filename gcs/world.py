@@ -131,8 +131,9 @@ def build_world(
     port = link.attach(None)
     fleet = FleetRunner(
         initial_state(config, frame, params, clock.now_us), params, rng, frame,
-        Codec(FLEET_SYSTEM_ID, FLEET_COMPONENT_ID), port.send, sensor_field(scenario, area, frame),
+        Codec(FLEET_SYSTEM_ID, FLEET_COMPONENT_ID), port.send_bytes, sensor_field(scenario, area, frame),
         CommsConfig(status_rate_hz=scenario.fleet.status_rate_hz, sensors_rate_hz=scenario.fleet.sensors_rate_hz),
+        local=port.send_local,
     )
     port.handler = fleet.handle
     fleet.register(clock.scheduler, clock.now_us, end_us=clock.now_us + round(scenario.mission.duration_s * 1e6))

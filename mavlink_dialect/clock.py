@@ -11,6 +11,7 @@ Models never see this module: they take `dt` as an argument. Runners register th
 
 from __future__ import annotations
 
+import heapq
 import select
 import time
 from collections.abc import Callable
@@ -26,9 +27,13 @@ def seconds_to_us(t_s: float) -> int:
     return round(t_s * US_PER_S)
 
 
-@dataclass
+@dataclass(eq=False)
 class Task:
-    """A callback run every `period_us` of mission time, first at `next_us`."""
+    """A callback run every `period_us` of mission time, first at `next_us`.
+
+    Change `period_us`, `next_us` or `active` through `Scheduler.reschedule`, which keeps the
+    queue in order; setting `active = False` directly also works (the task is dropped when due).
+    """
 
     name: str
     period_us: int
@@ -36,6 +41,7 @@ class Task:
     next_us: int
     order: int  # registration order: ties run in the order tasks were added
     active: bool = True
+    generation: int = 0  # bumped on every reschedule; older queue entries are stale
 
 
 class Poller(Protocol):
@@ -48,10 +54,15 @@ class Poller(Protocol):
 
 @dataclass
 class Scheduler:
-    """Periodic tasks plus receive pollers; the clocks decide how time passes between them."""
+    """Periodic tasks plus receive pollers; the clocks decide how time passes between them.
+
+    Due tasks sit in a heap of (next_us, order): lockstep runs fire hundreds of thousands of
+    tasks, so finding the next one must not scan them all.
+    """
 
     tasks: list[Task] = field(default_factory=list)
     pollers: list[Poller] = field(default_factory=list)
+    _queue: list[tuple[int, int, int, Task]] = field(default_factory=list, repr=False)
 
     def every(self, period_s: float, callback: Callable[[int], None], name: str, start_us: int = 0) -> Task:
         period_us = seconds_to_us(period_s)
@@ -59,7 +70,23 @@ class Scheduler:
             raise ValueError(f"task {name!r}: period must be positive, got {period_s} s")
         task = Task(name, period_us, callback, start_us, len(self.tasks))
         self.tasks.append(task)
+        heapq.heappush(self._queue, (task.next_us, task.order, task.generation, task))
         return task
+
+    def reschedule(
+        self, task: Task, *, period_us: int | None = None, next_us: int | None = None, active: bool | None = None
+    ) -> None:
+        if period_us is not None:
+            if period_us <= 0:
+                raise ValueError(f"task {task.name!r}: period must be positive")
+            task.period_us = period_us
+        if next_us is not None:
+            task.next_us = next_us
+        if active is not None:
+            task.active = active
+        task.generation += 1
+        if task.active:
+            heapq.heappush(self._queue, (task.next_us, task.order, task.generation, task))
 
     def add_poller(self, poller: Poller) -> None:
         self.pollers.append(poller)
@@ -68,26 +95,39 @@ class Scheduler:
         if poller in self.pollers:
             self.pollers.remove(poller)
 
+    def _head(self) -> Task | None:
+        """The next task to run, dropping stale and inactive queue entries."""
+        queue = self._queue
+        while queue:
+            _, _, generation, task = queue[0]
+            if task.active and generation == task.generation:
+                return task
+            heapq.heappop(queue)
+        return None
+
     def next_due_us(self) -> int | None:
-        due = [t.next_us for t in self.tasks if t.active]
-        return min(due) if due else None
+        task = self._head()
+        return None if task is None else task.next_us
 
     def run_due(self, now_us: int) -> None:
         """Run every task due at or before `now_us`, earliest first; deliver messages after each."""
+        queue = self._queue
         while True:
-            due = [t for t in self.tasks if t.active and t.next_us <= now_us]
-            if not due:
+            task = self._head()
+            if task is None or task.next_us > now_us:
                 return
-            task = min(due, key=lambda t: (t.next_us, t.order))
+            heapq.heappop(queue)
             task.next_us += task.period_us
+            heapq.heappush(queue, (task.next_us, task.order, task.generation, task))
             task.callback(now_us)
             self.drain()
 
     def drain(self) -> None:
         """Poll every receiver until nothing more arrives (in-memory delivery is immediate)."""
+        pollers = self.pollers
         for _ in range(MAX_DRAIN_ROUNDS):
             progressed = False
-            for poller in list(self.pollers):
+            for poller in pollers:
                 progressed |= poller.poll()
             if not progressed:
                 return
@@ -171,7 +211,7 @@ class WallClock:
             now = self.now_us
             for task in sched.tasks:
                 if task.active and now - task.next_us > self.MAX_LAG_US:
-                    task.next_us = now
+                    sched.reschedule(task, next_us=now)
             sched.run_due(now)
             now = self.now_us
             if now >= deadline_us:

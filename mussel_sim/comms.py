@@ -82,7 +82,10 @@ class FleetRunner:
         config: CommsConfig | None = None,
         recorder: Recorder | None = None,
         on_events: Callable[[StepEvents], None] | None = None,
+        local: Callable[[mavlink.MAVLink_message], None] | None = None,
     ) -> None:
+        """`send` gets every encoded frame; `local`, if given, also gets every message object, for
+        a party in the same process (the GCS router) that would otherwise parse our bytes back."""
         if state.n and int(state.ids[-1]) > MAX_MUSSEL_ID:
             raise ValueError(f"aMussel ids above {MAX_MUSSEL_ID} cannot be sent over MAVLink (uint16 mussel_id)")
         self.state = state
@@ -95,6 +98,7 @@ class FleetRunner:
         self.config = config or CommsConfig()
         self.recorder = recorder if recorder is not None else Recorder(state.ids)
         self.on_events = on_events
+        self.local = local
         self.end_us: int | None = None  # no steps past this mission time (see `register`)
         self.last_events: StepEvents | None = None
         self._ids = {int(i) for i in state.ids}
@@ -254,6 +258,8 @@ class FleetRunner:
 
     def _send(self, msg: mavlink.MAVLink_message) -> None:
         self.send(self.codec.encode(msg))
+        if self.local is not None:
+            self.local(msg)
 
 
 class _TransportPoller:

@@ -49,3 +49,12 @@ def test_unknown_message_id_is_counted_as_unknown() -> None:
     msgs = rx.decode(bytes(frame))
     assert msgs == []
     assert (rx.stats.unknown, rx.stats.bad_data) == (1, 0)
+
+
+def test_one_broken_frame_per_datagram_is_counted_and_the_next_still_parses() -> None:
+    tx, rx = Codec(1, 1), Codec(250, 190)
+    broken = bytearray(tx.encode(status(8)))
+    broken[12] ^= 0x55  # payload byte: CRC no longer matches
+    assert rx.decode(bytes(broken)) == []
+    assert rx.stats.bad_data == 1
+    assert [m.mussel_id for m in rx.decode(tx.encode(status(9)))] == [9]
