@@ -7,6 +7,7 @@ import sys
 from collections.abc import Callable, Sequence
 
 from apad_sitl import serve
+from gcs import run_cli
 
 Runner = Callable[[argparse.Namespace], int]
 
@@ -17,6 +18,14 @@ def build_parser() -> argparse.ArgumentParser:
         description="Vehicle-in-the-loop ground-control station for an aPad / aMussel marine robot swarm.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    run_p = sub.add_parser(
+        "run",
+        help="headless mission(s) in lockstep; no scenario: the paper's Table II reproduction",
+        description=run_cli.__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    run_cli.add_arguments(run_p)
+    run_p.set_defaults(runner=run_cli.run)
     sitl = sub.add_parser(
         "sitl",
         help="the SITL aPad alone, in real time, on UDP/TCP/serial",

@@ -21,10 +21,11 @@ class Event:
 class EventLog:
     """Append-only; every event is flushed so a killed process loses nothing already logged."""
 
-    def __init__(self, path: Path | None = None, keep: int = 10_000) -> None:
+    def __init__(self, path: Path | None = None, keep: int = 10_000, append: bool = False) -> None:
+        """`append` continues an existing log (a resumed mission); otherwise a new run starts it afresh."""
         self.events: list[Event] = []
         self.keep = keep
-        self._file: TextIO | None = path.open("a", encoding="utf-8") if path else None
+        self._file: TextIO | None = path.open("a" if append else "w", encoding="utf-8") if path else None
 
     def emit(self, t_s: float, kind: str, **fields: Any) -> Event:
         event = Event(t_s, kind, fields)

@@ -6,6 +6,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
+from rich import box
 from rich.table import Table
 
 # The paper's Table II (40 min, theta = 30): avg %, max %, min %, cost m, active.
@@ -14,12 +15,6 @@ PAPER_TABLE_II: dict[tuple[str, str], tuple[float, float, float, float, float]] 
     ("pool12", "greedy"): (72.27, 87.16, 42.84, 247.8026, 8.9495),
     ("bay24", "greedy"): (71.98, 90.31, 31.18, 186.4318, 16.2368),
     ("pool12", "none"): (67.36, 79.56, 56.64, 0.0, 8.0837),
-}
-PAPER_LABELS = {
-    ("pool12", "cautious"): "Cautious, 12 in pool",
-    ("pool12", "greedy"): "Greedy, 12 in pool",
-    ("bay24", "greedy"): "Greedy, 24 in bay",
-    ("pool12", "none"): "No charging, 12",
 }
 
 
@@ -52,26 +47,22 @@ class RunResult:
         return asdict(self)
 
 
-def _cell(ours: float, paper: float | None, digits: int) -> str:
-    mine = f"{ours:.{digits}f}"
-    return mine if paper is None else f"{mine} [dim]/ {paper:.{digits}f}[/]"
-
-
 def results_table(results: list[RunResult], title: str = "Results") -> Table:
-    """One row per run; where the paper ran the same thing, its figure follows ours after a slash."""
-    table = Table(title=title, caption="ours / paper's Table II, where the paper has the run")
-    for col, justify in (("run", "left"), ("avg %", "right"), ("max %", "right"), ("min %", "right"),
-                         ("cost m", "right"), ("active", "right"), ("cycles", "right"), ("wall s", "right")):
-        table.add_column(col, justify=justify)  # type: ignore[arg-type]
+    """One row per run; where the paper ran the same thing, its figures follow in a dim row."""
+    table = Table(title=title, caption="dim: the paper's Table II (40 min, theta 30)", box=box.SIMPLE_HEAD)
+    for col in ("run", "avg %", "max %", "min %", "cost m", "active", "cycles"):
+        table.add_column(col, justify="left" if col == "run" else "right", no_wrap=True)
     for r in results:
-        paper = PAPER_TABLE_II.get((r.scenario, r.strategy))
-        label = PAPER_LABELS.get((r.scenario, r.strategy), f"{r.strategy}, {r.scenario}")
-        p = paper or (None,) * 5
         table.add_row(
-            f"{label} (seed {r.seed})",
-            _cell(r.uptime["avg"], p[0], 2), _cell(r.uptime["max"], p[1], 2), _cell(r.uptime["min"], p[2], 2),
-            _cell(r.cost_m, p[3], 1), _cell(r.active_avg, p[4], 2), str(r.cycles), f"{r.wall_s:.2f}",
+            f"{r.scenario} {r.strategy} s{r.seed}",
+            f"{r.uptime['avg']:.2f}", f"{r.uptime['max']:.2f}", f"{r.uptime['min']:.2f}",
+            f"{r.cost_m:.1f}", f"{r.active_avg:.2f}", str(r.cycles),
         )
+        paper = PAPER_TABLE_II.get((r.scenario, r.strategy))
+        if paper is not None:
+            avg, mx, mn, cost, active = paper
+            table.add_row("  paper", f"{avg:.2f}", f"{mx:.2f}", f"{mn:.2f}", f"{cost:.1f}", f"{active:.2f}", "",
+                          style="dim")
     return table
 
 
@@ -108,7 +99,7 @@ def seed_stats(results: list[RunResult]) -> list[SeedStats]:
 
 
 def seed_stats_table(stats: list[SeedStats], title: str) -> Table:
-    table = Table(title=title, caption="mean ± standard deviation over seeds")
+    table = Table(title=title, caption="mean ± standard deviation over seeds", box=box.SIMPLE_HEAD)
     for col in ("scenario", "strategy", "seeds", "avg %", "max %", "min %", "cost m", "active"):
         table.add_column(col, justify="left" if col in ("scenario", "strategy") else "right")
     for s in stats:

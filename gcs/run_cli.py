@@ -1,0 +1,141 @@
+"""`vil run`: headless missions in lockstep, the paper's Table II by default.
+
+    vil run                                    # Table II: pool12 cautious/greedy/none, bay24 greedy
+    vil run missions/pool12.toml --strategy greedy --seed 3 --json out.json
+    vil run pool12 --seeds 20                  # mean and spread over 20 freshly drawn fleets
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+from gcs.headless import run_dir, run_mission
+from gcs.planner import COLLECT
+from gcs.results import RunResult, fraction_better, results_table, seed_stats, seed_stats_table
+from gcs.scenario import Scenario, ScenarioError, load_scenario, parse_duration_s
+
+# The paper's Table II runs: (scenario, collection strategy).
+TABLE_II = (("pool12", "cautious"), ("pool12", "greedy"), ("pool12", "none"), ("bay24", "greedy"))
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "scenario", nargs="?", metavar="SCENARIO",
+        help="scenario file (TOML) or a name in missions/ (pool12, bay24); none: the Table II reproduction",
+    )
+    parser.add_argument("--strategy", choices=COLLECT, help="collection strategy (default: the scenario's)")
+    parser.add_argument("--seed", type=int, help="seed of the run's random draws (default: the scenario's)")
+    parser.add_argument("--seeds", type=int, metavar="N",
+                        help="run seeds 1..N, each on a fleet drawn from its seed; print mean and spread")
+    parser.add_argument("--draw-fleet", action="store_true",
+                        help="draw the fleet from the seed instead of the scenario's saved start configuration")
+    parser.add_argument("--duration", type=_duration, help='mission time, e.g. 2400, "40m", "1h" (default: 40m)')
+    parser.add_argument("--theta", type=_positive, help="aMussel time scale (default: the scenario's, 30)")
+    parser.add_argument("--json", type=Path, metavar="FILE", help="write the result(s) as JSON")
+    parser.add_argument("--out", type=Path, default=Path("runs"), metavar="DIR",
+                        help="output folder; each run leaves DIR/SCENARIO-STRATEGY-seedN/ (default: runs)")
+    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="parallel runs (default: CPU count)")
+
+
+def _duration(text: str) -> float:
+    try:
+        return parse_duration_s(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+    return value
+
+
+@dataclass(frozen=True)
+class Job:
+    scenario: Scenario
+    out_dir: Path
+
+
+def _jobs(args: argparse.Namespace) -> list[Job]:
+    pairs = [(args.scenario, args.strategy)] if args.scenario else [(name, args.strategy or s) for name, s in TABLE_II]
+    seeds: list[int | None] = list(range(1, args.seeds + 1)) if args.seeds else [args.seed]
+    cache: dict[str, Scenario] = {}
+    jobs = []
+    for name, strategy in pairs:
+        base = cache.setdefault(name, load_scenario(name))
+        for seed in seeds:
+            s = base.with_overrides(strategy=strategy, seed=seed, duration_s=args.duration, theta=args.theta)
+            if args.seeds or args.draw_fleet:
+                s = replace(s, fleet=replace(s.fleet, start_config=None))
+            jobs.append(Job(s, run_dir(args.out, s)))
+    return jobs
+
+
+def _run_job(job: Job) -> RunResult:
+    return run_mission(job.scenario, job.out_dir)
+
+
+def run(args: argparse.Namespace) -> int:
+    console = Console()
+    try:
+        jobs = _jobs(args)
+    except ScenarioError as exc:
+        print(f"vil run: {exc}", file=sys.stderr)
+        return 2
+    if args.seeds is not None and args.seeds < 1:
+        print("vil run: --seeds must be at least 1", file=sys.stderr)
+        return 2
+    results = _run_all(jobs, max(1, args.jobs), console)
+    results.sort(key=lambda r: ([(j.scenario.name, j.scenario.mission.collect_strategy) for j in jobs]
+                                .index((r.scenario, r.strategy)), r.seed))
+    if args.seeds:
+        title = f"{len(results)} runs, fleets drawn from seeds 1..{args.seeds}"
+        console.print(seed_stats_table(seed_stats(results), title))
+        for scenario in sorted({r.scenario for r in results}):
+            frac = fraction_better(results, scenario, "greedy", "none")
+            if frac is not None:
+                console.print(f"{scenario}: greedy beats no charging on average uptime in {frac:.0%} of seeds")
+    else:
+        title = "Table II reproduction (lockstep SITL)" if not args.scenario else "Mission result"
+        console.print(results_table(results, title))
+    mission_s = sum(r.duration_s for r in results)
+    run_s = sum(r.wall_s for r in results)
+    out_dirs = sorted({str(Path(r.out_dir).parent) for r in results})
+    console.print(f"{len(results)} run(s): {mission_s / 60:.0f} mission minutes in {run_s:.1f} s of CPU "
+                  f"(real-time factor {mission_s / run_s:.0f}); logs, .tlog and traces in {', '.join(out_dirs)}/")
+    if args.json:
+        payload = [r.to_json() for r in results]
+        args.json.write_text(json.dumps(payload[0] if len(payload) == 1 else payload, indent=1) + "\n")
+    return 0
+
+
+def _run_all(jobs: list[Job], n_jobs: int, console: Console) -> list[RunResult]:
+    columns = (TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
+               TextColumn("mission s" if len(jobs) == 1 else "runs"), TimeElapsedColumn())
+    with Progress(*columns, console=console, transient=True) as progress:
+        if len(jobs) == 1:
+            job = jobs[0]
+            task = progress.add_task(f"{job.scenario.name} {job.scenario.mission.collect_strategy}",
+                                     total=int(job.scenario.mission.duration_s))
+            return [run_mission(job.scenario, job.out_dir,
+                                progress=lambda t_s: progress.update(task, completed=int(t_s)))]
+        task = progress.add_task(f"{len(jobs)} missions", total=len(jobs))
+        results = []
+        with ProcessPoolExecutor(max_workers=min(n_jobs, len(jobs))) as pool:
+            for future in as_completed([pool.submit(_run_job, job) for job in jobs]):
+                results.append(future.result())
+                progress.advance(task)
+        return results
