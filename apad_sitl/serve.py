@@ -1,0 +1,148 @@
+"""`vil sitl` / `python -m apad_sitl`: the SITL aPad alone, in real time, on UDP, TCP or serial.
+
+    vil sitl                                     # listen on udp:127.0.0.1:14550
+    vil sitl --connect udp:127.0.0.1:14550       # send to a listening GCS (mavproxy --master=udpin:...)
+    vil sitl --listen tcp:0.0.0.0:5760 --home 45.43,12.33 --current 0.1,0 --log-dir runs/sitl
+
+This is the edge: it opens the transport, reads the wall clock and handles Ctrl-C; the vehicle
+itself stays clock-free.
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import time
+from types import FrameType
+from typing import Any
+
+from apad_sitl.endpoint import SitlVehicle
+from apad_sitl.params import ApadParams, ParamError, with_param
+from mavlink_dialect import AddressError, mavlink, open_transport
+from mavlink_dialect.clock import Scheduler, WallClock
+
+DEFAULT_LISTEN = "udp:127.0.0.1:14550"
+DEFAULT_HOME = (43.9400, 15.4400)  # off Biograd na Moru
+# Stock consoles draw their HUD from these; in real time the extra bytes cost nothing.
+REALTIME_RATES_HZ = {mavlink.MAVLINK_MSG_ID_ATTITUDE: 4.0, mavlink.MAVLINK_MSG_ID_VFR_HUD: 2.0}
+
+
+def _pair(text: str, what: str) -> tuple[float, float]:
+    parts = text.split(",")
+    try:
+        a, b = (float(p) for p in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{what} must be two numbers A,B, got {text!r}") from None
+    return a, b
+
+
+def _home(text: str) -> tuple[float, float]:
+    lat, lon = _pair(text, "--home")
+    if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
+        raise argparse.ArgumentTypeError(f"--home {text!r}: latitude must be in [-90, 90], longitude in [-180, 180]")
+    return lat, lon
+
+
+def _current(text: str) -> tuple[float, float]:
+    east, north = _pair(text, "--current")
+    if not (abs(east) <= 5.0 and abs(north) <= 5.0):
+        raise argparse.ArgumentTypeError(f"--current {text!r}: more than 5 m/s is not a sea we work in")
+    return east, north
+
+
+def _sysid(text: str) -> int:
+    if not text.isdigit() or not 1 <= int(text) <= 255:
+        raise argparse.ArgumentTypeError(f"--sysid must be 1..255, got {text!r}")
+    return int(text)
+
+
+def _duration(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not value > 0.0:
+        raise argparse.ArgumentTypeError(f"--duration must be a positive number of seconds, got {text!r}")
+    return value
+
+
+def _param(text: str) -> tuple[str, float]:
+    name, sep, value = text.partition("=")
+    try:
+        with_param(ApadParams(), name.strip().upper(), float(value))
+    except (ValueError, ParamError) as exc:
+        if not sep:
+            raise argparse.ArgumentTypeError(f"--param expects NAME=VALUE, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"--param {text}: {exc}") from None
+    return name.strip().upper(), float(value)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    link = parser.add_mutually_exclusive_group()
+    link.add_argument("--listen", metavar="ADDR",
+                      help=f"serve whoever talks to us: udp:HOST:PORT, tcp:HOST:PORT, serial:DEV[:BAUD] "
+                           f"(default {DEFAULT_LISTEN})")
+    link.add_argument("--connect", metavar="ADDR", help="send to a listening GCS at udp:HOST:PORT or tcp:HOST:PORT")
+    parser.add_argument("--home", type=_home, default=DEFAULT_HOME, metavar="LAT,LON",
+                        help="home and start position in degrees (default 43.9400,15.4400)")
+    parser.add_argument("--sysid", type=_sysid, default=1, help="MAVLink system id, 1..255 (default 1)")
+    parser.add_argument("--current", type=_current, default=(0.0, 0.0), metavar="E,N",
+                        help="water current east,north in m/s (default 0,0)")
+    parser.add_argument("--param", type=_param, action="append", default=[], metavar="NAME=VALUE",
+                        help="set an aPad parameter at start, e.g. SPEED_MAX=0.3 (repeatable)")
+    parser.add_argument("--log-dir", metavar="DIR", help="write the aPad's .tlog and event log here")
+    parser.add_argument("--duration", type=_duration, metavar="S", help="stop after S seconds (default: until Ctrl-C)")
+
+
+def _stop(signum: int, frame: FrameType | None) -> None:
+    raise KeyboardInterrupt
+
+
+def run(args: argparse.Namespace) -> int:
+    listen = args.connect is None
+    address = args.listen or args.connect or DEFAULT_LISTEN
+    params = ApadParams()
+    for name, value in args.param:
+        params = with_param(params, name, value)
+    try:
+        transport = open_transport(address, listen=listen)
+    except AddressError as exc:
+        print(f"vil sitl: {exc}", file=sys.stderr)
+        return 2
+    lat, lon = args.home
+    clock = WallClock(Scheduler())
+    try:
+        vehicle = SitlVehicle(
+            transport, params, lat, lon, system_id=args.sysid, current_mps=args.current,
+            log_dir=args.log_dir, rates_hz=REALTIME_RATES_HZ, log_epoch_us=int(time.time() * 1e6),
+        )
+    except OSError as exc:
+        transport.close()
+        print(f"vil sitl: cannot write logs in {args.log_dir}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    previous: dict[int, Any] = {}
+    try:
+        # `kill` stops as cleanly as Ctrl-C; SIGINT too when a shell started us in the background.
+        previous[signal.SIGTERM] = signal.signal(signal.SIGTERM, _stop)
+        previous[signal.SIGINT] = signal.signal(signal.SIGINT, signal.default_int_handler)
+    except ValueError:
+        pass  # not the main thread: the embedder handles signals
+    vehicle.attach(clock.scheduler, clock.now_us)
+    verb = "listening on" if listen else "connecting to"
+    east, north = args.current
+    print(f"vil sitl: aPad sysid {args.sysid} {verb} {address}, home {lat:.6f},{lon:.6f}, "
+          f"current {east:g},{north:g} m/s" + (f", logs in {args.log_dir}" if args.log_dir else ""), flush=True)
+    try:
+        if args.duration is not None:
+            clock.sleep(args.duration)
+        else:
+            while True:
+                clock.sleep(3600.0)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        vehicle.close()
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+    return 0
