@@ -265,6 +265,36 @@ class Link:
                 raise TimeoutError(f"no heartbeat from {who} within {timeout_s:g} s")
             self.clock.sleep(0.05)
 
+    # --- parameters (PARAM protocol) ---------------------------------------------------------
+
+    def param_set(
+        self, system_id: int, name: str, value: float, timeout_s: float = 1.0, retries: int = 3,
+        component_id: int = mavlink.MAV_COMP_ID_AUTOPILOT1,
+    ) -> float:
+        """PARAM_SET until the vehicle answers PARAM_VALUE for `name`; return the value it now holds.
+
+        A vehicle that refuses a value answers with the old one: that is a `ValueError` here.
+        """
+        view = self.vehicles.get(system_id)
+        if view is None:
+            raise LookupError(f"aPad {system_id} has not been heard")
+        msg = mavlink.MAVLink_param_set_message(
+            system_id, component_id, name.encode(), float(value), mavlink.MAV_PARAM_TYPE_REAL32
+        )
+        for _ in range(retries + 1):
+            view.params.pop(name, None)
+            self.send(msg)
+            deadline = self.clock.now_us + int(timeout_s * 1e6)
+            self.clock.sleep(0)
+            while name not in view.params and self.clock.now_us < deadline:
+                self.clock.sleep(min(0.02, timeout_s))
+            if name in view.params:
+                held = view.params[name]
+                if abs(held - float(value)) > 1e-6 * max(1.0, abs(float(value))):
+                    raise ValueError(f"aPad {system_id} refused {name}={value:g}; it keeps {held:g}")
+                return held
+        raise TimeoutError(f"aPad {system_id}: no PARAM_VALUE for {name} after {retries + 1} attempts")
+
     # --- command protocol -------------------------------------------------------------------
 
     def command_long(
