@@ -327,6 +327,8 @@ class SitlVehicle:
         if last is None:
             return
         dt_s = (now_us - last) / US_PER_S
+        if self.log is not None and now_us // US_PER_S != last // US_PER_S:
+            self.log.flush()  # once a second of mission time: a killed process loses little
         if self.params.fs_gcs_enable:
             self._check_gcs_failsafe()
         p = self.params
@@ -658,10 +660,12 @@ class SitlVehicle:
 
     def _apply_interval(self, msg_id: int, task: Task, now_us: int) -> None:
         interval_us = self._interval_us[msg_id]
-        task.active = interval_us > 0 and not self.closed
-        if interval_us > 0:
-            task.period_us = interval_us
-            task.next_us = max(now_us, min(task.next_us, now_us + interval_us))
+        if interval_us > 0 and not self.closed and self._scheduler is not None:
+            self._scheduler.reschedule(
+                task, period_us=interval_us, next_us=max(now_us, min(task.next_us, now_us + interval_us)), active=True
+            )
+        else:
+            task.active = False
 
     def _cmd_dock(self, cmd: Command) -> tuple[int, int]:
         slot, mussel_id = _as_int(cmd.params[0]), _as_int(cmd.params[1])
@@ -679,7 +683,7 @@ class SitlVehicle:
     ) -> tuple[int, int]:
         if refusal is not None:
             self._statustext(mavlink.MAV_SEVERITY_WARNING,
-                             f"{what} slot {slot} aMussel {mussel_id} refused: {REFUSAL_TEXT[refusal]}")
+                             f"{what} slot {slot} aMussel {mussel_id}: {REFUSAL_TEXT[refusal]}")
             return DENIED, int(refusal)
         self._set_primitive(new)
         return ACCEPTED, 0

@@ -31,6 +31,10 @@ class VehicleLog:
     def event(self, time_us: int, event: str, **fields: Any) -> None:
         record = {"t_s": round(time_us / 1e6, 6), "event": event, **fields}
         self._events.write(json.dumps(record, separators=(",", ":")) + "\n")
+        self._events.flush()  # events are rare and the ones before a crash matter most
+
+    def flush(self) -> None:
+        self._tlog.flush()
 
     def close(self) -> None:
         for f in (self._tlog, self._events):

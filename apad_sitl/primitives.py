@@ -46,15 +46,15 @@ class Refusal(IntEnum):
     SLOT_BUSY = 9
 
 
-REFUSAL_TEXT: dict[Refusal, str] = {
+REFUSAL_TEXT: dict[Refusal, str] = {  # short: the reason and its context fit one STATUSTEXT (50 chars)
     Refusal.BAD_SLOT: "slot must be 1..4",
-    Refusal.BAD_MUSSEL_ID: "aMussel id must be 1..65535",
-    Refusal.UNKNOWN_MUSSEL: "no status heard from this aMussel",
-    Refusal.OUT_OF_REACH: "aMussel out of docking reach",
+    Refusal.BAD_MUSSEL_ID: "bad aMussel id",
+    Refusal.UNKNOWN_MUSSEL: "never heard of it",
+    Refusal.OUT_OF_REACH: "out of docking reach",
     Refusal.SLOT_OCCUPIED: "slot occupied",
-    Refusal.ALREADY_DOCKED: "aMussel already docked",
+    Refusal.ALREADY_DOCKED: "already docked",
     Refusal.SLOT_EMPTY: "slot empty",
-    Refusal.WRONG_MUSSEL: "another aMussel is in the slot",
+    Refusal.WRONG_MUSSEL: "other aMussel in slot",
     Refusal.SLOT_BUSY: "slot busy releasing",
 }
 
@@ -171,6 +171,8 @@ def dock(
         return state, None
     if state.docked_slot(mussel_id):
         return state, Refusal.ALREADY_DOCKED
+    if current.latch == Latch.RELEASING:
+        return state, Refusal.SLOT_BUSY
     if current.latch != Latch.OPEN:
         return state, Refusal.SLOT_OCCUPIED
     fix = mussels.get(mussel_id)

@@ -253,6 +253,8 @@ def test_undock_refusals_and_retries_never_touch_another_slot() -> None:
     assert sim.undock(1, 2) == Refusal.WRONG_MUSSEL
     assert sim.undock(9) == Refusal.BAD_SLOT
     assert sim.undock(1, 1) is None
+    sim.mussels[3] = MusselFix(0.0, 0.0)
+    assert sim.dock(1, 3) == Refusal.SLOT_BUSY
     sim.run(2.0)
     releasing = sim.prim
     assert sim.undock(1, 1) is None  # retried while releasing: not restarted
