@@ -1,0 +1,86 @@
+"""Real-time factor of headless lockstep missions, and where the time goes.
+
+For each scenario: one 40-minute mission in lockstep (SITL aPad, fleet and GCS on one virtual
+clock, every message really encoded and parsed), timed without a profiler (best of --repeat),
+then once under cProfile to split the time into disjoint parts: MAVLink encode, MAVLink parse,
+fleet model step, planner, SITL physics, and everything else (scheduler, routing, handlers).
+
+    .venv/bin/python bench/scenario_speed.py [--repeat N] [--scenarios pool12 bay24 stress240]
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import pstats
+import time
+
+from rich.console import Console
+from rich.table import Table
+
+from gcs.headless import run_mission
+from gcs.scenario import load_scenario
+
+# (label, file suffix, function name): entry points whose cumulative times do not overlap.
+PARTS = (
+    ("MAVLink encode", "mavlink_dialect/codec.py", "encode"),
+    ("MAVLink parse", "mavlink_dialect/codec.py", "decode"),
+    ("fleet step", "mussel_sim/fleet.py", "step"),
+    ("planner", "gcs/planner.py", "plan"),
+    ("SITL physics", "apad_sitl/endpoint.py", "_physics"),
+)
+
+
+def timed(name: str, repeat: int) -> tuple[float, float, int]:
+    """(best wall seconds, mission seconds, messages encoded) of one mission."""
+    scenario = load_scenario(name)
+    best = float("inf")
+    for _ in range(repeat):
+        start = time.perf_counter()
+        result = run_mission(scenario)
+        best = min(best, time.perf_counter() - start)
+    messages = sum(result.messages.values())
+    return best, scenario.mission.duration_s, messages
+
+
+def profile_parts(name: str) -> dict[str, float]:
+    """Fraction of profiled time per part, plus "other"."""
+    scenario = load_scenario(name)
+    profiler = cProfile.Profile()
+    profiler.runcall(run_mission, scenario)
+    stats = pstats.Stats(profiler).stats  # type: ignore[attr-defined]
+    total = sum(tt for (_, _, tt, _, _) in stats.values())  # (calls, prim calls, self, cumulative, callers)
+    parts = {}
+    for label, suffix, func in PARTS:
+        parts[label] = sum(ct for (file, _, fn), (_, _, _, ct, _) in stats.items()
+                           if fn == func and file.endswith(suffix)) / total
+    parts["other"] = max(0.0, 1.0 - sum(parts.values()))
+    return parts
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeat", type=int, default=3, help="timed runs per scenario; the best counts (default 3)")
+    parser.add_argument("--scenarios", nargs="+", default=["pool12", "bay24", "stress240"])
+    args = parser.parse_args()
+
+    speed = Table(title="Lockstep missions: real-time factor (40 min of mission time each)")
+    for col in ("scenario", "wall s", "real-time factor", "messages", "msg/s wall"):
+        speed.add_column(col, justify="left" if col == "scenario" else "right")
+    split = Table(title="Where the time goes (share of profiled time)")
+    split.add_column("scenario")
+    for label in [p[0] for p in PARTS] + ["other"]:
+        split.add_column(label, justify="right")
+    for name in args.scenarios:
+        wall, mission, messages = timed(name, args.repeat)
+        speed.add_row(name, f"{wall:.2f}", f"{mission / wall:,.0f}", f"{messages:,}", f"{messages / wall:,.0f}")
+        parts = profile_parts(name)
+        split.add_row(name, *(f"{parts[label]:.0%}" for label in [p[0] for p in PARTS] + ["other"]))
+    console = Console(width=130)
+    console.print(speed)
+    console.print(split)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
