@@ -196,7 +196,7 @@ class SitlVehicle:
         self._interval_us = {mid: _hz_to_us(hz) for mid, hz in self._rates_hz.items()}
 
         self._senders: dict[int, Callable[[int], None]] = {
-            mavlink.MAVLINK_MSG_ID_HEARTBEAT: lambda now: self._send(msgs.heartbeat(self.mode, self.armed)),
+            mavlink.MAVLINK_MSG_ID_HEARTBEAT: lambda now: self._send_heartbeat(),
             mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: self._send_position,
             mavlink.MAVLINK_MSG_ID_SYS_STATUS: lambda now: self._send(msgs.sys_status(self.state)),
             mavlink.MAVLINK_MSG_ID_BATTERY_STATUS: lambda now: self._send(msgs.battery_status(self.state)),
@@ -363,6 +363,10 @@ class SitlVehicle:
             self._latlon_cache = (x_m, y_m, lat_e7, lon_e7)
         return lat_e7, lon_e7
 
+    def _send_heartbeat(self) -> None:
+        if not self.closed:
+            self._send(msgs.heartbeat(self.mode, self.armed))
+
     def _send_position(self, now_us: int) -> None:
         lat_e7, lon_e7 = self._latlon_e7(self.state.x_m, self.state.y_m)
         self._send(msgs.global_position_int(now_us, lat_e7, lon_e7, self.state))
@@ -439,6 +443,7 @@ class SitlVehicle:
         if mode != self.mode:
             self._event("mode", mode=msgs.ROVER_MODE_NAMES.get(mode, str(mode)))
             self.mode = mode
+            self._send_heartbeat()  # consoles show the new mode now, not up to a second later
 
     def _enter_hold(self) -> None:
         """HOLD mode running Hold Position: at the point already held, else where the hull is.
@@ -603,6 +608,7 @@ class SitlVehicle:
         if armed != self.armed:
             self.armed = armed
             self._event("arm" if armed else "disarm")
+            self._send_heartbeat()
         return ACCEPTED, 0
 
     def _cmd_change_speed(self, cmd: Command) -> tuple[int, int]:
