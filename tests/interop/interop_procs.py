@@ -82,8 +82,8 @@ class Proc:
             return "\n".join(self._lines)
 
     def wait_output(self, pattern: str, timeout_s: float, start: int = 0) -> re.Match[str]:
-        """Wait until `pattern` (a regex) matches the output from character `start` on."""
-        regex = re.compile(pattern)
+        """Wait until `pattern` (a regex, ^ and $ per line) matches the output from character `start` on."""
+        regex = re.compile(pattern, re.MULTILINE)
 
         def found() -> re.Match[str] | None:
             match = regex.search(self.output, start)
