@@ -72,6 +72,11 @@ def main(argv: list[str] | None = None) -> int:
     sys.path.insert(0, str(script.resolve().parent))  # what `python SCRIPT` would do
     try:
         runpy.run_path(str(script), run_name="__main__")
+    except BrokenPipeError:
+        # `mavlogdump.py ... | head`: the reader left. Stop quietly, as a shell tool does (the
+        # Python docs' recipe: point stdout at devnull so the interpreter's final flush cannot fail).
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
     except SystemExit as exc:
         code = exc.code
         if code is None:

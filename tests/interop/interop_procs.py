@@ -155,6 +155,14 @@ class Procs:
         argv = [sys.executable, "-m", "mavlink_dialect.run_with_dialect", str(tool(script)), *args]
         return self.start(name, argv, stdin=stdin)
 
+    def run_with_dialect(self, script: str, *args: str, timeout_s: float = 30.0) -> subprocess.CompletedProcess[str]:
+        """Run a one-shot tool (e.g. `mavlogdump.py`) through our dialect launcher to the end."""
+        argv = [sys.executable, "-m", "mavlink_dialect.run_with_dialect", str(tool(script)), *args]
+        done = subprocess.run(argv, cwd=self.workdir, env=self.env, capture_output=True, text=True,
+                              timeout=timeout_s, check=False)
+        assert done.returncode == 0, f"{script} failed ({done.returncode}):\n{done.stdout}\n{done.stderr}"
+        return done
+
     def close(self) -> None:
         for proc in reversed(self.started):
             proc.stop()
