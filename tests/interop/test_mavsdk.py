@@ -16,7 +16,7 @@ import contextlib
 import json
 import math
 import socket
-from collections.abc import AsyncIterator, Callable
+from collections.abc import AsyncGenerator, Callable
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -51,9 +51,9 @@ def metres_between(lat_a: float, lon_a: float, lat_b: float, lon_b: float) -> fl
     return math.hypot(float(xa) - float(xb), float(ya) - float(yb))
 
 
-async def first(stream: AsyncIterator[T], what: str, timeout_s: float, match: Callable[[T], bool] = bool) -> T:
+async def first(stream: AsyncGenerator[T, None], what: str, timeout_s: float, match: Callable[[T], bool] = bool) -> T:
     """The first item of a MAVSDK subscription that `match`es; closes the subscription either way."""
-    async with contextlib.aclosing(stream) as items:  # type: ignore[type-var]
+    async with contextlib.aclosing(stream) as items:
         try:
             async with asyncio.timeout(timeout_s):
                 async for item in items:
@@ -64,10 +64,10 @@ async def first(stream: AsyncIterator[T], what: str, timeout_s: float, match: Ca
     pytest.fail(f"MAVSDK: no {what} within {timeout_s:g} s")
 
 
-async def collect(stream: AsyncIterator[T], duration_s: float) -> list[T]:
+async def collect(stream: AsyncGenerator[T, None], duration_s: float) -> list[T]:
     """Everything a subscription yields during `duration_s`."""
     out: list[T] = []
-    async with contextlib.aclosing(stream) as items:  # type: ignore[type-var]
+    async with contextlib.aclosing(stream) as items:
         with contextlib.suppress(TimeoutError):
             async with asyncio.timeout(duration_s):
                 async for item in items:
