@@ -126,6 +126,13 @@ class ApadApi:
             self.clock.sleep(0.05)
         return view.system_id
 
+    def set_telemetry_rates(self, rates_hz: dict[int, float], apad_id: int | None = None) -> None:
+        """Ask the aPad for each message id at a rate (Hz; 0 stops it), as stock GCSs do."""
+        sysid = self.apad(apad_id).system_id
+        for msg_id, hz in rates_hz.items():
+            interval_us = round(1e6 / hz) if hz > 0 else -1
+            self.link.command_long(sysid, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, (msg_id, interval_us))
+
     def position(self, apad_id: int | None = None) -> Location:
         view = self.apad(apad_id)
         if view.lat_deg is None or view.lon_deg is None:

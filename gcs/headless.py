@@ -15,7 +15,7 @@ import numpy as np
 
 from gcs.results import MusselResult, RunResult
 from gcs.scenario import Scenario
-from gcs.world import World, lockstep_world
+from gcs.world import MISSION_TELEMETRY_HZ, World, lockstep_world
 
 ProgressFn = Callable[[float], None]  # receives mission time done, seconds
 
@@ -32,6 +32,7 @@ def run_mission(scenario: Scenario, out_dir: Path | None = None, progress: Progr
         if progress is not None:
             world.clock.scheduler.every(10.0, lambda now_us: progress(now_us / 1e6), "progress")
         world.api.wait_apad(timeout_s=10.0)
+        world.api.set_telemetry_rates(MISSION_TELEMETRY_HZ)
         loop = world.mission_loop()
         end = loop.run()
         result = _result(world, loop.status.cost_m, loop.status.cycles, str(end), time.perf_counter() - wall_start,

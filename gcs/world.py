@@ -19,7 +19,7 @@ from gcs.events import EventLog
 from gcs.link import Link
 from gcs.scenario import Scenario
 from gcs.scenario_loop import EnergySharingLoop, LoopControl, LoopSettings
-from mavlink_dialect import Codec, memory_pair
+from mavlink_dialect import Codec, mavlink, memory_pair
 from mavlink_dialect.clock import Clock, VirtualClock
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner
 from mussel_sim.drift import NO_CURRENT, UniformCurrent
@@ -31,6 +31,14 @@ from mussel_sim.startconfig import StartConfig, generate_start_config, load_star
 
 # .tlog stamps of lockstep runs start here (2020-06-12 00:00 UTC), so logs are repeatable.
 LOCKSTEP_EPOCH_US = 1_591_920_000_000_000
+# What the mission loop needs from the aPad, requested like any GCS does (SET_MESSAGE_INTERVAL).
+# Slot and primitive changes are also sent the moment they happen, so slow periodic copies do.
+MISSION_TELEMETRY_HZ = {
+    mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: 2.0,
+    mavlink.MAVLINK_MSG_ID_PRIMITIVE_STATUS: 1.0,
+    mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS: 0.2,
+    mavlink.MAVLINK_MSG_ID_BATTERY_STATUS: 0.2,
+}
 
 
 @dataclass

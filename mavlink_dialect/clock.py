@@ -116,10 +116,14 @@ class Scheduler:
             task = self._head()
             if task is None or task.next_us > now_us:
                 return
-            heapq.heappop(queue)
-            task.next_us += task.period_us
-            heapq.heappush(queue, (task.next_us, task.order, task.generation, task))
-            task.callback(now_us)
+            instant = task.next_us
+            # Every task of one instant runs before the messages they sent are delivered.
+            while task is not None and task.next_us == instant:
+                heapq.heappop(queue)
+                task.next_us += task.period_us
+                heapq.heappush(queue, (task.next_us, task.order, task.generation, task))
+                task.callback(now_us)
+                task = self._head()
             self.drain()
 
     def drain(self) -> None:
