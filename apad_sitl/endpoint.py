@@ -139,6 +139,25 @@ class _MusselTable(Mapping[int, MusselFix]):
         return len(self._raw)
 
 
+class _DegE7:
+    """Local metres -> degE7 through the frame, remembering the last point (most sends repeat it)."""
+
+    def __init__(self, frame: LocalFrame) -> None:
+        self.frame = frame
+        self._last: tuple[float, float, int, int] = (math.nan, math.nan, 0, 0)
+
+    def remember(self, x_m: float, y_m: float, lat_e7: int, lon_e7: int) -> None:
+        self._last = (x_m, y_m, lat_e7, lon_e7)
+
+    def of(self, x_m: float, y_m: float) -> tuple[int, int]:
+        cx, cy, lat_e7, lon_e7 = self._last
+        if x_m != cx or y_m != cy:
+            lat, lon = self.frame.to_geodetic(x_m, y_m)
+            lat_e7, lon_e7 = round(float(lat) * 1e7), round(float(lon) * 1e7)
+            self._last = (x_m, y_m, lat_e7, lon_e7)
+        return lat_e7, lon_e7
+
+
 class SitlVehicle:
     """A simulated aPad speaking MAVLink on `transport`. Call `attach(scheduler)` to run it."""
 
@@ -180,8 +199,8 @@ class SitlVehicle:
         self._speed_override_mps = 0.0  # DO_CHANGE_SPEED for later Go Tos; 0: SPEED_MAX
         self._last_physics_us: int | None = None
         self._executed: dict[tuple[int, int], _Executed] = {}
-        self._latlon_cache: tuple[float, float, int, int] = (math.nan, math.nan, 0, 0)  # x, y -> degE7
-        self._target_cache: tuple[float, float, int, int] = (math.nan, math.nan, 0, 0)
+        self._position_e7 = _DegE7(self.frame)  # where the aPad is
+        self._target_e7 = _DegE7(self.frame)  # where its primitive is going
         self._sent_primitive: tuple[Any, ...] | None = None
         self._sent_slots: list[prim.SlotState | None] = [None] * prim.N_SLOTS
         self._scheduler: Scheduler | None = None
@@ -285,7 +304,7 @@ class SitlVehicle:
     @property
     def position_deg(self) -> tuple[float, float]:
         """(lat_deg, lon_deg) of the aPad now."""
-        lat_e7, lon_e7 = self._latlon_e7(self.state.x_m, self.state.y_m)
+        lat_e7, lon_e7 = self._position_e7.of(self.state.x_m, self.state.y_m)
         return lat_e7 / 1e7, lon_e7 / 1e7
 
     def gcs_link_lost(self) -> bool:
@@ -355,24 +374,16 @@ class SitlVehicle:
         if self.log is not None:
             self.log.message(self.now_us, frame)
 
-    def _latlon_e7(self, x_m: float, y_m: float) -> tuple[int, int]:
-        cx, cy, lat_e7, lon_e7 = self._latlon_cache
-        if x_m != cx or y_m != cy:
-            lat, lon = self.frame.to_geodetic(x_m, y_m)
-            lat_e7, lon_e7 = round(float(lat) * 1e7), round(float(lon) * 1e7)
-            self._latlon_cache = (x_m, y_m, lat_e7, lon_e7)
-        return lat_e7, lon_e7
-
     def _send_heartbeat(self) -> None:
         if not self.closed:
             self._send(msgs.heartbeat(self.mode, self.armed))
 
     def _send_position(self, now_us: int) -> None:
-        lat_e7, lon_e7 = self._latlon_e7(self.state.x_m, self.state.y_m)
+        lat_e7, lon_e7 = self._position_e7.of(self.state.x_m, self.state.y_m)
         self._send(msgs.global_position_int(now_us, lat_e7, lon_e7, self.state))
 
     def _send_home(self, now_us: int) -> None:
-        self._send(msgs.home_position(now_us, *self._latlon_e7(0.0, 0.0)))
+        self._send(msgs.home_position(now_us, round(self.home_lat_deg * 1e7), round(self.home_lon_deg * 1e7)))
 
     def _primitive_key(self) -> tuple[Any, ...]:
         p = self.primitive
@@ -380,19 +391,9 @@ class SitlVehicle:
 
     def _send_primitive_status(self, now_us: int) -> None:
         p = self.primitive
-        lat_e7, lon_e7 = (0, 0) if p.kind == Primitive.IDLE else self._target_latlon_e7()
+        lat_e7, lon_e7 = (0, 0) if p.kind == Primitive.IDLE else self._target_e7.of(p.target_x_m, p.target_y_m)
         self._send(msgs.primitive_status(now_us, p, lat_e7, lon_e7, self.state))
         self._sent_primitive = self._primitive_key()
-
-    def _target_latlon_e7(self) -> tuple[int, int]:
-        """The target in degE7; a commanded Go To target is echoed exactly as it was sent."""
-        x_m, y_m = self.primitive.target_x_m, self.primitive.target_y_m
-        cx, cy, lat_e7, lon_e7 = self._target_cache
-        if x_m != cx or y_m != cy:
-            lat, lon = self.frame.to_geodetic(x_m, y_m)
-            lat_e7, lon_e7 = round(float(lat) * 1e7), round(float(lon) * 1e7)
-            self._target_cache = (x_m, y_m, lat_e7, lon_e7)
-        return lat_e7, lon_e7
 
     def _send_slot(self, slot: int) -> None:
         s = self.primitive.slot_state(slot)
@@ -582,7 +583,7 @@ class SitlVehicle:
         speed, radius = cmd.params[0], cmd.params[2]
         speed = speed if math.isfinite(speed) and speed > 0 else self._speed_override_mps
         radius = radius if math.isfinite(radius) and radius > 0 else 0.0
-        self._target_cache = (x_m, y_m, round(lat * 1e7), round(lon * 1e7))
+        self._target_e7.remember(x_m, y_m, round(lat * 1e7), round(lon * 1e7))  # echo the target exactly
         self._set_mode(msgs.ROVER_MODE_GUIDED)
         self._set_primitive(prim.go_to(self.primitive, x_m, y_m, speed, radius))
         return ACCEPTED, 0

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -111,10 +112,34 @@ def seed_stats_table(stats: list[SeedStats], title: str) -> Table:
     return table
 
 
-def fraction_better(results: list[RunResult], scenario: str, a: str, b: str, key: str = "avg") -> float | None:
-    """Fraction of seeds where strategy `a` has a higher uptime `key` than `b` (same scenario and seed)."""
-    by = {(r.strategy, r.seed): r.uptime[key] for r in results if r.scenario == scenario}
+def fraction_of_seeds(results: list[RunResult], scenario: str, claim: Callable[[RunResult, RunResult], bool],
+                      a: str, b: str) -> tuple[int, int]:
+    """(seeds where `claim(run_a, run_b)` holds, seeds with both runs) for one scenario."""
+    by = {(r.strategy, r.seed): r for r in results if r.scenario == scenario}
     seeds = sorted({seed for strategy, seed in by if strategy == a and (b, seed) in by})
-    if not seeds:
-        return None
-    return sum(by[(a, s)] > by[(b, s)] for s in seeds) / len(seeds)
+    return sum(claim(by[(a, s)], by[(b, s)]) for s in seeds), len(seeds)
+
+
+# The robust shape of Table II, and the one comparison the paper's single run cannot settle.
+SHAPE_CLAIMS: tuple[tuple[str, str, str, Callable[[RunResult, RunResult], bool]], ...] = (
+    ("cautious beats no charging (avg uptime)", "cautious", "none", lambda a, b: a.uptime["avg"] > b.uptime["avg"]),
+    ("cautious lifts the minimum above greedy", "cautious", "greedy", lambda a, b: a.uptime["min"] > b.uptime["min"]),
+    ("greedy moves less than cautious", "greedy", "cautious", lambda a, b: a.cost_m < b.cost_m),
+    ("greedy beats no charging (avg uptime)", "greedy", "none", lambda a, b: a.uptime["avg"] > b.uptime["avg"]),
+)
+
+
+def shape_table(results: list[RunResult]) -> Table:
+    """Per scenario, in how many seeds each Table II comparison holds."""
+    scenarios = sorted({r.scenario for r in results})
+    table = Table(title="Shape of Table II, seed by seed", box=box.SIMPLE_HEAD)
+    table.add_column("comparison")
+    for scenario in scenarios:
+        table.add_column(scenario, justify="right")
+    for text, a, b, claim in SHAPE_CLAIMS:
+        cells = []
+        for scenario in scenarios:
+            held, n = fraction_of_seeds(results, scenario, claim, a, b)
+            cells.append(f"{held}/{n} ({held / n:.0%})" if n else "-")
+        table.add_row(text, *cells)
+    return table

@@ -2,7 +2,8 @@
 
     vil run                                    # Table II: pool12 cautious/greedy/none, bay24 greedy
     vil run missions/pool12.toml --strategy greedy --seed 3 --json out.json
-    vil run pool12 --seeds 20                  # mean and spread over 20 freshly drawn fleets
+    vil run pool12 --seeds 20                  # cautious, greedy, none on 20 freshly drawn fleets
+    vil run --seeds 20                         # the same for pool12 and bay24: Table II's shape per seed
 """
 
 from __future__ import annotations
@@ -20,11 +21,13 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from gcs.headless import run_dir, run_mission
 from gcs.planner import COLLECT
-from gcs.results import RunResult, fraction_better, results_table, seed_stats, seed_stats_table
+from gcs.results import RunResult, results_table, seed_stats, seed_stats_table, shape_table
 from gcs.scenario import Scenario, ScenarioError, load_scenario, parse_duration_s
 
 # The paper's Table II runs: (scenario, collection strategy).
 TABLE_II = (("pool12", "cautious"), ("pool12", "greedy"), ("pool12", "none"), ("bay24", "greedy"))
+# Over many seeds every scenario runs these, so the shape of Table II can be checked per seed.
+SHAPE_STRATEGIES = ("cautious", "greedy", "none")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -32,7 +35,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "scenario", nargs="?", metavar="SCENARIO",
         help="scenario file (TOML) or a name in missions/ (pool12, bay24); none: the Table II reproduction",
     )
-    parser.add_argument("--strategy", choices=COLLECT, help="collection strategy (default: the scenario's)")
+    parser.add_argument("--strategy", type=_strategies, metavar="NAME[,NAME...]",
+                        help=f"collection strategy or a comma list of them ({', '.join(COLLECT)}); "
+                             "default: the scenario's")
     parser.add_argument("--seed", type=int, help="seed of the run's random draws (default: the scenario's)")
     parser.add_argument("--seeds", type=int, metavar="N",
                         help="run seeds 1..N, each on a fleet drawn from its seed; print mean and spread")
@@ -44,6 +49,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", type=Path, default=Path("runs"), metavar="DIR",
                         help="output folder; each run leaves DIR/SCENARIO-STRATEGY-seedN/ (default: runs)")
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="parallel runs (default: CPU count)")
+
+
+def _strategies(text: str) -> list[str]:
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    unknown = [n for n in names if n not in COLLECT]
+    if unknown or not names:
+        raise argparse.ArgumentTypeError(f"invalid choice: {text!r} (choose from {', '.join(COLLECT)})")
+    return names
 
 
 def _duration(text: str) -> float:
@@ -70,7 +83,15 @@ class Job:
 
 
 def _jobs(args: argparse.Namespace) -> list[Job]:
-    pairs = [(args.scenario, args.strategy)] if args.scenario else [(name, args.strategy or s) for name, s in TABLE_II]
+    strategies: list[str | None] = list(args.strategy) if args.strategy else [None]
+    if args.scenario:
+        if args.seeds and not args.strategy:
+            strategies = list(SHAPE_STRATEGIES)
+        pairs = [(args.scenario, s) for s in strategies]
+    elif args.seeds:
+        pairs = [(name, s) for name in ("pool12", "bay24") for s in (args.strategy or SHAPE_STRATEGIES)]
+    else:
+        pairs = [(name, s) for name, s in TABLE_II if not args.strategy or s in args.strategy]
     seeds: list[int | None] = list(range(1, args.seeds + 1)) if args.seeds else [args.seed]
     cache: dict[str, Scenario] = {}
     jobs = []
@@ -104,10 +125,7 @@ def run(args: argparse.Namespace) -> int:
     if args.seeds:
         title = f"{len(results)} runs, fleets drawn from seeds 1..{args.seeds}"
         console.print(seed_stats_table(seed_stats(results), title))
-        for scenario in sorted({r.scenario for r in results}):
-            frac = fraction_better(results, scenario, "greedy", "none")
-            if frac is not None:
-                console.print(f"{scenario}: greedy beats no charging on average uptime in {frac:.0%} of seeds")
+        console.print(shape_table(results))
     else:
         title = "Table II reproduction (lockstep SITL)" if not args.scenario else "Mission result"
         console.print(results_table(results, title))
