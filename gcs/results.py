@@ -100,14 +100,14 @@ def seed_stats(results: list[RunResult]) -> list[SeedStats]:
 
 
 def seed_stats_table(stats: list[SeedStats], title: str) -> Table:
-    table = Table(title=title, caption="mean ± standard deviation over seeds", box=box.SIMPLE_HEAD)
-    for col in ("scenario", "strategy", "seeds", "avg %", "max %", "min %", "cost m", "active"):
-        table.add_column(col, justify="left" if col in ("scenario", "strategy") else "right")
+    table = Table(title=title, caption="mean±standard deviation over seeds", box=box.SIMPLE_HEAD, pad_edge=False)
+    for col in ("scenario", "strategy", "n", "avg %", "max %", "min %", "cost m", "active"):
+        table.add_column(col, justify="left" if col in ("scenario", "strategy") else "right", no_wrap=True)
     for s in stats:
         table.add_row(
             s.scenario, s.strategy, str(s.n),
-            *(f"{s.mean[k]:.2f} ± {s.std[k]:.2f}" for k in ("avg", "max", "min")),
-            f"{s.mean['cost_m']:.1f} ± {s.std['cost_m']:.1f}", f"{s.mean['active']:.2f} ± {s.std['active']:.2f}",
+            *(f"{s.mean[k]:.1f}±{s.std[k]:.1f}" for k in ("avg", "max", "min")),
+            f"{s.mean['cost_m']:.0f}±{s.std['cost_m']:.0f}", f"{s.mean['active']:.2f}±{s.std['active']:.1f}",
         )
     return table
 
