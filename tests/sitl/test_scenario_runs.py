@@ -129,3 +129,21 @@ def test_a_broken_scenario_file_names_file_and_field(tmp_path: Path) -> None:
     done = vil("run", str(bad), cwd=tmp_path)
     assert done.returncode == 2
     assert done.stderr.strip() == f"vil run: {bad}: fleet.count: 0 is outside [1, 65535]"
+
+
+def test_seed_statistics_cover_every_strategy_and_report_the_shape(tmp_path: Path) -> None:
+    out = tmp_path / "seeds.json"
+    done = vil("run", "pool12", "--seeds", "3", "--jobs", "2", "--json", str(out), "--out", str(tmp_path / "runs"),
+               cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert "Shape of Table II, seed by seed" in done.stdout and "greedy beats no charging" in done.stdout
+    runs = json.loads(out.read_text())
+    assert sorted((r["strategy"], r["seed"]) for r in runs) == [
+        (s, k) for s in ("cautious", "greedy", "none") for k in (1, 2, 3)
+    ]
+    by = {(r["strategy"], r["seed"]): r for r in runs}
+    # Each seed draws its own fleet (not the saved start configuration), the same for every strategy.
+    starts = {k: [m["start_battery"] for m in by[("none", k)]["mussels"]] for k in (1, 2, 3)}
+    assert starts[1] != starts[2] != starts[3]
+    assert all([m["start_battery"] for m in by[(s, k)]["mussels"]] == starts[k] for s in ("cautious", "greedy")
+               for k in (1, 2, 3))
