@@ -50,7 +50,7 @@ class RunResult:
 
 def results_table(results: list[RunResult], title: str = "Results") -> Table:
     """One row per run; where the paper ran the same thing, its figures follow in a dim row."""
-    table = Table(title=title, caption="dim: the paper's Table II (40 min, theta 30)", box=box.SIMPLE_HEAD)
+    table = Table(title=title, caption="paper: the paper's Table II (40 min, theta 30)", box=box.SIMPLE_HEAD)
     for col in ("run", "avg %", "max %", "min %", "cost m", "active", "cycles"):
         table.add_column(col, justify="left" if col == "run" else "right", no_wrap=True)
     for r in results:

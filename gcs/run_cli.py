@@ -132,8 +132,9 @@ def run(args: argparse.Namespace) -> int:
     mission_s = sum(r.duration_s for r in results)
     run_s = sum(r.wall_s for r in results)
     out_dirs = sorted({str(Path(r.out_dir).parent) for r in results})
-    console.print(f"{len(results)} run(s): {mission_s / 60:.0f} mission minutes in {run_s:.1f} s of CPU "
-                  f"(real-time factor {mission_s / run_s:.0f}); logs, .tlog and traces in {', '.join(out_dirs)}/")
+    console.print(f"{len(results)} run(s) of {mission_s / 60 / len(results):.0f} mission minutes, "
+                  f"{run_s / len(results):.1f} s each (real-time factor {mission_s / run_s:.0f}); "
+                  f"logs, .tlog and traces in {', '.join(out_dirs)}/")
     if args.json:
         payload = [r.to_json() for r in results]
         args.json.write_text(json.dumps(payload[0] if len(payload) == 1 else payload, indent=1) + "\n")
