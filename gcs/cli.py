@@ -7,7 +7,8 @@ import sys
 from collections.abc import Callable, Sequence
 
 from apad_sitl import serve
-from gcs import run_cli
+from gcs import report, run_cli
+from gcs.tui import cli as console_cli
 
 Runner = Callable[[argparse.Namespace], int]
 
@@ -33,6 +34,22 @@ def build_parser() -> argparse.ArgumentParser:
     )
     serve.add_arguments(sitl)
     sitl.set_defaults(runner=serve.run)
+    gcs = sub.add_parser(
+        "gcs",
+        help="the operator console, live against an aPad (--sitl embeds one)",
+        description=console_cli.__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    console_cli.add_gcs_arguments(gcs)
+    gcs.set_defaults(runner=console_cli.run_gcs)
+    replay = sub.add_parser("replay", help="the console driven from a recorded run",
+                            description="Replay a recorded run in the console: play, pause, speed, seek.")
+    console_cli.add_replay_arguments(replay)
+    replay.set_defaults(runner=console_cli.run_replay)
+    report_p = sub.add_parser("report", help="plots, HTML summary and GeoJSON of a recorded run",
+                              description=report.__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    report.add_arguments(report_p)
+    report_p.set_defaults(runner=report.run)
     return parser
 
 

@@ -1,0 +1,346 @@
+"""The live console's world thread: it owns the link, the fleet, an embedded SITL aPad and the loop.
+
+The scheduler and the link are not thread-safe, so everything that touches them runs on the one
+thread that calls `ConsoleRunner.run()` (the console starts it in a Textual worker thread). The UI
+talks to it only through thread-safe doors:
+
+- `LoopControl` flags (pause, stop, strategy), which the loop reads between waits;
+- `submit(command)`: a queue of operator commands, executed through `ApadApi` *between* the
+  loop's waits (never inside another command's ACK wait), or while the loop is not running;
+- `snapshot`: a frozen `Snapshot` (copies) replaced at 10 Hz when something changed.
+
+Nothing here imports Textual: tests drive a runner directly.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from apad_sitl.endpoint import SitlVehicle
+from gcs.api import CommandError
+from gcs.console_model import ConsoleModel, Snapshot, area_outline
+from gcs.events import Event
+from gcs.scenario import Scenario
+from gcs.scenario_loop import EnergySharingLoop, LoopControl
+from gcs.world import MISSION_TELEMETRY_HZ, World, apad_params, build_world
+from mavlink_dialect import Latch, MusselCommand, Primitive, Progress, memory_pair, open_transport
+from mavlink_dialect.clock import Clock, VirtualClock, WallClock, seconds_to_us
+from mavlink_dialect.transport import UdpTransport
+from mussel_sim.placement import load_area
+
+PUBLISH_PERIOD_S = 0.1  # the UI redraws at 10 Hz at most
+SAMPLE_PERIOD_S = 1.0  # one point on the plots per second of mission time
+QUIT_DOCK_WAIT_S = 120.0  # quitting waits this long at most for a dock/undock to finish
+
+
+class PacedClock(VirtualClock):
+    """Lockstep time that runs at most `speed` times the wall clock: a deterministic world a
+    person (or a Pilot test) can watch. `speed` 1 looks like the field; the bits do not depend on it."""
+
+    def __init__(self, speed: float) -> None:
+        super().__init__()
+        if speed <= 0:
+            raise ValueError(f"speed must be positive, got {speed}")
+        self.speed = speed
+        self._wall0 = time.monotonic()
+
+    def sleep(self, dt_s: float) -> None:
+        target_us = self.now_us + seconds_to_us(max(dt_s, 0.0))
+        while True:
+            self.advance_to(min(target_us, self.now_us + 100_000))
+            ahead_s = self.now_us / 1e6 / self.speed - (time.monotonic() - self._wall0)
+            if ahead_s > 0:
+                time.sleep(ahead_s)
+            if self.now_us >= target_us:
+                return
+
+
+# --- operator commands: plain values the UI puts on the queue ---------------------------------
+
+
+@dataclass(frozen=True)
+class Hold:
+    """Abort whatever the aPad does: Hold Position."""
+
+
+@dataclass(frozen=True)
+class GoToMussel:
+    mussel_id: int
+
+
+@dataclass(frozen=True)
+class DockMussel:
+    mussel_id: int
+
+
+@dataclass(frozen=True)
+class UndockMussel:
+    mussel_id: int
+
+
+OperatorCommand = Hold | GoToMussel | DockMussel | UndockMussel
+
+
+@dataclass(frozen=True)
+class ConsoleConfig:
+    scenario: Scenario
+    connect: str | None = None  # udp:HOST:PORT of a real or separate SITL aPad
+    sitl: str | None = None  # embedded SITL aPad: "memory" (in-memory pair) or "udp" (localhost socket)
+    speed: float | None = None  # None: wall clock; else a PacedClock at this speed (SITL only)
+    out_dir: Path | None = None  # gcs.tlog and events.jsonl, replayable with `vil replay`
+    start_paused: bool = False  # connect and show, but start the loop only on resume
+    connect_timeout_s: float = 5.0
+
+
+def open_world(config: ConsoleConfig) -> World:
+    """Fleet, link and API on the console's clock, with an aPad transport: remote or embedded SITL."""
+    s = config.scenario
+    if (config.connect is None) == (config.sitl is None):
+        raise ValueError("give exactly one of connect or sitl")
+    clock: Clock = WallClock() if config.speed is None else PacedClock(config.speed)
+    epoch_us = int(time.time() * 1e6)  # live .tlog stamps are real dates
+    if config.connect is not None:
+        transport = open_transport(config.connect)
+        world = build_world(s, clock, config.out_dir, epoch_us)
+        world.link.add_transport(transport)
+        return world
+    world = build_world(s, clock, config.out_dir, epoch_us)
+    if config.sitl == "udp":
+        apad_end: Any = UdpTransport("127.0.0.1", 0, listen=True)
+        gcs_end: Any = open_transport(f"udp:127.0.0.1:{apad_end.local_port}")
+    else:
+        gcs_end, apad_end = memory_pair("apad")
+    a = s.apad
+    vehicle = SitlVehicle(
+        apad_end, apad_params(s), a.home_lat_deg, a.home_lon_deg, system_id=a.system_id,
+        current_mps=(s.environment.current_east_mps, s.environment.current_north_mps),
+        log_dir=config.out_dir, log_epoch_us=epoch_us,
+    )
+    vehicle.attach(clock.scheduler, clock.now_us)
+    world.link.add_transport(gcs_end)
+    world.vehicle = vehicle
+    return world
+
+
+class _ServingClock:
+    """The loop's clock: before each wait it runs the operator's queued commands.
+
+    Only the loop's own waits go through here; the API's ACK waits use the raw clock, so an
+    operator command never starts inside another command.
+    """
+
+    def __init__(self, clock: Clock, serve: Any) -> None:
+        self._clock = clock
+        self._serve = serve
+        self.scheduler = clock.scheduler
+
+    @property
+    def now_us(self) -> int:
+        return self._clock.now_us
+
+    def time(self) -> float:
+        return self._clock.time()
+
+    def sleep(self, dt_s: float) -> None:
+        self._serve()
+        self._clock.sleep(dt_s)
+
+
+class ConsoleRunner:
+    def __init__(self, config: ConsoleConfig) -> None:
+        self.config = config
+        self.control = LoopControl(paused=config.start_paused)
+        self.snapshot: Snapshot | None = None  # replaced whole; readers never see a half-built one
+        self.world: World | None = None
+        self.loop: EnergySharingLoop | None = None
+        self.error: str | None = None
+        self.finished = threading.Event()
+        self._commands: queue.SimpleQueue[OperatorCommand] = queue.SimpleQueue()
+        self._quit = threading.Event()
+        self._notice = "connecting" if config.connect else "starting the SITL aPad"
+        self._model: ConsoleModel | None = None
+        self._last_event: Event | None = None
+        self._published = (-1, False, None, "")
+
+    # --- the UI's doors (any thread) -------------------------------------------------------------
+
+    def submit(self, command: OperatorCommand) -> None:
+        """Queue an operator command; a command that moves the aPad pauses the loop first."""
+        self.control.paused = True
+        self._commands.put(command)
+
+    def set_paused(self, paused: bool) -> None:
+        self.control.paused = paused
+
+    def switch_strategy(self, name: str) -> None:
+        with self.control.lock:
+            self.control.strategy = name
+
+    def request_quit(self) -> None:
+        """End the mission (never mid-dock), leave the aPad holding, close everything."""
+        self._quit.set()
+        self.control.stop = True
+        self._notice = "quitting: the loop stops at its next safe point (never mid-dock), then the aPad holds"
+
+    # --- the world thread ------------------------------------------------------------------------
+
+    def run(self) -> None:
+        try:
+            self.world = world = open_world(self.config)
+        except (OSError, ValueError) as exc:
+            self.error = f"cannot start: {exc}"
+            self.finished.set()
+            return
+        try:
+            self._run(world)
+        except Exception as exc:  # shown on the console, not lost in a worker thread
+            self.error = f"{type(exc).__name__}: {exc}"
+            self._publish(world.clock.now_us)
+            raise
+        finally:
+            world.close()
+            self.finished.set()
+
+    def _run(self, world: World) -> None:
+        s = world.scenario
+        clock = world.clock
+        source = self.config.connect or f"embedded SITL ({self.config.sitl})"
+        model = ConsoleModel(
+            s.apad.system_id, s.mission.pool_threshold, s.mission.duration_s, source,
+            world.start.ids.astype(np.int64), area_outline(load_area(s.fleet.area).geometry),
+        )
+        model.strategy = s.mission.collect_strategy  # until the loop says otherwise
+        self._model = model
+        world.link.attach(model.handle)  # sees all the .tlog sees, the GCS's own commands included
+        clock.scheduler.every(PUBLISH_PERIOD_S, self._publish, "console.publish", clock.now_us)
+        clock.scheduler.every(SAMPLE_PERIOD_S, lambda now_us: model.sample(now_us / 1e6), "console.sample",
+                              clock.now_us)
+        if not self._wait_for_apad(world):
+            return
+        world.api.set_telemetry_rates(MISSION_TELEMETRY_HZ)
+        self._notice = "loop paused: press p to start" if self.control.paused else ""
+        while self.control.paused and not self._quit.is_set():
+            self._serve()
+            clock.sleep(PUBLISH_PERIOD_S)
+        if not self._quit.is_set():
+            self.loop = loop = world.mission_loop(self.control)
+            loop.clock = _ServingClock(clock, self._serve)  # operator commands between the loop's waits
+            self._notice = ""
+            end = loop.run()
+            self._notice = f"mission ended: {end}"
+        while not self._quit.is_set():  # telemetry and manual commands go on until the operator quits
+            self._serve()
+            clock.sleep(PUBLISH_PERIOD_S)
+        self._leave_holding(world)
+
+    def _wait_for_apad(self, world: World) -> bool:
+        while not self._quit.is_set():
+            try:
+                world.api.wait_apad(timeout_s=self.config.connect_timeout_s, apad_id=world.scenario.apad.system_id)
+                return True
+            except TimeoutError:
+                self._notice = f"no aPad heard on {self.config.connect or 'the SITL link'}; still listening"
+        return False
+
+    def _leave_holding(self, world: World) -> None:
+        """Quit: let a dock or undock finish, then hold (the loop already did if it ran)."""
+        api, apad = world.api, world.scenario.apad.system_id
+        if apad not in world.link.vehicles:
+            return
+        deadline = world.clock.time() + QUIT_DOCK_WAIT_S
+        while _docking(world) and world.clock.time() < deadline:
+            self._notice = "quitting: waiting for the dock to finish"
+            world.clock.sleep(0.2)
+        try:
+            api.hold(apad)
+        except CommandError as exc:
+            self.error = str(exc)
+
+    def _serve(self) -> None:
+        """Run queued operator commands through the aPad API (world thread only)."""
+        world = self.world
+        assert world is not None
+        while True:
+            try:
+                command = self._commands.get_nowait()
+            except queue.Empty:
+                return
+            try:
+                self._notice = self._execute(world, command)
+            except (CommandError, LookupError) as exc:
+                self._notice = f"refused: {exc}"
+
+    def _execute(self, world: World, command: OperatorCommand) -> str:
+        api, apad = world.api, world.scenario.apad.system_id
+        match command:
+            case Hold():
+                api.hold(apad)
+                return "override: aPad holding, loop paused"
+            case GoToMussel(mussel_id):
+                api.go_to(api.get_location(mussel_id), apad_id=apad)
+                return f"manual: going to aMussel {mussel_id}, loop paused"
+            case DockMussel(mussel_id):
+                free = [s.slot for s in api.slots(apad) if s.latch == Latch.OPEN and s.mussel_id == 0]
+                if not free:
+                    return "refused: no free slot"
+                api.command_mussel(mussel_id, MusselCommand.SURFACE, apad)
+                api.docking(True, free[0], mussel_id, apad)
+                return f"manual: docking aMussel {mussel_id} in slot {free[0]}, loop paused"
+            case UndockMussel(mussel_id):
+                slots = [s.slot for s in api.slots(apad) if s.mussel_id == mussel_id and s.latch == Latch.LATCHED]
+                if not slots:
+                    return f"refused: aMussel {mussel_id} is not docked"
+                api.docking(False, slots[0], mussel_id, apad)
+                return f"manual: undocking aMussel {mussel_id} from slot {slots[0]}, loop paused"
+        raise AssertionError(command)
+
+    def _publish(self, now_us: int) -> None:
+        """Pull new mission events into the model; publish a snapshot if anything changed."""
+        model, world = self._model, self.world
+        if model is None or world is None:
+            return
+        events = world.events.events
+        fresh: list[Event] = []
+        for ev in reversed(events):
+            if ev is self._last_event:
+                break
+            fresh.append(ev)
+        for ev in reversed(fresh):
+            model.event(ev)
+        if events:
+            self._last_event = events[-1]
+        with self.control.lock:
+            pending = self.control.strategy
+        key = (model.version, self.control.paused, pending, self._notice + (self.error or ""))
+        if key == self._published:
+            return
+        self._published = key
+        notice = f"error: {self.error}" if self.error else self._notice
+        self.snapshot = model.snapshot(now_us / 1e6, paused=self.control.paused, pending_strategy=pending,
+                                       notice=notice)
+
+
+def _docking(world: World) -> bool:
+    view = world.link.vehicles.get(world.scenario.apad.system_id)
+    return view is not None and view.primitive.primitive in (Primitive.DOCK, Primitive.UNDOCK) and (
+        view.primitive.progress == Progress.IN_PROGRESS
+    )
+
+
+__all__ = [
+    "ConsoleConfig",
+    "ConsoleRunner",
+    "DockMussel",
+    "GoToMussel",
+    "Hold",
+    "OperatorCommand",
+    "PacedClock",
+    "UndockMussel",
+]

@@ -1,0 +1,182 @@
+"""Recorded runs for the console and reports: the GCS .tlog plus events.jsonl, frame by frame.
+
+A run folder (from `vil run`/`run_mission` or the live console's `--out`) holds `gcs.tlog`, in
+which every message the GCS saw is stamped (aMussel statuses, aPad telemetry, the GCS's own
+commands), and `events.jsonl` with the loop's phases. Replaying feeds both, in time order, to
+the same `ConsoleModel` the live console uses and keeps one `Snapshot` per second of mission
+time, so seeking is an index lookup.
+"""
+
+from __future__ import annotations
+
+import bisect
+import json
+import struct
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from gcs.console_model import ConsoleModel, Snapshot, area_outline
+from gcs.events import Event
+from gcs.link import GCS_SYSTEM_ID
+from gcs.scenario import Scenario, ScenarioError, load_scenario
+from mavlink_dialect import Codec, mavlink
+from mussel_sim.placement import load_area
+
+REPO_MISSIONS = Path(__file__).resolve().parents[1] / "missions"
+
+
+class ReplayError(ValueError):
+    pass
+
+
+def read_tlog(path: Path) -> Iterator[tuple[int, mavlink.MAVLink_message]]:
+    """(time_us, message) per record: an 8-byte big-endian stamp, then one MAVLink frame."""
+    data = path.read_bytes()
+    codec = Codec(GCS_SYSTEM_ID, 0)
+    i = 0
+    while i + 9 < len(data):
+        (stamp,) = struct.unpack_from(">Q", data, i)
+        magic, length = data[i + 8], data[i + 9]
+        if magic == 0xFD:
+            signed = len(data) > i + 10 and data[i + 10] & 0x01
+            size = 12 + length + (13 if signed else 0)
+        elif magic == 0xFE:
+            size = 8 + length
+        else:
+            raise ReplayError(f"{path}: not a MAVLink .tlog (bad frame at byte {i + 8})")
+        for msg in codec.decode(data[i + 8 : i + 8 + size]):
+            yield stamp, msg
+        i += 8 + size
+
+
+def read_events(path: Path) -> list[Event]:
+    if not path.exists():
+        return []
+    out = []
+    for line in path.read_text().splitlines():
+        if line.strip():
+            obj = json.loads(line)
+            t_s, kind = float(obj.pop("t_s")), str(obj.pop("event"))
+            out.append(Event(t_s, kind, obj))
+    return out
+
+
+@dataclass
+class RunFiles:
+    folder: Path
+    tlog: Path
+    events: Path
+    result: dict[str, object]
+
+
+def run_files(path: str | Path) -> RunFiles:
+    p = Path(path)
+    if p.is_dir():
+        tlog = p / "gcs.tlog"
+        if not tlog.exists():
+            raise ReplayError(f"{p}: no gcs.tlog in this folder")
+    elif p.is_file():
+        tlog, p = p, p.parent
+    else:
+        raise ReplayError(f"{p}: no such run folder or .tlog")
+    result_path = p / "result.json"
+    result = json.loads(result_path.read_text()) if result_path.exists() else {}
+    console_path = p / "console.json"
+    if console_path.exists():
+        result = {**json.loads(console_path.read_text()), **result}
+    return RunFiles(p, tlog, p / "events.jsonl", result)
+
+
+def find_scenario(files: RunFiles, explicit: str | Path | None = None) -> Scenario | None:
+    """The run's scenario: given, named in console.json, or missions/NAME.toml by result.json's name."""
+    candidates: list[Path] = []
+    if explicit is not None:
+        candidates.append(Path(explicit))
+    if isinstance(files.result.get("scenario_path"), str):
+        candidates.append(Path(str(files.result["scenario_path"])))
+    name = files.result.get("scenario")
+    if isinstance(name, str):
+        candidates += [Path("missions") / f"{name}.toml", REPO_MISSIONS / f"{name}.toml"]
+    for path in candidates:
+        if path.exists():
+            try:
+                return load_scenario(path)
+            except ScenarioError:
+                if explicit is not None:
+                    raise
+    if explicit is not None:
+        raise ReplayError(f"{explicit}: no such scenario file")
+    return None
+
+
+class Replay:
+    """One snapshot per second of a recorded run."""
+
+    def __init__(self, frames: list[Snapshot], source: str) -> None:
+        if not frames:
+            raise ReplayError(f"{source}: the log holds no mission time")
+        self.frames = frames
+        self.source = source
+        self._times = [f.t_s for f in frames]
+        self.end_s = frames[-1].t_s
+
+    def at(self, t_s: float) -> Snapshot:
+        k = bisect.bisect_right(self._times, t_s) - 1
+        return self.frames[max(k, 0)]
+
+
+def load_replay(path: str | Path, scenario: str | Path | None = None) -> Replay:
+    files = run_files(path)
+    found = find_scenario(files, scenario)
+    stream = list(read_tlog(files.tlog))
+    if not stream:
+        raise ReplayError(f"{files.tlog}: empty log")
+    t0_us = stream[0][0]
+    apad_id, ids = _apad_and_mussels(stream)
+    if found is not None:
+        outline = area_outline(load_area(found.fleet.area).geometry)
+        model = ConsoleModel(found.apad.system_id, found.mission.pool_threshold, found.mission.duration_s,
+                             str(files.folder), ids, outline)
+    else:
+        model = ConsoleModel(apad_id, 0.8, (stream[-1][0] - t0_us) / 1e6, str(files.folder), ids)
+    events = read_events(files.events)
+    frames: list[Snapshot] = []
+    next_sample_s = 0.0
+    e = 0
+
+    def sample_until(t_s: float) -> None:
+        nonlocal next_sample_s, e
+        while next_sample_s <= t_s:
+            while e < len(events) and events[e].t_s <= next_sample_s:
+                model.event(events[e])
+                e += 1
+            model.sample(next_sample_s)
+            frames.append(model.snapshot(next_sample_s))
+            next_sample_s += 1.0
+
+    for stamp, msg in stream:
+        t_s = (stamp - t0_us) / 1e6
+        if t_s >= next_sample_s:
+            sample_until(t_s - 1e-9)
+        model.handle(msg)
+    end_s = stream[-1][0] - t0_us
+    sample_until(end_s / 1e6)
+    for ev in events[e:]:
+        model.event(ev)
+    frames.append(model.snapshot(end_s / 1e6))
+    return Replay(frames, str(files.folder))
+
+
+def _apad_and_mussels(stream: list[tuple[int, mavlink.MAVLink_message]]) -> tuple[int, np.ndarray]:
+    apad_id = 1
+    ids: set[int] = set()
+    for _, msg in stream:
+        kind = msg.get_type()
+        if kind == "AMUSSEL_STATUS":
+            ids.add(msg.mussel_id)
+        elif kind == "HEARTBEAT" and msg.type == mavlink.MAV_TYPE_SURFACE_BOAT:
+            apad_id = msg.get_srcSystem()
+    return apad_id, np.array(sorted(ids), np.int64)

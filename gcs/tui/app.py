@@ -1,0 +1,251 @@
+"""The console apps: one screen, two drivers.
+
+`LiveConsole` shows a `ConsoleRunner` (the world runs in a worker thread; keys go through
+`LoopControl` and the runner's command queue, never to the API from the UI thread).
+`ReplayConsole` shows a recorded run with play, pause, speed and seek. Both redraw from plain
+snapshots on a 10 Hz timer, and only when the snapshot changed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+from typing import ClassVar
+
+from textual import on
+from textual.app import App, ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal, Vertical
+from textual.reactive import reactive
+from textual.widgets import Footer
+from textual.worker import Worker, WorkerState
+
+from gcs.console_model import Snapshot
+from gcs.console_runner import ConsoleRunner, DockMussel, GoToMussel, Hold, UndockMussel
+from gcs.planner import COLLECT
+from gcs.replay import Replay
+from gcs.tui.help import HelpScreen
+from gcs.tui.widgets import LEGEND, Chart, EventLog, FleetTable, MapView, StatusPanel
+
+REDRAW_PERIOD_S = 0.1
+
+
+class ConsoleApp(App[None]):
+    CSS_PATH = "console.tcss"
+    HELP_INTRO = ""
+
+    def compose(self) -> ComposeResult:
+        with Horizontal(id="top"):
+            yield MapView(id="map")
+            with Vertical(id="side"):
+                yield StatusPanel(id="status")
+                yield FleetTable(id="fleet")
+                yield EventLog(id="log")
+        with Horizontal(id="plots"):
+            yield Chart("battery", id="batteries")
+            yield Chart("active", id="active")
+            yield Chart("apad", id="apad-battery")
+        yield Footer()
+
+    def on_mount(self) -> None:
+        # Looked up once: a timer firing during shutdown must not query a torn-down DOM.
+        self.map_view = self.query_one(MapView)
+        self.status_panel = self.query_one(StatusPanel)
+        self.fleet = self.query_one(FleetTable)
+        self.event_log = self.query_one(EventLog)
+        self.charts = list(self.query(Chart))
+        self.map_view.border_title = "Map"
+        self.map_view.border_subtitle = LEGEND
+        # Escaped brackets: Textual would read [count] as markup.
+        titles = (r"aMussel battery \[%]", r"active aMussels \[count]", r"aPad battery \[V]")
+        for chart, title in zip(self.charts, titles, strict=True):
+            chart.border_title = title
+            chart.border_subtitle = r"mission time \[mm:ss]"
+        self.query_one("#log").border_title = "events"
+        self._shown: Snapshot | None = None
+        self.set_interval(REDRAW_PERIOD_S, self.redraw)
+
+    def current(self) -> Snapshot | None:
+        raise NotImplementedError
+
+    def header(self) -> str:
+        return ""
+
+    def redraw(self) -> None:
+        snap = self.current()
+        if snap is None or snap is self._shown:
+            return
+        self._shown = snap
+        self.map_view.show(snap)
+        self.status_panel.show(snap, self.header())
+        self.fleet.show(snap)
+        self.event_log.show(snap)
+        for chart in self.charts:
+            chart.show(snap)
+
+    def action_help(self) -> None:
+        self.push_screen(HelpScreen([b for b in self.BINDINGS if isinstance(b, Binding)], self.HELP_INTRO))
+
+
+class LiveConsole(ConsoleApp):
+    TITLE = "vil gcs"
+    HELP_INTRO = ("Live console. Override, go-to, dock and undock pause the scenario loop first; "
+                  "p resumes it. Quit ends the mission, lets a dock finish and leaves the aPad holding.")
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("p", "toggle_pause", "Pause/resume"),
+        Binding("o", "override", "Override: hold"),
+        Binding("s", "switch_strategy", "Strategy"),
+        Binding("g", "goto", "Go to selected"),
+        Binding("d", "dock", "Dock selected"),
+        Binding("u", "undock", "Undock selected"),
+        Binding("question_mark", "help", "Help", key_display="?"),
+        Binding("q", "quit_console", "Quit"),
+    ]
+
+    paused: reactive[bool] = reactive(False, init=False)
+
+    def __init__(self, runner: ConsoleRunner) -> None:
+        super().__init__()
+        self.runner = runner
+        self.set_reactive(LiveConsole.paused, runner.control.paused)
+        self.quitting = False
+
+    def on_mount(self) -> None:
+        super().on_mount()
+        # The world (link, fleet, SITL, loop) lives on this one thread for the whole session.
+        self.run_worker(self.runner.run, name="world", thread=True, exit_on_error=False)
+
+    def on_unmount(self) -> None:
+        # However the app ends (q, an error, a test), the world thread must not outlive it.
+        self.runner.request_quit()
+
+    def current(self) -> Snapshot | None:
+        return self.runner.snapshot
+
+    def header(self) -> str:
+        return "LIVE  " + (self.runner.snapshot.source if self.runner.snapshot else "")
+
+    def watch_paused(self, paused: bool) -> None:
+        self.runner.set_paused(paused)
+
+    def action_toggle_pause(self) -> None:
+        self.paused = not self.runner.control.paused
+
+    def action_override(self) -> None:
+        self.runner.submit(Hold())
+        self.paused = True
+
+    def action_switch_strategy(self) -> None:
+        snap = self.runner.snapshot
+        now = (snap.pending_strategy or snap.strategy) if snap else COLLECT[0]
+        following = COLLECT[(COLLECT.index(now) + 1) % len(COLLECT)] if now in COLLECT else COLLECT[0]
+        self.runner.switch_strategy(following)
+        self.notify(f"strategy {following} from the next planning step")
+
+    def _selected(self) -> int | None:
+        mussel = self.fleet.selected_mussel()
+        if mussel is None:
+            self.notify("select an aMussel in the fleet table first", severity="warning")
+        return mussel
+
+    def action_goto(self) -> None:
+        if (m := self._selected()) is not None:
+            self.runner.submit(GoToMussel(m))
+            self.paused = True
+
+    def action_dock(self) -> None:
+        if (m := self._selected()) is not None:
+            self.runner.submit(DockMussel(m))
+            self.paused = True
+
+    def action_undock(self) -> None:
+        if (m := self._selected()) is not None:
+            self.runner.submit(UndockMussel(m))
+            self.paused = True
+
+    def action_quit_console(self) -> None:
+        if not self.quitting:
+            self.quitting = True
+            self.runner.request_quit()
+            self.notify("quitting: ending the mission, leaving the aPad holding")
+        if self.runner.finished.is_set():
+            self.exit()
+
+    @on(Worker.StateChanged)
+    def world_ended(self, event: Worker.StateChanged) -> None:
+        if event.worker.name == "world" and event.state in (WorkerState.SUCCESS, WorkerState.ERROR):
+            if self.quitting:
+                self.exit()
+            elif self.runner.error:
+                self.notify(self.runner.error, severity="error", timeout=30)
+
+
+class ReplayConsole(ConsoleApp):
+    TITLE = "vil replay"
+    HELP_INTRO = "Replay of a recorded run: the same screen as the live console, driven from its logs."
+    BINDINGS: ClassVar[list[BindingType]] = [
+        # Priority: the fleet table would take these keys for its own scrolling.
+        Binding("space", "toggle_play", "Play/pause", priority=True),
+        Binding("plus,equals_sign", "faster", "Faster", key_display="+"),
+        Binding("minus", "slower", "Slower", key_display="-"),
+        Binding("right", "seek(10)", "+10 s", priority=True),
+        Binding("left", "seek(-10)", "-10 s", priority=True),
+        Binding("shift+right,pagedown", "seek(60)", "+60 s", show=False, priority=True),
+        Binding("shift+left,pageup", "seek(-60)", "-60 s", show=False, priority=True),
+        Binding("home", "seek_to(0)", "Start", show=False, priority=True),
+        Binding("end", "seek_to(-1)", "End", show=False, priority=True),
+        Binding("question_mark", "help", "Help", key_display="?"),
+        Binding("q", "quit", "Quit"),
+    ]
+
+    playing: reactive[bool] = reactive(True)
+    speed: reactive[float] = reactive(8.0)
+    position_s: reactive[float] = reactive(0.0)
+
+    def __init__(self, replay: Replay, start_s: float = 0.0, playing: bool = True, speed: float = 8.0) -> None:
+        super().__init__()
+        self.replay = replay
+        self.set_reactive(ReplayConsole.position_s, start_s)
+        self.set_reactive(ReplayConsole.playing, playing)
+        self.set_reactive(ReplayConsole.speed, speed)
+        self._framed: tuple[object, ...] = ()
+        self._frame: Snapshot | None = None
+
+    def on_mount(self) -> None:
+        super().on_mount()
+        self.set_interval(REDRAW_PERIOD_S, self._advance)
+
+    def _advance(self) -> None:
+        if self.playing:
+            self.position_s = min(self.position_s + REDRAW_PERIOD_S * self.speed, self.replay.end_s)
+            if self.position_s >= self.replay.end_s:
+                self.playing = False
+
+    def current(self) -> Snapshot | None:
+        frame = self.replay.at(self.position_s)
+        key = (id(frame), self.playing, self.speed)
+        if key != self._framed:  # a new object only when something shown changed
+            self._framed = key
+            state = "▶" if self.playing else "⏸"
+            self._frame = replace(frame, notice=f"{state} {self.speed:g}x   {frame.notice}".rstrip())
+        return self._frame
+
+    def header(self) -> str:
+        return f"REPLAY  {Path(self.replay.source).name}"
+
+    def action_toggle_play(self) -> None:
+        if not self.playing and self.position_s >= self.replay.end_s:
+            self.position_s = 0.0
+        self.playing = not self.playing
+
+    def action_faster(self) -> None:
+        self.speed = min(self.speed * 2, 256.0)
+
+    def action_slower(self) -> None:
+        self.speed = max(self.speed / 2, 0.25)
+
+    def action_seek(self, delta_s: float) -> None:
+        self.position_s = min(max(self.position_s + delta_s, 0.0), self.replay.end_s)
+
+    def action_seek_to(self, t_s: float) -> None:
+        self.position_s = self.replay.end_s if t_s < 0 else min(t_s, self.replay.end_s)

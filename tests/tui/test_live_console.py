@@ -1,0 +1,147 @@
+"""The live console driven headless with Pilot: each key goes through the runner to the SITL aPad.
+
+The world runs on a PacedClock (lockstep, 40x real time) in the console's worker thread, with the
+SITL aPad over an in-memory pair of real MAVLink bytes; assertions read the SITL vehicle itself.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from pathlib import Path
+
+import pytest
+from tui_helpers import screen_text, wait_for
+
+from gcs.console_runner import ConsoleConfig, ConsoleRunner
+from gcs.planner import COLLECT
+from gcs.scenario import load_scenario
+from gcs.tui.app import LiveConsole
+from mavlink_dialect import Primitive
+
+pytestmark = [pytest.mark.tui, pytest.mark.sitl]
+
+POOL12 = Path(__file__).resolve().parents[2] / "missions" / "pool12.toml"
+SIZE = (150, 46)
+HOLD_MODE = 4
+
+
+def make_app(start_paused: bool = False, speed: float = 40.0) -> tuple[LiveConsole, ConsoleRunner]:
+    runner = ConsoleRunner(ConsoleConfig(load_scenario(POOL12), sitl="memory", speed=speed, start_paused=start_paused))
+    return LiveConsole(runner), runner
+
+
+def events_of(runner: ConsoleRunner, kind: str) -> list[dict[str, object]]:
+    assert runner.world is not None
+    return [e.fields for e in list(runner.world.events.events) if e.kind == kind]
+
+
+def test_map_and_table_appear_and_q_leaves_the_apad_holding() -> None:
+    async def scenario() -> None:
+        app, runner = make_app(start_paused=True)
+        async with app.run_test(size=SIZE) as pilot:
+            await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.apad_lat_deg is not None
+                           and runner.snapshot.hist_t_s.size > 0)
+            await pilot.pause(0.3)
+            text = screen_text(app)
+            assert "Map" in text and "◆" in text and "●" in text  # area, aPad, aMussels
+            assert "battery %" in text and "uptime %" in text
+            assert "loop paused" in text
+            await pilot.press("q")
+            await wait_for(pilot, runner.finished.is_set)
+            await pilot.pause(0.2)
+        assert not app.is_running
+        vehicle = runner.world.vehicle
+        assert vehicle is not None and vehicle.closed
+        assert vehicle.mode == HOLD_MODE and vehicle.primitive.kind == Primitive.HOLD
+
+    asyncio.run(scenario())
+
+
+def test_pause_stops_the_loop_and_resume_restarts_it() -> None:
+    async def scenario() -> None:
+        app, runner = make_app()
+        async with app.run_test(size=SIZE) as pilot:
+            await wait_for(pilot, lambda: bool(runner.world and events_of(runner, "call_up")))
+            await pilot.press("p")
+            await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.paused)
+            assert runner.control.paused
+            await pilot.pause(0.3)  # the loop reaches its next wait and stays there
+            assert runner.snapshot is not None
+            n_events, t0 = len(runner.world.events.events), runner.snapshot.t_s
+            await pilot.pause(1.5)  # 60 s of mission time at 40x
+            assert len(runner.world.events.events) == n_events  # the loop did nothing
+            assert runner.snapshot.t_s > t0 + 10  # while the world (aPad, fleet) ran on
+            assert "PAUSED" in screen_text(app)
+            await pilot.press("p")
+            await wait_for(pilot, lambda: len(runner.world.events.events) > n_events)
+            assert not runner.control.paused
+            runner.request_quit()  # no need to wait out the dock in progress
+        runner.finished.wait(30)
+
+    asyncio.run(scenario())
+
+
+def test_override_sends_hold_to_the_sitl() -> None:
+    async def scenario() -> None:
+        app, runner = make_app()
+        async with app.run_test(size=SIZE) as pilot:
+            await wait_for(pilot, lambda: runner.world is not None and runner.world.vehicle is not None
+                           and runner.world.vehicle.primitive.kind == Primitive.GOTO)
+            await pilot.press("o")
+            vehicle = runner.world.vehicle
+            await wait_for(pilot, lambda: vehicle.primitive.kind == Primitive.HOLD and vehicle.mode == HOLD_MODE)
+            assert runner.control.paused and app.paused
+            await wait_for(pilot, lambda: "override: aPad holding" in screen_text(app))
+            # The SITL's own log saw the GCS's mode command.
+            assert vehicle.mode == HOLD_MODE
+            runner.request_quit()
+        runner.finished.wait(30)
+
+    asyncio.run(scenario())
+
+
+def test_strategy_switch_takes_effect_at_the_next_planning_step() -> None:
+    async def scenario() -> None:
+        app, runner = make_app(start_paused=True)
+        async with app.run_test(size=SIZE) as pilot:
+            await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.apad_lat_deg is not None)
+            first = load_scenario(POOL12).mission.collect_strategy
+            wanted = COLLECT[(COLLECT.index(first) + 1) % len(COLLECT)]
+            await pilot.press("s")
+            assert runner.control.strategy == wanted
+            await wait_for(pilot, lambda: f"→ {wanted} at next plan" in screen_text(app))
+            assert not events_of(runner, "plan_collection")  # nothing planned yet: the switch is pending
+            await pilot.press("p")
+            await wait_for(pilot, lambda: bool(events_of(runner, "plan_collection")))
+            assert events_of(runner, "strategy_switch") == [{"old": first, "new": wanted}]
+            assert events_of(runner, "plan_collection")[0]["strategy"] == wanted
+            await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.strategy == wanted)
+            runner.request_quit()
+        runner.finished.wait(30)
+
+    asyncio.run(scenario())
+
+
+def test_manual_go_to_the_selected_amussel() -> None:
+    async def scenario() -> None:
+        app, runner = make_app(start_paused=True)
+        async with app.run_test(size=SIZE) as pilot:
+            await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.hist_t_s.size > 1)
+            await pilot.pause(0.2)
+            app.fleet.focus()
+            await pilot.press("down", "down")  # the third row: aMussel 3
+            assert app.fleet.selected_mussel() == 3
+            await pilot.press("g")
+            vehicle = runner.world.vehicle
+            await wait_for(pilot, lambda: vehicle.primitive.kind == Primitive.GOTO)
+            home = runner.world.homes[3]
+            lat, lon = vehicle.frame.to_geodetic(vehicle.primitive.target_x_m, vehicle.primitive.target_y_m)
+            assert abs(float(lat) - home.lat) < 2e-5 and abs(float(lon) - home.lon) < 2e-5
+            await pilot.press("q")
+            await wait_for(pilot, runner.finished.is_set)
+        assert runner.world.vehicle.mode == HOLD_MODE
+
+    started = time.monotonic()
+    asyncio.run(scenario())
+    assert time.monotonic() - started < 20
