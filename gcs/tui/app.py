@@ -31,7 +31,7 @@ REDRAW_PERIOD_S = 0.1
 
 
 class ConsoleApp(App[None]):
-    CSS_PATH = "console.tcss"
+    CSS_PATH = Path(__file__).with_name("console.tcss")  # absolute: subclasses live elsewhere
     HELP_INTRO = ""
 
     def compose(self) -> ComposeResult:

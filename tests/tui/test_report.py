@@ -1,0 +1,35 @@
+"""`vil report`: PNGs, the HTML page with the Table II indices, GeoJSON, from a recorded run."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from gcs.cli import main
+
+pytestmark = pytest.mark.tui
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+def test_report_writes_plots_page_and_geojson(recorded_run: Path, tmp_path: Path) -> None:
+    out = tmp_path / "report"
+    assert main(["report", str(recorded_run), "-o", str(out)]) == 0
+    for name in ("battery.png", "active.png", "uptime.png", "track.png"):
+        data = (out / name).read_bytes()
+        assert data.startswith(PNG_MAGIC) and len(data) > 20_000, name
+    page = (out / "index.html").read_text()
+    for text in ("avg uptime %", "cost m", "active aMussels (mean)", "33.4", "battery.png", "run.geojson"):
+        assert text in page
+    geo = json.loads((out / "run.geojson").read_text())
+    kinds = [f["geometry"]["type"] for f in geo["features"]]
+    assert kinds[0] == "LineString" and kinds.count("Point") == 24  # 12 aMussels, start and end
+    track = geo["features"][0]["geometry"]["coordinates"]
+    assert len(track) > 200 and all(15.43 < lon < 15.45 and 43.93 < lat < 43.95 for lon, lat in track)
+
+
+def test_report_of_a_missing_run_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["report", str(tmp_path / "nope"), "-o", str(tmp_path / "out")]) == 2
+    assert capsys.readouterr().err.startswith("vil report:")

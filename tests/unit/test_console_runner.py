@@ -1,0 +1,95 @@
+"""The console's world-thread runner and model, without Textual."""
+
+from __future__ import annotations
+
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gcs.console_model import ConsoleModel, MarkerColour
+from gcs.console_runner import ConsoleConfig, ConsoleRunner, Hold, PacedClock, UndockMussel
+from gcs.events import Event
+from gcs.scenario import load_scenario
+from gcs.tui.canvas import BrailleCanvas
+from mavlink_dialect import MusselState, Primitive, mavlink
+
+POOL12 = Path(__file__).resolve().parents[2] / "missions" / "pool12.toml"
+
+
+def _status(mussel_id: int, battery: float, state: MusselState) -> mavlink.MAVLink_message:
+    return mavlink.MAVLink_amussel_status_message(0, mussel_id, 439400000, 154400000, 3.0, battery, 4000,
+                                                  int(state), 1)
+
+
+def test_model_classes_uptime_and_copies() -> None:
+    model = ConsoleModel(1, 0.8, 60.0, "test", np.array([1, 2, 3, 4]))
+    for mussel_id, battery, state in ((1, 0.9, MusselState.ACTIVE), (2, 0.5, MusselState.ACTIVE),
+                                      (3, 0.0, MusselState.DEPLETED), (4, 0.7, MusselState.DOCKED)):
+        model.handle(_status(mussel_id, battery, state))
+    model.sample(0.0)
+    model.handle(_status(1, 0.9, MusselState.SURFACING))
+    model.sample(1.0)
+    snap = model.snapshot(1.0)
+    assert list(snap.marker_classes()) == [MarkerColour.CHARGED, MarkerColour.CANDIDATE, MarkerColour.DEPLETED,
+                                           MarkerColour.DOCKED]
+    assert list(snap.uptime_pct) == [50.0, 100.0, 0.0, 0.0]
+    assert list(snap.hist_active) == [2, 1]
+    model.handle(_status(2, 0.1, MusselState.ACTIVE))
+    model.handle(_status(9, 0.5, MusselState.ACTIVE))  # a newcomer grows the fleet
+    assert snap.battery_frac[1] == 0.5 and snap.mussel_ids.size == 4  # the snapshot is a copy
+    assert list(model.snapshot(2.0).mussel_ids) == [1, 2, 3, 4, 9]
+
+
+def test_model_counts_cycles_and_strategy_from_events() -> None:
+    model = ConsoleModel(1, 0.8, 60.0, "test")
+    for kind, fields in (("mission_start", {"strategy": "cautious"}), ("phase", {"phase": "idle wait"}),
+                         ("strategy_switch", {"old": "cautious", "new": "greedy"}),
+                         ("plan_redeployment", {"route": [1]}), ("phase", {"phase": "idle wait"}),
+                         ("mission_end", {"reason": "mission time"})):
+        model.event(Event(1.0, kind, fields))
+    snap = model.snapshot(1.0)
+    assert (snap.strategy, snap.cycles, snap.ended, snap.phase) == ("greedy", 1, "mission time", "idle wait")
+
+
+def test_canvas_dots_lines_and_glyphs() -> None:
+    canvas = BrailleCanvas(4, 2, ["#000000", "#ff0000"])
+    canvas.polyline([0, 7], [0, 0], 1)
+    canvas.glyphs([6.5], [6.0], "●", [1])
+    canvas.dots([np.nan, 100.0], [0.0, 0.0], 1)  # skipped, not an error
+    rows = [strip.text for strip in canvas.strips()]
+    assert rows[0] == "⠉⠉⠉⠉" and rows[1] == "   ●"
+
+
+def test_paced_clock_keeps_to_its_speed() -> None:
+    clock = PacedClock(speed=20.0)
+    start = time.monotonic()
+    clock.sleep(2.0)
+    assert clock.time() == 2.0
+    assert 0.09 < time.monotonic() - start < 0.5
+
+
+@pytest.mark.sitl
+def test_runner_serves_operator_commands_between_loop_waits() -> None:
+    runner = ConsoleRunner(ConsoleConfig(load_scenario(POOL12), sitl="udp", speed=40.0))
+    thread = threading.Thread(target=runner.run)
+    thread.start()
+    try:
+        deadline = time.monotonic() + 15
+        while not (runner.world and runner.world.vehicle and runner.world.vehicle.primitive.kind == Primitive.GOTO):
+            assert time.monotonic() < deadline
+            time.sleep(0.02)
+        runner.submit(Hold())
+        runner.submit(UndockMussel(5))  # not docked: refused with a reason, nothing sent
+        while not (runner.snapshot and "refused: aMussel 5 is not docked" in runner.snapshot.notice):
+            assert time.monotonic() < deadline
+            time.sleep(0.02)
+        vehicle = runner.world.vehicle
+        assert vehicle.primitive.kind == Primitive.HOLD and runner.control.paused
+        assert runner.snapshot.mode == "HOLD" and runner.snapshot.paused
+    finally:
+        runner.request_quit()
+        thread.join(60)
+    assert not thread.is_alive() and runner.error is None
