@@ -12,7 +12,7 @@ messages between tasks. Lat/lon <-> metres goes through `LocalFrame` around home
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -34,6 +34,7 @@ from mavlink_dialect import (
     Progress,
     Transport,
     mavlink,
+    signing,
 )
 from mavlink_dialect.clock import Scheduler, Task
 from mussel_sim.geo import LocalFrame
@@ -174,14 +175,27 @@ class SitlVehicle:
         rates_hz: Mapping[int, float] | None = None,
         physics_hz: float = PHYSICS_HZ,
         log_epoch_us: int = 0,
+        signing_key: bytes | None = None,
+        geofence_deg: Sequence[tuple[float, float]] | None = None,
+        log_append: bool = False,
     ) -> None:
-        """`rates_hz` overrides DEFAULT_RATES_HZ per message id; `log_epoch_us` offsets .tlog stamps."""
+        """`rates_hz` overrides DEFAULT_RATES_HZ per message id; `log_epoch_us` offsets .tlog stamps and
+        is the Unix time of t = 0 for signing timestamps. With `signing_key` every frame we send is
+        signed and commands must be too (the swarm's own telemetry may come unsigned). `geofence_deg`
+        is the water area as a (lat, lon) ring: Go To targets outside it and undocking outside it are refused.
+        """
         self.transport = transport
         self.params = with_param(params, "SYSID_THISMAV", system_id)
         self.system_id = system_id
         self.component_id = component_id
         self.codec = Codec(system_id, component_id)
+        if signing_key is not None:
+            self.codec.enable_signing(
+                signing_key, link_id=0, ticks=lambda: signing.timestamp_ticks(log_epoch_us, self.now_us),
+                allow_unsigned_ids=(mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS, mavlink.MAVLINK_MSG_ID_AMUSSEL_SENSORS),
+            )
         self.frame = LocalFrame(home_lat_deg, home_lon_deg)
+        self.geofence = Geofence.of(geofence_deg, self.frame) if geofence_deg else None
         self.home_lat_deg, self.home_lon_deg = home_lat_deg, home_lon_deg
         self.current_mps = current_mps  # (east, north) m/s; scenarios may change it at run time
         self.physics_hz = physics_hz
@@ -254,7 +268,7 @@ class SitlVehicle:
 
         self.log: VehicleLog | None = None
         if log_dir is not None:
-            self.log = VehicleLog(Path(log_dir), f"apad{system_id}", log_epoch_us)
+            self.log = VehicleLog(Path(log_dir), f"apad{system_id}", log_epoch_us, append=log_append)
             self._event("start", system_id=system_id, home_lat_deg=home_lat_deg, home_lon_deg=home_lon_deg,
                         current_mps=list(current_mps))
 
@@ -359,8 +373,10 @@ class SitlVehicle:
         if not self.gcs_link_lost():
             self.failsafe_active = False
             return
-        going = self.primitive.kind == Primitive.GOTO and self.primitive.progress == Progress.IN_PROGRESS
-        if going and not self.failsafe_active:
+        # Anything but holding: a Go To stops; a Dock or Undock gives way to Hold and its latch carries on,
+        # so docked aMussels stay latched and charging. The GCS re-commands what it wants when it is back.
+        busy = self.primitive.kind != Primitive.HOLD and self.primitive.progress == Progress.IN_PROGRESS
+        if busy and not self.failsafe_active:
             self.failsafe_active = True
             self._statustext(mavlink.MAV_SEVERITY_WARNING, "GCS failsafe: heartbeat lost, holding")
             self._event("failsafe", reason="gcs heartbeat lost")
@@ -580,6 +596,10 @@ class SitlVehicle:
         if math.hypot(x_m, y_m) > MAX_GOTO_FROM_HOME_M:
             self._statustext(mavlink.MAV_SEVERITY_WARNING, "Go To refused: target too far from home")
             return DENIED, 0
+        if self.geofence is not None and not self.geofence.contains(x_m, y_m):
+            self._statustext(mavlink.MAV_SEVERITY_WARNING, "Go To refused: target outside the geofence")
+            self._event("geofence", what="goto", lat_deg=lat, lon_deg=lon)
+            return DENIED, 0
         speed, radius = cmd.params[0], cmd.params[2]
         speed = speed if math.isfinite(speed) and speed > 0 else self._speed_override_mps
         radius = radius if math.isfinite(radius) and radius > 0 else 0.0
@@ -682,6 +702,10 @@ class SitlVehicle:
 
     def _cmd_undock(self, cmd: Command) -> tuple[int, int]:
         slot, mussel_id = _as_int(cmd.params[0]), _as_int(cmd.params[1])
+        if self.geofence is not None and not self.geofence.contains(self.state.x_m, self.state.y_m):
+            self._statustext(mavlink.MAV_SEVERITY_WARNING, f"Undock slot {slot} refused: not over water")
+            self._event("geofence", what="undock", slot=slot)
+            return DENIED, 0
         new, refusal = prim.undock(self.primitive, slot, mussel_id, self.state.x_m, self.state.y_m, self.params)
         return self._slot_command_result("Undock", slot, mussel_id, new, refusal)
 
@@ -694,6 +718,33 @@ class SitlVehicle:
             return DENIED, int(refusal)
         self._set_primitive(new)
         return ACCEPTED, 0
+
+
+@dataclass(frozen=True)
+class Geofence:
+    """The water area in the aPad's local metres; a point on the boundary is inside."""
+
+    polygon: Any  # shapely Polygon, prepared
+
+    @staticmethod
+    def of(ring_deg: Sequence[tuple[float, float]], frame: LocalFrame) -> Geofence:
+        import shapely
+
+        if len(ring_deg) < 3:
+            raise ValueError("a geofence needs at least 3 (lat, lon) vertices")
+        lat = [p[0] for p in ring_deg]
+        lon = [p[1] for p in ring_deg]
+        x, y = frame.to_local(lat, lon)
+        polygon = shapely.Polygon(list(zip(map(float, x), map(float, y), strict=True)))
+        if not polygon.is_valid or polygon.area <= 0:
+            raise ValueError("the geofence polygon is not a simple ring with an area")
+        shapely.prepare(polygon)
+        return Geofence(polygon)
+
+    def contains(self, x_m: float, y_m: float) -> bool:
+        import shapely
+
+        return bool(shapely.intersects_xy(self.polygon, x_m, y_m))
 
 
 def _hz_to_us(hz: float) -> int:

@@ -17,13 +17,14 @@ _STAMP = struct.Struct(">Q")
 
 
 class VehicleLog:
-    def __init__(self, log_dir: Path, stem: str, epoch_us: int = 0) -> None:
+    def __init__(self, log_dir: Path, stem: str, epoch_us: int = 0, append: bool = False) -> None:
+        """`append` continues existing logs (the mission resumed after a GCS crash)."""
         log_dir.mkdir(parents=True, exist_ok=True)
         self.tlog_path = log_dir / f"{stem}.tlog"
         self.events_path = log_dir / f"{stem}.events.jsonl"
         self.epoch_us = epoch_us
-        self._tlog = open(self.tlog_path, "wb")  # noqa: SIM115 - lives until close()
-        self._events = open(self.events_path, "w", encoding="utf-8")  # noqa: SIM115
+        self._tlog = open(self.tlog_path, "ab" if append else "wb")  # noqa: SIM115 - lives until close()
+        self._events = open(self.events_path, "a" if append else "w", encoding="utf-8")  # noqa: SIM115
 
     def message(self, time_us: int, frame: bytes) -> None:
         self._tlog.write(_STAMP.pack(self.epoch_us + time_us) + frame)

@@ -28,7 +28,9 @@ class ApadParams:
     drag_per_s: float = 0.5  # 1/s, linear drag: thrust to hold a water speed v is drag * v
     batt_drain_idle_vph: float = 0.5  # V/h, hotel load (computer, Kinect, radios)
     batt_drain_thrust_vph: float = 8.0  # V/h per (m/s^2)^2 of thrust (specific force)
-    fs_gcs_enable: int = 0  # 1: hold position when the GCS heartbeat is lost during a Go To
+    # 1: hold position when the GCS heartbeat is lost (on by default: a field aPad must not sail on
+    # blind; lockstep runs deliver every heartbeat, so they are unaffected)
+    fs_gcs_enable: int = 1
     fs_gcs_timeout_s: float = 5.0  # s without a GCS heartbeat before the failsafe
     sysid_thismav: int = 1  # MAVLink system id; takes effect at restart
 

@@ -13,8 +13,11 @@ The planner, the scenario loop and the operator console are written on this API.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
+
+import shapely
 
 from gcs.link import CommandError, Link, PrimitiveView, SlotView, VehicleView
 from mavlink_dialect import (
@@ -31,7 +34,15 @@ from mavlink_dialect.clock import Clock
 ARDUROVER_HOLD = 4
 ARDUROVER_GUIDED = 15
 
-__all__ = ["ApadApi", "CommandError", "Location", "MusselView", "Progress"]
+__all__ = ["ApadApi", "CommandError", "GeofenceError", "Location", "MusselView", "Progress"]
+
+
+class GeofenceError(CommandError):
+    """A Go To the GCS refuses to send: the target is outside the scenario's geofence."""
+
+    def __init__(self, system_id: int, lat: float, lon: float) -> None:
+        super().__init__(system_id, mavlink.MAV_CMD_DO_REPOSITION, mavlink.MAV_RESULT_DENIED,
+                         f"target {lat:.7f}, {lon:.7f} outside the geofence; not sent")
 
 
 class Location(NamedTuple):
@@ -80,8 +91,16 @@ class UnknownMussel(KeyError):
 
 
 class ApadApi:
-    def __init__(self, link: Link, clock: Clock, default_apad: int | None = None) -> None:
+    def __init__(
+        self, link: Link, clock: Clock, default_apad: int | None = None,
+        geofence_deg: Sequence[tuple[float, float]] | None = None,
+    ) -> None:
+        """`geofence_deg`: a (lat, lon) ring; Go To targets outside it raise `GeofenceError` unsent."""
         self.link = link
+        self._fence = None
+        if geofence_deg:
+            self._fence = shapely.Polygon([(lon, lat) for lat, lon in geofence_deg])
+            shapely.prepare(self._fence)
         self.clock = clock
         self.default_apad = default_apad
         self.mussels: dict[int, MusselView] = {}
@@ -170,6 +189,8 @@ class ApadApi:
     ) -> None:
         """Go To Point: speed in m/s (<= 0: the aPad's default), victory radius in m (0: default)."""
         sysid = self.apad(apad_id).system_id
+        if self._fence is not None and not shapely.intersects_xy(self._fence, latlon[1], latlon[0]):
+            raise GeofenceError(sysid, latlon[0], latlon[1])
         lat_e7, lon_e7 = round(latlon[0] * 1e7), round(latlon[1] * 1e7)
         self._expected[sysid] = _Expectation(Primitive.GOTO, lat_e7, lon_e7)
         self.link.command_int(

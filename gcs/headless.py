@@ -13,9 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
+from gcs import checkpoint
+from gcs.accounting import account
 from gcs.results import MusselResult, RunResult
 from gcs.scenario import Scenario
-from gcs.world import MISSION_TELEMETRY_HZ, World, lockstep_world
+from gcs.world import MISSION_TELEMETRY_HZ, LinkOptions, World, lockstep_world
 
 ProgressFn = Callable[[float], None]  # receives mission time done, seconds
 
@@ -24,21 +26,48 @@ def run_dir(root: Path, scenario: Scenario) -> Path:
     return root / f"{scenario.name}-{scenario.mission.collect_strategy}-seed{scenario.seed}"
 
 
-def run_mission(scenario: Scenario, out_dir: Path | None = None, progress: ProgressFn | None = None) -> RunResult:
-    """Run one mission in lockstep to its end; write its folder if `out_dir` is given."""
+def run_mission(
+    scenario: Scenario, out_dir: Path | None = None, progress: ProgressFn | None = None,
+    options: LinkOptions | None = None,
+    resume: bool = False,
+) -> RunResult:
+    """Run one mission in lockstep to its end; write its folder if `out_dir` is given.
+
+    `options` route the aPad link through a fault proxy over UDP and/or sign it. With `out_dir` the
+    run checkpoints itself there; `resume` continues from that checkpoint (after a crash).
+    """
     wall_start = time.perf_counter()
-    world = lockstep_world(scenario, out_dir)
+    ckpt_path = out_dir / checkpoint.CHECKPOINT_NAME if out_dir is not None else None
+    saved = None
+    if resume:
+        if ckpt_path is None:
+            raise checkpoint.CheckpointError("resuming needs the run's output folder")
+        saved = checkpoint.load(ckpt_path)
+    world = lockstep_world(scenario, out_dir, options, start_us=saved.time_us if saved else 0,
+                           append_logs=saved is not None)
     try:
+        if saved is not None:
+            checkpoint.restore(world, saved)
         if progress is not None:
-            world.clock.scheduler.every(10.0, lambda now_us: progress(now_us / 1e6), "progress")
+            world.clock.scheduler.every(10.0, lambda now_us: progress(now_us / 1e6), "progress", world.clock.now_us)
         world.api.wait_apad(timeout_s=10.0)
         world.api.set_telemetry_rates(MISSION_TELEMETRY_HZ)
         loop = world.mission_loop()
-        end = loop.run()
+        if saved is not None:
+            loop.status = saved.loop_status
+        if ckpt_path is not None:
+            path = ckpt_path
+            world.clock.scheduler.every(
+                checkpoint.CHECKPOINT_PERIOD_S, lambda now_us: checkpoint.save(path, checkpoint.capture(world, loop)),
+                "checkpoint", world.clock.now_us + round(checkpoint.CHECKPOINT_PERIOD_S * 1e6),
+            )
+        end = loop.run(resume=saved is not None)
         result = _result(world, loop.status.cost_m, loop.status.cycles, str(end), time.perf_counter() - wall_start,
                          out_dir)
         if out_dir is not None:
             _write_outputs(world, result, out_dir)
+        if ckpt_path is not None:
+            ckpt_path.unlink(missing_ok=True)  # finished: nothing to resume
         return result
     finally:
         world.close()
@@ -56,6 +85,18 @@ def _result(world: World, cost_m: float, cycles: int, end: str, wall_s: float, o
     ]
     travelled = world.vehicle.state.distance_travelled_m if world.vehicle is not None else 0.0
     stats = world.link.codec.stats
+    homes = {m: (h.lat, h.lon) for m, h in world.homes.items()}
+    whereabouts = [
+        {"id": a.mussel_id, "where": a.where, "detail": a.detail}
+        for a in account(world.fleet.state, world.frame, homes, world.link.vehicles)
+    ]
+    messages = {"gcs_sent": stats.sent, "fleet_sent": world.fleet.codec.stats.sent,
+                "apad_sent": world.vehicle.codec.stats.sent if world.vehicle else 0,
+                "gcs_bad_data": world.link.bad_data,
+                "apad_bad_data": world.vehicle.codec.stats.bad_data if world.vehicle else 0}
+    if world.proxy is not None:
+        for way, st in (("to_apad", world.proxy.stats[True]), ("to_gcs", world.proxy.stats[False])):
+            messages |= {f"proxy_{way}_{k}": v for k, v in vars(st).items()}
     return RunResult(
         scenario=s.name,
         strategy=s.mission.collect_strategy,
@@ -72,8 +113,8 @@ def _result(world: World, cost_m: float, cycles: int, end: str, wall_s: float, o
         cycles=cycles,
         end_reason=end,
         out_dir=str(out_dir) if out_dir is not None else "",
-        messages={"gcs_sent": stats.sent, "fleet_sent": world.fleet.codec.stats.sent,
-                  "apad_sent": world.vehicle.codec.stats.sent if world.vehicle else 0},
+        messages=messages,
+        whereabouts=whereabouts,
     )
 
 

@@ -141,7 +141,9 @@ class Link:
         component_id: int = GCS_COMPONENT_ID,
         tlog_path: Path | None = None,
         tlog_epoch_us: int = 0,
+        append: bool = False,
     ) -> None:
+        """`append` continues an existing .tlog (a resumed mission)."""
         self.clock = clock
         self.codec = Codec(system_id, component_id)
         self._pollers: list[_TransportPoller] = []
@@ -149,7 +151,8 @@ class Link:
         self._loopback = Codec(system_id, component_id)  # parses local parties' bytes for each other
         self.vehicles: dict[int, VehicleView] = {}
         self._pending: list[_PendingCommand] = []
-        self._tlog: BinaryIO | None = tlog_path.open("wb") if tlog_path else None
+        self._tlog: BinaryIO | None = tlog_path.open("ab" if append else "wb") if tlog_path else None
+        self._signing: tuple[bytes, int, Callable[[], int]] | None = None
         self._tlog_epoch_us = tlog_epoch_us
         self.port = self.attach(self._handle)  # the GCS's own party
         self._heartbeat = mavlink.MAVLink_heartbeat_message(
@@ -161,8 +164,30 @@ class Link:
 
     def add_transport(self, transport: Transport) -> None:
         poller = _TransportPoller(self, transport)
+        if self._signing is not None:
+            self._verify(poller.codec)
         self._pollers.append(poller)
         self.clock.scheduler.add_poller(poller)
+
+    @property
+    def bad_data(self) -> int:
+        """Frames from the aPads' transports dropped as garbage, CRC-broken or badly signed."""
+        return sum(p.codec.stats.bad_data for p in self._pollers)
+
+    def enable_signing(self, key: bytes, link_id: int, ticks: Callable[[], int]) -> None:
+        """Sign every command and heartbeat; accept from the aPads only frames signed with `key`.
+
+        `ticks` gives the MAVLink signing timestamp now (see `mavlink_dialect.signing`).
+        """
+        self._signing = (key, link_id, ticks)
+        self.codec.enable_signing(key, link_id, ticks)
+        for poller in self._pollers:
+            self._verify(poller.codec)
+
+    def _verify(self, codec: Codec) -> None:
+        assert self._signing is not None
+        key, link_id, ticks = self._signing
+        codec.enable_signing(key, link_id, ticks)
 
     def attach(self, handler: Handler | None) -> Port:
         port = Port(self, handler)

@@ -4,6 +4,9 @@
     vil run missions/pool12.toml --strategy greedy --seed 3 --json out.json
     vil run pool12 --seeds 20                  # cautious, greedy, none on 20 freshly drawn fleets
     vil run --seeds 20                         # the same for pool12 and bay24: Table II's shape per seed
+    vil run pool12 --loss 0.2 --latency 0.2 --duplicate 0.05   # aPad link over UDP through a fault proxy
+    VIL_SIGNING_KEY=secret vil run pool12      # MAVLink 2 signing on the aPad link (or --signing-key FILE)
+    vil run pool12 --resume                    # continue the run in its folder after a crash (kill -9)
 """
 
 from __future__ import annotations
@@ -19,10 +22,14 @@ from pathlib import Path
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from gcs.checkpoint import CHECKPOINT_NAME
+from gcs.faultproxy import LinkFaults
 from gcs.headless import run_dir, run_mission
 from gcs.planner import COLLECT
 from gcs.results import RunResult, results_table, seed_stats, seed_stats_table, shape_table
 from gcs.scenario import Scenario, ScenarioError, load_scenario, parse_duration_s
+from gcs.world import LinkOptions
+from mavlink_dialect.signing import SigningKeyError, load_key
 
 # The paper's Table II runs: (scenario, collection strategy).
 TABLE_II = (("pool12", "cautious"), ("pool12", "greedy"), ("pool12", "none"), ("bay24", "greedy"))
@@ -48,6 +55,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", type=Path, metavar="FILE", help="write the result(s) as JSON")
     parser.add_argument("--out", type=Path, default=Path("runs"), metavar="DIR",
                         help="output folder; each run leaves DIR/SCENARIO-STRATEGY-seedN/ (default: runs)")
+    faults = parser.add_argument_group("link faults and security (the aPad link over real UDP through a seeded proxy)")
+    faults.add_argument("--loss", type=_fraction, default=0.0, metavar="FRAC", help="drop this fraction of datagrams")
+    faults.add_argument("--latency", type=_non_negative, default=0.0, metavar="S",
+                        help="one-way delay, mission seconds")
+    faults.add_argument("--jitter", type=_non_negative, default=0.0, metavar="S",
+                        help="extra delay uniform in [0, S]; reorders datagrams")
+    faults.add_argument("--duplicate", type=_fraction, default=0.0, metavar="FRAC",
+                        help="send this fraction of datagrams twice")
+    faults.add_argument("--outage", type=_outage, action="append", default=[], metavar="START:END",
+                        help="total link loss between these mission times (s); repeatable")
+    faults.add_argument("--proxy", action="store_true", help="route through the proxy even with no faults")
+    faults.add_argument("--signing-key", type=Path, metavar="FILE",
+                        help="MAVLink 2 signing with the passphrase in FILE (default: $VIL_SIGNING_KEY if set)")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue the mission from the checkpoint in its output folder (after a crash)")
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="parallel runs (default: CPU count)")
 
 
@@ -66,6 +88,34 @@ def _duration(text: str) -> float:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+def _outage(text: str) -> tuple[float, float]:
+    start, sep, end = text.partition(":")
+    try:
+        window = (float(start), float(end))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected START:END in mission seconds, got {text!r}") from None
+    if not sep or not 0 <= window[0] < window[1]:
+        raise argparse.ArgumentTypeError(f"expected START:END with 0 <= START < END, got {text!r}")
+    return window
+
+
+def _fraction(text: str) -> float:
+    value = _non_negative(text)
+    if value >= 1.0:
+        raise argparse.ArgumentTypeError(f"must be a fraction below 1, got {text}")
+    return value
+
+
+def _non_negative(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not value >= 0:
+        raise argparse.ArgumentTypeError(f"must not be negative, got {text}")
+    return value
+
+
 def _positive(text: str) -> float:
     try:
         value = float(text)
@@ -80,6 +130,18 @@ def _positive(text: str) -> float:
 class Job:
     scenario: Scenario
     out_dir: Path
+    options: LinkOptions | None = None
+    resume: bool = False
+
+
+def _link_options(args: argparse.Namespace) -> LinkOptions | None:
+    key = load_key(args.signing_key)
+    faults = LinkFaults(args.loss, args.latency, args.jitter, args.duplicate, seed=args.seed or 0,
+                        outages_s=tuple(args.outage))
+    use_proxy = args.proxy or faults.any
+    if not use_proxy and key is None:
+        return None
+    return LinkOptions(faults=faults if use_proxy else None, signing_key=key)
 
 
 def _jobs(args: argparse.Namespace) -> list[Job]:
@@ -94,6 +156,7 @@ def _jobs(args: argparse.Namespace) -> list[Job]:
         pairs = [(name, s) for name, s in TABLE_II if not args.strategy or s in args.strategy]
     seeds: list[int | None] = list(range(1, args.seeds + 1)) if args.seeds else [args.seed]
     cache: dict[str, Scenario] = {}
+    options = _link_options(args)
     jobs = []
     for name, strategy in pairs:
         base = cache.setdefault(name, load_scenario(name))
@@ -101,21 +164,26 @@ def _jobs(args: argparse.Namespace) -> list[Job]:
             s = base.with_overrides(strategy=strategy, seed=seed, duration_s=args.duration, theta=args.theta)
             if args.seeds or args.draw_fleet:
                 s = replace(s, fleet=replace(s.fleet, start_config=None))
-            jobs.append(Job(s, run_dir(args.out, s)))
+            jobs.append(Job(s, run_dir(args.out, s), options, args.resume))
     return jobs
 
 
 def _run_job(job: Job) -> RunResult:
-    return run_mission(job.scenario, job.out_dir)
+    return run_mission(job.scenario, job.out_dir, options=job.options, resume=job.resume)
 
 
 def run(args: argparse.Namespace) -> int:
     console = Console()
     try:
         jobs = _jobs(args)
-    except ScenarioError as exc:
+    except (ScenarioError, SigningKeyError) as exc:
         print(f"vil run: {exc}", file=sys.stderr)
         return 2
+    if args.resume:
+        missing = [j.out_dir for j in jobs if not (j.out_dir / CHECKPOINT_NAME).exists()]
+        if missing:
+            print(f"vil run: nothing to resume: no {CHECKPOINT_NAME} in {missing[0]}", file=sys.stderr)
+            return 2
     if args.seeds is not None and args.seeds < 1:
         print("vil run: --seeds must be at least 1", file=sys.stderr)
         return 2
@@ -149,7 +217,7 @@ def _run_all(jobs: list[Job], n_jobs: int, console: Console) -> list[RunResult]:
             job = jobs[0]
             task = progress.add_task(f"{job.scenario.name} {job.scenario.mission.collect_strategy}",
                                      total=int(job.scenario.mission.duration_s))
-            return [run_mission(job.scenario, job.out_dir,
+            return [run_mission(job.scenario, job.out_dir, options=job.options, resume=job.resume,
                                 progress=lambda t_s: progress.update(task, completed=int(t_s)))]
         task = progress.add_task(f"{len(jobs)} missions", total=len(jobs))
         results = []

@@ -18,8 +18,9 @@ from enum import StrEnum
 
 import numpy as np
 
-from gcs.api import ApadApi, CommandError, Location, MusselView
+from gcs.api import ApadApi, CommandError, GeofenceError, Location, MusselView
 from gcs.events import EventLog
+from gcs.link import SlotView
 from gcs.planner import CostWeights, PlanInput, plan
 from gcs.scenario import MissionConfig
 from mavlink_dialect import Latch, MusselCommand, MusselState, Progress
@@ -79,6 +80,9 @@ class LoopSettings:
     dock_reach_m: float
     battery_end_v: float
     surfacing_timeout_s: float = 120.0  # an aMussel that does not float by then is skipped
+    # No aMussel is called up later than this before the mission end: once called up it is docked
+    # (or sent down again) whatever the clock says, so it is never left at the surface.
+    call_up_margin_s: float = 300.0
     poll_s: float = 0.5  # how often waits look again (mission time)
 
 
@@ -105,10 +109,16 @@ class EnergySharingLoop:
 
     # --- the loop ---------------------------------------------------------------------------
 
-    def run(self) -> EndReason:
-        """Run until the mission ends; the aPad is left holding, never mid-dock."""
-        self._log("mission_start", strategy=self.status.strategy)
+    def run(self, resume: bool = False) -> EndReason:
+        """Run until the mission ends; the aPad is left holding, never mid-dock.
+
+        `resume`: continue a mission whose GCS crashed (status restored from a checkpoint): first
+        settle what the crash interrupted, from what the aPad and the fleet report now.
+        """
+        self._log("mission_resume" if resume else "mission_start", strategy=self.status.strategy)
         try:
+            if resume:
+                self._recover()
             while True:
                 self._idle_wait()
                 route = self._plan_collection()
@@ -126,13 +136,30 @@ class EnergySharingLoop:
         self._log("mission_end", reason=str(self.status.end_reason), cost_m=round(self.status.cost_m, 3))
         return self.status.end_reason
 
+    def _recover(self) -> None:
+        """After a crash: finish latches in motion, send down whatever was called up and not docked,
+        and complete a charging cycle whose aMussels are still on board."""
+        self._sleep(2.0, interruptible=False)  # hear the aPad's slots and the fleet's status afresh
+        self._wait_until(lambda: not any(s.latch in (Latch.CLOSING, Latch.RELEASING)
+                                         for s in self.api.slots(self.apad_id)), interruptible=False)
+        on_board = set(self._docked().values())
+        for mussel_id, view in sorted(self.api.mussels.items()):
+            if view.state in (MusselState.FLOATING, MusselState.SURFACING) and mussel_id not in on_board:
+                self._log("recover", mussel=mussel_id, action="sink", state=view.state.name)
+                self._sink(mussel_id)
+        if self._docked():
+            self._log("recover", action="finish charging cycle", docked=sorted(on_board))
+            self._charging_wait()
+            self._redeploy(self._plan_redeployment())
+            self.status.cycles += 1
+
     def _idle_wait(self) -> None:
         self._set_phase(Phase.IDLE_WAIT)
         self._command(self.api.hold)
         mission = self.settings.mission
 
         def pool_full() -> bool:
-            if self.status.strategy == "none":
+            if self.status.strategy == "none" or self._too_late_to_call_up():
                 return False
             need = min(mission.min_pool, len(self._free_slots()))
             return need > 0 and len(self._candidates()) >= need
@@ -163,23 +190,31 @@ class EnergySharingLoop:
             free = self._free_slots()
             if not free:
                 break
+            if self._too_late_to_call_up():
+                self._log("skip", mussel=mussel_id, why="too close to the mission end to dock it")
+                break
             self.status.target_mussel = mussel_id
             called = self._call_up_if_in_range(mussel_id)
-            self._go_to(self.api.get_location(mussel_id))
+            # From a call-up on, the waits ignore the mission end: the margin above leaves time to finish.
+            if not self._go_to(self.api.get_location(mussel_id), interruptible=not called):
+                if called:
+                    self._sink(mussel_id)
+                continue
             if not called and not self._call_up_if_in_range(mussel_id):
                 self._log("skip", mussel=mussel_id, why="no aPad within acoustic range")
                 continue
             if not self._wait_until(lambda m=mussel_id: self._state(m) == MusselState.FLOATING,
-                                    self.settings.surfacing_timeout_s):
+                                    self.settings.surfacing_timeout_s, interruptible=False):
                 self._log("skip", mussel=mussel_id, why="did not surface", state=self._state(mussel_id).name)
+                self._sink(mussel_id)  # it may surface later: it must not float there forever
                 continue
             # It surfaced where it was last localised underwater, give or take drift: close in.
             if self._distance_to(mussel_id) > 0.8 * self.settings.dock_reach_m:
-                self._go_to(self.api.get_location(mussel_id))
+                self._go_to(self.api.get_location(mussel_id), interruptible=False)
             if self._dock(free[0], mussel_id):
                 self._log("docked", mussel=mussel_id, slot=free[0])
             else:
-                self._command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
+                self._sink(mussel_id)
                 self._log("skip", mussel=mussel_id, why="docking failed")
         self.status.target_mussel = 0
 
@@ -225,25 +260,65 @@ class EnergySharingLoop:
 
     # --- primitives with waiting ------------------------------------------------------------
 
-    def _go_to(self, target: Location) -> None:
+    def _go_to(self, target: Location, interruptible: bool = True) -> bool:
+        """Go To and wait; False if the target is outside the geofence. A Go To preempted on the
+        aPad (its link-loss failsafe switched to Hold) is commanded again once we hear it."""
         here = self.api.position(self.apad_id)
         self.status.cost_m += float(distance_m(here.lat, here.lon, target.lat, target.lon))
-        self._command(self.api.go_to, target, apad_id=self.apad_id)
-        self._wait_until(lambda: self.api.goto_status(self.apad_id) != Progress.IN_PROGRESS)
+        while True:
+            try:
+                self._command(self.api.go_to, target, apad_id=self.apad_id)
+            except GeofenceError as exc:
+                self._log("geofence", what=str(exc))
+                return False
+            self._wait_until(lambda: self.api.goto_status(self.apad_id) != Progress.IN_PROGRESS,
+                             interruptible=interruptible)
+            if self.api.goto_status(self.apad_id) != Progress.FAILED:
+                return True
+            self._log("goto_resumed", lat=target.lat, lon=target.lon)
 
     def _dock(self, slot: int, mussel_id: int) -> bool:
+        """Dock and wait for the latch. The slot's own report decides, not the ACK or the primitive:
+        an ACK lost on the way back, or a failsafe Hold over the dock, leave the latch closing."""
         try:
             self.api.docking(True, slot, mussel_id, self.apad_id)
         except CommandError as exc:
             self._log("command_failed", what=str(exc))
-            return False
+            if exc.result is not None:
+                return False  # refused: nothing happened on the aPad
+            self._sleep(self.settings.poll_s * 4, interruptible=False)  # no ACK: let the slot report
+            if self._slot(slot).mussel_id != mussel_id or self._slot(slot).latch == Latch.OPEN:
+                return False
         # Never abandon a dock half-way: the wait ignores the end of the mission.
-        self._wait_until(lambda: self.api.docking_status(self.apad_id) != Progress.IN_PROGRESS, interruptible=False)
-        return self.api.docking_status(self.apad_id) == Progress.DONE
+        self._wait_until(lambda: self._slot(slot).latch != Latch.CLOSING, interruptible=False)
+        s = self._slot(slot)
+        return s.latch == Latch.LATCHED and s.mussel_id == mussel_id
 
     def _undock(self, slot: int, mussel_id: int) -> None:
-        self._command(self.api.docking, False, slot, mussel_id, self.apad_id)
-        self._wait_until(lambda: self.api.docking_status(self.apad_id) != Progress.IN_PROGRESS, interruptible=False)
+        """Undock until the slot is released. A retransmitted undock is harmless: the aPad re-ACKs it,
+        and it names the aMussel, so it can never release another one put in that slot since."""
+
+        def released() -> bool:
+            s = self._slot(slot)
+            return s.mussel_id != mussel_id or s.latch == Latch.OPEN
+
+        while not released():
+            if self._slot(slot).latch != Latch.RELEASING:
+                try:
+                    self.api.docking(False, slot, mussel_id, self.apad_id)
+                except CommandError as exc:
+                    self._log("command_failed", what=str(exc))
+            self._wait_until(lambda: released() or self._slot(slot).latch != Latch.RELEASING,
+                             timeout_s=self.settings.poll_s * 8, interruptible=False)
+
+    def _sink(self, mussel_id: int) -> None:
+        """Tell a called-up aMussel to go back down, and see that it does (the relay is not acknowledged)."""
+        for _ in range(10):
+            self._command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
+            if self._wait_until(lambda: self._state(mussel_id) not in (MusselState.FLOATING, MusselState.SURFACING),
+                                timeout_s=self.settings.poll_s * 8, interruptible=False):
+                return
+        self._log("lost", mussel=mussel_id, why="does not answer the sink command", state=self._state(mussel_id).name)
 
     def _command(self, fn: Callable[..., None], *args: object, **kwargs: object) -> None:
         """Run an API command; a refused one is logged and retried once the operator or time allows."""
@@ -301,6 +376,9 @@ class EnergySharingLoop:
     def _free_slots(self) -> list[int]:
         return [s.slot for s in self.api.slots(self.apad_id) if s.latch == Latch.OPEN and s.mussel_id == 0]
 
+    def _slot(self, slot: int) -> SlotView:
+        return self.api.slots(self.apad_id)[slot - 1]
+
     def _docked(self) -> dict[int, int]:
         return {s.slot: s.mussel_id for s in self.api.slots(self.apad_id) if s.latch == Latch.LATCHED}
 
@@ -313,6 +391,9 @@ class EnergySharingLoop:
     def _distance_to(self, mussel_id: int) -> float:
         here, there = self.api.position(self.apad_id), self.api.get_location(mussel_id)
         return float(distance_m(here.lat, here.lon, there.lat, there.lon))
+
+    def _too_late_to_call_up(self) -> bool:
+        return self.settings.mission.duration_s - self.clock.time() < self.settings.call_up_margin_s
 
     def _call_up_if_in_range(self, mussel_id: int) -> bool:
         """Safety: an aMussel is only called to the surface with an aPad within acoustic range."""

@@ -7,7 +7,7 @@ console builds the same pieces on a wall clock with a real transport (`field_wor
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -16,11 +16,13 @@ from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.params import ApadParams
 from gcs.api import ApadApi, Location
 from gcs.events import EventLog
+from gcs.faultproxy import FaultProxy, LinkFaults
 from gcs.link import Link
 from gcs.scenario import Scenario
 from gcs.scenario_loop import EnergySharingLoop, LoopControl, LoopSettings
-from mavlink_dialect import Codec, mavlink, memory_pair
+from mavlink_dialect import Codec, mavlink, memory_pair, signing
 from mavlink_dialect.clock import Clock, VirtualClock
+from mavlink_dialect.transport import UdpTransport
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner
 from mussel_sim.drift import NO_CURRENT, UniformCurrent
 from mussel_sim.fleet import FleetParams, initial_state
@@ -31,6 +33,18 @@ from mussel_sim.startconfig import StartConfig, generate_start_config, load_star
 
 # .tlog stamps of lockstep runs start here (2020-06-12 00:00 UTC), so logs are repeatable.
 LOCKSTEP_EPOCH_US = 1_591_920_000_000_000
+# The geofence is the scenario's water area grown by this much (GPS error, drift of the aMussels).
+GEOFENCE_BUFFER_M = 10.0
+GCS_SIGNING_LINK_ID = 1
+
+
+@dataclass(frozen=True)
+class LinkOptions:
+    """How the GCS reaches the embedded aPad in lockstep: in memory (default) or over real UDP via a fault proxy."""
+
+    faults: LinkFaults | None = None  # not None: real UDP sockets through a FaultProxy
+    signing_key: bytes | None = None  # MAVLink 2 signing on both ends
+    geofence_buffer_m: float | None = GEOFENCE_BUFFER_M  # None: no geofence
 # What the mission loop needs from the aPad, requested like any GCS does (SET_MESSAGE_INTERVAL).
 # Slot and primitive changes are also sent the moment they happen, so slow periodic copies do.
 MISSION_TELEMETRY_HZ = {
@@ -53,6 +67,8 @@ class World:
     homes: dict[int, Location]  # where each aMussel started, and goes back to
     events: EventLog
     vehicle: SitlVehicle | None = None  # the embedded SITL aPad, if any
+    proxy: FaultProxy | None = None  # the fault-injection proxy between GCS and aPad, if any
+    geofence_deg: list[tuple[float, float]] = field(default_factory=list)  # (lat, lon) ring; empty: none
 
     def mission_loop(self, control: LoopControl | None = None) -> EnergySharingLoop:
         s = self.scenario
@@ -67,6 +83,8 @@ class World:
     def close(self) -> None:
         if self.vehicle is not None:
             self.vehicle.close()
+        if self.proxy is not None:
+            self.proxy.close()
         self.link.close()
         self.events.close()
 
@@ -126,16 +144,25 @@ def build_world(
     out_dir: Path | None,
     tlog_epoch_us: int,
     rng: np.random.Generator | None = None,
+    mission_start_us: int | None = None,
+    append_logs: bool = False,
+    geofence_buffer_m: float | None = None,
 ) -> World:
-    """The GCS side of a mission: fleet, link and API on `clock`; transports are added by the caller."""
+    """The GCS side of a mission: fleet, link and API on `clock`; transports are added by the caller.
+
+    `mission_start_us` is when the mission began (default: now; a resumed mission began earlier);
+    `append_logs` continues the folder's logs instead of starting them afresh.
+    """
     rng = rng if rng is not None else np.random.default_rng(scenario.seed)
+    start_us = clock.now_us if mission_start_us is None else mission_start_us
     area = load_area(scenario.fleet.area)
     config, frame = start_config(scenario, area, rng)
     params = fleet_params(scenario)
     if out_dir is not None:
         out_dir.mkdir(parents=True, exist_ok=True)
-    link = Link(clock, tlog_path=out_dir / "gcs.tlog" if out_dir else None, tlog_epoch_us=tlog_epoch_us)
-    events = EventLog(out_dir / "events.jsonl" if out_dir else None)
+    link = Link(clock, tlog_path=out_dir / "gcs.tlog" if out_dir else None, tlog_epoch_us=tlog_epoch_us,
+                append=append_logs)
+    events = EventLog(out_dir / "events.jsonl" if out_dir else None, append=append_logs)
     port = link.attach(None)
     fleet = FleetRunner(
         initial_state(config, frame, params, clock.now_us), params, rng, frame,
@@ -144,27 +171,58 @@ def build_world(
         local=port.send_local,
     )
     port.handler = fleet.handle
-    fleet.register(clock.scheduler, clock.now_us, end_us=clock.now_us + round(scenario.mission.duration_s * 1e6))
-    api = ApadApi(link, clock, default_apad=scenario.apad.system_id)
+    fleet.register(clock.scheduler, clock.now_us, end_us=start_us + round(scenario.mission.duration_s * 1e6))
+    fence = geofence_ring(area, frame, geofence_buffer_m) if geofence_buffer_m is not None else []
+    api = ApadApi(link, clock, default_apad=scenario.apad.system_id, geofence_deg=fence or None)
     homes = {
         int(i): Location(float(lat), float(lon))
         for i, lat, lon in zip(config.ids, config.lat_deg, config.lon_deg, strict=True)
     }
-    return World(scenario, clock, link, api, fleet, frame, config, homes, events)
+    return World(scenario, clock, link, api, fleet, frame, config, homes, events, geofence_deg=fence)
 
 
-def lockstep_world(scenario: Scenario, out_dir: Path | None = None) -> World:
-    """Everything on one virtual clock; the aPad over an in-memory pair of real MAVLink bytes."""
-    clock = VirtualClock()
-    world = build_world(scenario, clock, out_dir, LOCKSTEP_EPOCH_US)
-    gcs_end, apad_end = memory_pair("apad")
+def geofence_ring(area: Area, frame: LocalFrame, buffer_m: float) -> list[tuple[float, float]]:
+    """The water area grown by `buffer_m`, as one (lat, lon) ring (several basins: their convex hull)."""
+    local = area.to_local(frame).buffer(buffer_m)
+    if local.geom_type != "Polygon":
+        local = local.convex_hull
+    x, y = local.exterior.xy
+    lat, lon = frame.to_geodetic(np.asarray(x), np.asarray(y))
+    return [(float(a), float(b)) for a, b in zip(lat, lon, strict=True)]
+
+
+def lockstep_world(
+    scenario: Scenario, out_dir: Path | None = None, options: LinkOptions | None = None,
+    start_us: int = 0, append_logs: bool = False,
+) -> World:
+    """Everything on one virtual clock; the aPad over an in-memory pair of real MAVLink bytes, or
+    over real UDP sockets through a `FaultProxy` whose delays run on the same virtual clock.
+
+    `start_us` > 0 starts the clock later (a resumed mission; the mission itself began at 0).
+    """
+    options = options or LinkOptions()
+    clock = VirtualClock(start_us=start_us)
+    world = build_world(scenario, clock, out_dir, LOCKSTEP_EPOCH_US, mission_start_us=0, append_logs=append_logs,
+                        geofence_buffer_m=options.geofence_buffer_m)
     a = scenario.apad
+    proxy = None
+    if options.faults is None:
+        gcs_end, apad_end = memory_pair("apad")
+    else:
+        apad_end = UdpTransport("127.0.0.1", 0, listen=True)
+        proxy = FaultProxy(clock, ("127.0.0.1", apad_end.local_port), options.faults)
+        gcs_end = UdpTransport("127.0.0.1", proxy.listen_port, listen=False)
     vehicle = SitlVehicle(
         apad_end, apad_params(scenario), a.home_lat_deg, a.home_lon_deg, system_id=a.system_id,
         current_mps=(scenario.environment.current_east_mps, scenario.environment.current_north_mps),
-        log_dir=out_dir, log_epoch_us=LOCKSTEP_EPOCH_US,
+        log_dir=out_dir, log_epoch_us=LOCKSTEP_EPOCH_US, signing_key=options.signing_key,
+        geofence_deg=world.geofence_deg or None, log_append=append_logs,
     )
     vehicle.attach(clock.scheduler, clock.now_us)
     world.link.add_transport(gcs_end)
+    if options.signing_key is not None:
+        world.link.enable_signing(options.signing_key, GCS_SIGNING_LINK_ID,
+                                  lambda: signing.timestamp_ticks(LOCKSTEP_EPOCH_US, clock.now_us))
     world.vehicle = vehicle
+    world.proxy = proxy
     return world

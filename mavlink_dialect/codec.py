@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable, Collection
 from dataclasses import dataclass
 
+from mavlink_dialect import signing
 from mavlink_dialect import subcultron as mavlink
 
 HEADER_V2_LEN = mavlink.HEADER_LEN_V2
@@ -46,6 +48,24 @@ class Codec:
         self.mav.seq = (self.mav.seq + 1) % 256
         self.stats.sent += 1
         return bytes(buf)
+
+    def enable_signing(
+        self, key: bytes, link_id: int, ticks: Callable[[], int], allow_unsigned_ids: Collection[int] = ()
+    ) -> None:
+        """Sign what we send (timestamps from `ticks`, see `signing`) and refuse unsigned or forged frames."""
+        signing.configure(self.mav, key, link_id, allow_unsigned_ids)
+        self._ticks = ticks
+        self.encode = self._encode_signed  # type: ignore[method-assign]  # unsigned codecs pay nothing
+
+    def _encode_signed(self, msg: mavlink.MAVLink_message) -> bytes:
+        s = self.mav.signing
+        s.timestamp = max(s.timestamp, self._ticks())  # never behind the clock, never backwards
+        return Codec.encode(self, msg)
+
+    @property
+    def signing_rejects(self) -> int:
+        """Frames refused for a missing, wrong or replayed signature (also counted in bad_data)."""
+        return int(self.mav.signing.reject_count)
 
     def decode(self, data: bytes) -> list[mavlink.MAVLink_message]:
         """Every complete, valid message in `data` (plus what earlier calls left buffered)."""

@@ -1,0 +1,61 @@
+"""Where every aMussel is at the end of a mission, checked against what the GCS believes.
+
+Nothing may be lost silently: each aMussel is at a position on the seabed (its start or where it
+was redeployed, or where it is still working), on a known aPad slot (the fleet and the aPad's slot
+report agree), or reported lost with a reason.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from gcs.link import VehicleView
+from mavlink_dialect import Latch, MusselState
+from mussel_sim.fleet import FleetState
+from mussel_sim.geo import LocalFrame
+
+# Farther than this from where it started or was put back, a submerged aMussel is somewhere unexpected.
+HOME_TOLERANCE_M = 10.0
+
+
+@dataclass(frozen=True)
+class MusselAccount:
+    mussel_id: int
+    where: str  # "seabed", "slot", "lost"
+    detail: str  # slot number, distance from home, or the reason it is lost
+
+    @property
+    def lost(self) -> bool:
+        return self.where == "lost"
+
+
+def account(
+    fleet: FleetState, frame: LocalFrame, homes_deg: dict[int, tuple[float, float]], apads: dict[int, VehicleView]
+) -> list[MusselAccount]:
+    """One entry per aMussel, from the fleet's own state and the aPads' slot reports."""
+    ids = [int(i) for i in fleet.ids]
+    home_lat = np.array([homes_deg[i][0] for i in ids])
+    home_lon = np.array([homes_deg[i][1] for i in ids])
+    hx, hy = frame.to_local(home_lat, home_lon)
+    out = []
+    for k, mussel_id in enumerate(ids):
+        state = MusselState(int(fleet.state[k]))
+        if state == MusselState.DOCKED:
+            apad, slot = int(fleet.dock_apad[k]), int(fleet.dock_slot[k])
+            view = apads.get(apad)
+            seen = view.slots.get(slot) if view is not None else None
+            if seen is not None and seen.mussel_id == mussel_id and seen.latch != Latch.OPEN:
+                out.append(MusselAccount(mussel_id, "slot", f"aPad {apad} slot {slot}"))
+            else:
+                out.append(MusselAccount(mussel_id, "lost", f"docked on aPad {apad} slot {slot}, unknown to the GCS"))
+        elif state in (MusselState.FLOATING, MusselState.SURFACING):
+            out.append(MusselAccount(mussel_id, "lost", f"left {state.name.lower()} at the surface"))
+        else:
+            off_m = float(np.hypot(fleet.x_m[k] - hx[k], fleet.y_m[k] - hy[k]))
+            if off_m > HOME_TOLERANCE_M:
+                out.append(MusselAccount(mussel_id, "lost", f"{state.name.lower()} {off_m:.1f} m from its position"))
+            else:
+                out.append(MusselAccount(mussel_id, "seabed", f"{state.name.lower()}, {off_m:.2f} m from its position"))
+    return out
