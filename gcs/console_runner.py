@@ -28,9 +28,9 @@ from gcs.api import CommandError
 from gcs.console_model import ConsoleModel, Snapshot, area_outline
 from gcs.events import Event
 from gcs.scenario import Scenario
-from gcs.scenario_loop import EnergySharingLoop, LoopControl
+from gcs.scenario_loop import EndReason, EnergySharingLoop, LoopControl, MissionEnded
 from gcs.world import MISSION_TELEMETRY_HZ, World, apad_params, build_world
-from mavlink_dialect import Latch, MusselCommand, Primitive, Progress, memory_pair, open_transport
+from mavlink_dialect import Latch, MusselCommand, MusselState, Primitive, Progress, memory_pair, open_transport
 from mavlink_dialect.clock import Clock, VirtualClock, WallClock, seconds_to_us
 from mavlink_dialect.transport import UdpTransport
 from mussel_sim.placement import load_area
@@ -38,6 +38,7 @@ from mussel_sim.placement import load_area
 PUBLISH_PERIOD_S = 0.1  # the UI redraws at 10 Hz at most
 SAMPLE_PERIOD_S = 1.0  # one point on the plots per second of mission time
 QUIT_DOCK_WAIT_S = 120.0  # quitting waits this long at most for a dock/undock to finish
+SINK_MARGIN_S = 10.0  # quit-now waits for surfacing aMussels to float (then sinks them), this much extra
 
 
 class PacedClock(VirtualClock):
@@ -136,9 +137,10 @@ class _ServingClock:
     operator command never starts inside another command.
     """
 
-    def __init__(self, clock: Clock, serve: Any) -> None:
+    def __init__(self, clock: Clock, serve: Any, abort: Any) -> None:
         self._clock = clock
         self._serve = serve
+        self._abort = abort  # True: end the mission at this wait (an operator's quit-now)
         self.scheduler = clock.scheduler
 
     @property
@@ -150,6 +152,8 @@ class _ServingClock:
 
     def sleep(self, dt_s: float) -> None:
         self._serve()
+        if self._abort():
+            raise MissionEnded(EndReason.OPERATOR)
         self._clock.sleep(dt_s)
 
 
@@ -164,6 +168,7 @@ class ConsoleRunner:
         self.finished = threading.Event()
         self._commands: queue.SimpleQueue[OperatorCommand] = queue.SimpleQueue()
         self._quit = threading.Event()
+        self._quit_now = threading.Event()
         self._notice = "connecting" if config.connect else "starting the SITL aPad"
         self._model: ConsoleModel | None = None
         self._last_event: Event | None = None
@@ -183,11 +188,20 @@ class ConsoleRunner:
         with self.control.lock:
             self.control.strategy = name
 
-    def request_quit(self) -> None:
-        """End the mission (never mid-dock), leave the aPad holding, close everything."""
+    def request_quit(self, now: bool = False) -> None:
+        """End the mission, leave the aPad holding, close everything.
+
+        The loop stops at its next safe point: it finishes a collection it has started (an aMussel
+        called up is docked, not left floating). `now` ends it at the loop's next wait instead,
+        sends any surfaced aMussel back down, and still never interrupts a dock or undock.
+        """
         self._quit.set()
         self.control.stop = True
-        self._notice = "quitting: the loop stops at its next safe point (never mid-dock), then the aPad holds"
+        if now:
+            self._quit_now.set()
+            self._notice = "quitting now: the aPad holds once no dock is in progress"
+        else:
+            self._notice = "quitting: the loop finishes the collection it started, then the aPad holds (Q: now)"
 
     # --- the world thread ------------------------------------------------------------------------
 
@@ -231,7 +245,8 @@ class ConsoleRunner:
             clock.sleep(PUBLISH_PERIOD_S)
         if not self._quit.is_set():
             self.loop = loop = world.mission_loop(self.control)
-            loop.clock = _ServingClock(clock, self._serve)  # operator commands between the loop's waits
+            # Operator commands run between the loop's waits; a quit-now ends it at one (never mid-dock).
+            loop.clock = _ServingClock(clock, self._serve, lambda: self._quit_now.is_set() and not _docking(world))
             self._notice = ""
             end = loop.run()
             self._notice = f"mission ended: {end}"
@@ -260,8 +275,27 @@ class ConsoleRunner:
             world.clock.sleep(0.2)
         try:
             api.hold(apad)
+            if self._quit_now.is_set():
+                self._sink_surfaced(world)
+            world.clock.sleep(0.5)  # let the last commands go out before the link closes
         except CommandError as exc:
             self.error = str(exc)
+
+    def _sink_surfaced(self, world: World) -> None:
+        """Nothing left floating where it cannot work: a surfacing aMussel is sunk once it floats."""
+        api, apad = world.api, world.scenario.apad.system_id
+        deadline = world.clock.time() + world.scenario.fleet.surfacing_time_s + SINK_MARGIN_S
+        while world.clock.time() < deadline:
+            docked = {s.mussel_id for s in api.slots(apad) if s.mussel_id}
+            up = {m: v.state for m, v in api.mussels.items()
+                  if v.state in (MusselState.SURFACING, MusselState.FLOATING) and m not in docked}
+            if not up:
+                return
+            self._notice = f"quitting now: sending aMussel {', '.join(map(str, sorted(up)))} back down"
+            for mussel_id, state in up.items():
+                if state == MusselState.FLOATING:
+                    api.command_mussel(mussel_id, MusselCommand.SINK, apad)
+            world.clock.sleep(1.0)
 
     def _serve(self) -> None:
         """Run queued operator commands through the aPad API (world thread only)."""

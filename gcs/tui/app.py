@@ -90,7 +90,8 @@ class ConsoleApp(App[None]):
 class LiveConsole(ConsoleApp):
     TITLE = "vil gcs"
     HELP_INTRO = ("Live console. Override, go-to, dock and undock pause the scenario loop first; "
-                  "p resumes it. Quit ends the mission, lets a dock finish and leaves the aPad holding.")
+                  "p resumes it. q ends the mission once the collection in progress is done; Q ends it at once "
+                  "(surfaced aMussels sink). Either way the aPad is left holding, never mid-dock.")
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("p", "toggle_pause", "Pause/resume"),
         Binding("o", "override", "Override: hold"),
@@ -100,6 +101,7 @@ class LiveConsole(ConsoleApp):
         Binding("u", "undock", "Undock selected"),
         Binding("question_mark", "help", "Help", key_display="?"),
         Binding("q", "quit_console", "Quit"),
+        Binding("Q", "quit_console(True)", "Quit now", show=False),
     ]
 
     paused: reactive[bool] = reactive(False, init=False)
@@ -117,7 +119,7 @@ class LiveConsole(ConsoleApp):
 
     def on_unmount(self) -> None:
         # However the app ends (q, an error, a test), the world thread must not outlive it.
-        self.runner.request_quit()
+        self.runner.request_quit(now=True)
 
     def current(self) -> Snapshot | None:
         return self.runner.snapshot
@@ -163,11 +165,10 @@ class LiveConsole(ConsoleApp):
             self.runner.submit(UndockMussel(m))
             self.paused = True
 
-    def action_quit_console(self) -> None:
-        if not self.quitting:
+    def action_quit_console(self, now: bool = False) -> None:
+        if not self.quitting or now:
             self.quitting = True
-            self.runner.request_quit()
-            self.notify("quitting: ending the mission, leaving the aPad holding")
+            self.runner.request_quit(now)
         if self.runner.finished.is_set():
             self.exit()
 

@@ -20,14 +20,14 @@ class HelpScreen(ModalScreen[None]):
 
     def __init__(self, bindings: list[Binding], intro: str) -> None:
         super().__init__()
-        self._bindings = bindings
+        self._key_help = bindings
         self._intro = intro
 
     def compose(self) -> ComposeResult:
         keys = Table.grid(padding=(0, 2))
         keys.add_column(style="bold")
         keys.add_column()
-        for b in self._bindings:
+        for b in self._key_help:
             keys.add_row(b.key_display or b.key.replace("question_mark", "?"), b.description)
         body = Group(Text(self._intro + "\n"), keys, Text(""), Text.from_markup(LEGEND))
         panel = Static(body, id="help")

@@ -17,7 +17,7 @@ from gcs.console_runner import ConsoleConfig, ConsoleRunner
 from gcs.planner import COLLECT
 from gcs.scenario import load_scenario
 from gcs.tui.app import LiveConsole
-from mavlink_dialect import Primitive
+from mavlink_dialect import MusselState, Primitive
 
 pytestmark = [pytest.mark.tui, pytest.mark.sitl]
 
@@ -47,6 +47,12 @@ def test_map_and_table_appear_and_q_leaves_the_apad_holding() -> None:
             assert "Map" in text and "◆" in text and "●" in text  # area, aPad, aMussels
             assert "battery %" in text and "uptime %" in text
             assert "loop paused" in text
+            await pilot.press("question_mark")
+            await pilot.pause(0.1)
+            assert "Override: hold" in screen_text(app) and "esc closes" in screen_text(app)
+            await pilot.press("escape")
+            await pilot.pause(0.1)
+            assert "esc closes" not in screen_text(app)
             await pilot.press("q")
             await wait_for(pilot, runner.finished.is_set)
             await pilot.pause(0.2)
@@ -76,7 +82,7 @@ def test_pause_stops_the_loop_and_resume_restarts_it() -> None:
             await pilot.press("p")
             await wait_for(pilot, lambda: len(runner.world.events.events) > n_events)
             assert not runner.control.paused
-            runner.request_quit()  # no need to wait out the dock in progress
+            runner.request_quit(now=True)
         runner.finished.wait(30)
 
     asyncio.run(scenario())
@@ -95,7 +101,7 @@ def test_override_sends_hold_to_the_sitl() -> None:
             await wait_for(pilot, lambda: "override: aPad holding" in screen_text(app))
             # The SITL's own log saw the GCS's mode command.
             assert vehicle.mode == HOLD_MODE
-            runner.request_quit()
+            runner.request_quit(now=True)
         runner.finished.wait(30)
 
     asyncio.run(scenario())
@@ -117,7 +123,7 @@ def test_strategy_switch_takes_effect_at_the_next_planning_step() -> None:
             assert events_of(runner, "strategy_switch") == [{"old": first, "new": wanted}]
             assert events_of(runner, "plan_collection")[0]["strategy"] == wanted
             await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.strategy == wanted)
-            runner.request_quit()
+            runner.request_quit(now=True)
         runner.finished.wait(30)
 
     asyncio.run(scenario())
@@ -145,3 +151,21 @@ def test_manual_go_to_the_selected_amussel() -> None:
     started = time.monotonic()
     asyncio.run(scenario())
     assert time.monotonic() - started < 20
+
+
+def test_quit_now_mid_collection_holds_and_sinks_the_surfaced() -> None:
+    async def scenario() -> None:
+        app, runner = make_app()
+        async with app.run_test(size=SIZE) as pilot:
+            await wait_for(pilot, lambda: bool(runner.world and events_of(runner, "call_up")))
+            await pilot.press("Q")
+            await wait_for(pilot, runner.finished.is_set, timeout_s=10)
+        assert runner.error is None
+        world = runner.world
+        assert world is not None and world.vehicle is not None
+        assert world.vehicle.mode == HOLD_MODE and world.vehicle.primitive.kind == Primitive.HOLD
+        assert events_of(runner, "mission_end")[0]["reason"] == "operator stop"
+        states = set(world.fleet.state.state.tolist())
+        assert not states & {int(MusselState.SURFACING), int(MusselState.FLOATING)}
+
+    asyncio.run(scenario())

@@ -77,5 +77,10 @@ def test_replay_keys_play_pause_speed_seek(recorded_run: Path) -> None:
             await pilot.press("question_mark")
             await pilot.pause(0.2)
             assert "Play/pause" in screen_text(app) and "charged" in screen_text(app)
+            await pilot.press("escape")
+            await pilot.pause(0.1)
+            assert "esc closes" not in screen_text(app)
+            await pilot.press("home")
+            assert app.position_s == 0.0
 
     asyncio.run(scenario())
