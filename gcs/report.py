@@ -140,11 +140,11 @@ def _uptime_png(snap: Snapshot, path: Path, title: str) -> Path:
     ax.bar(ids, snap.uptime_pct, color=GREEN)
     avg = float(snap.uptime_pct.mean()) if snap.uptime_pct.size else 0.0
     ax.axhline(avg, color=ORANGE, ls="--", lw=1, label=f"average {avg:.1f} %")
-    ax.set(xlabel="aMussel id", ylabel="uptime [% of mission steps active]", ylim=(0, 105),
+    ax.set(xlabel="aMussel id", ylabel="uptime [% of mission steps active]", ylim=(0, 118),
            title=f"Uptime per aMussel (eq. 3) — {title}")
     if len(ids) > 30:
         ax.set_xticks(ids[:: max(len(ids) // 20, 1)])
-    ax.legend(loc="lower right")
+    ax.legend(loc="upper right")
     return _save(fig, path)
 
 

@@ -33,3 +33,18 @@ def test_report_writes_plots_page_and_geojson(recorded_run: Path, tmp_path: Path
 def test_report_of_a_missing_run_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["report", str(tmp_path / "nope"), "-o", str(tmp_path / "out")]) == 2
     assert capsys.readouterr().err.startswith("vil report:")
+
+
+def test_report_takes_the_indices_from_result_json(recorded_run: Path, tmp_path: Path) -> None:
+    run = tmp_path / "run"
+    run.mkdir()
+    for name in ("gcs.tlog", "events.jsonl", "console.json"):
+        (run / name).write_bytes((recorded_run / name).read_bytes())
+    result = {"scenario": "pool12", "strategy": "cautious", "seed": 1, "uptime": {"avg": 70.5, "max": 90.0,
+              "min": 50.25}, "cost_m": 123.4, "active_avg": 8.5, "end_reason": "mission time"}
+    (run / "result.json").write_text(json.dumps(result))
+    out = tmp_path / "report"
+    assert main(["report", str(run), "-o", str(out)]) == 0
+    page = (out / "index.html").read_text()
+    assert "pool12 cautious seed 1" in page and "<td>70.50</td>" in page and "<td>123.4</td>" in page
+    assert "paper (Table II)" in page and "<td>74.37</td>" in page  # the paper's row beside ours
