@@ -14,6 +14,7 @@ import argparse
 import signal
 import sys
 import time
+from pathlib import Path
 from types import FrameType
 from typing import Any
 
@@ -21,6 +22,7 @@ from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.params import ApadParams, ParamError, with_param
 from mavlink_dialect import AddressError, mavlink, open_transport
 from mavlink_dialect.clock import Scheduler, WallClock
+from mavlink_dialect.signing import SigningKeyError, load_key
 
 DEFAULT_LISTEN = "udp:127.0.0.1:14550"
 DEFAULT_HOME = (43.9400, 15.4400)  # off Biograd na Moru
@@ -93,6 +95,31 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="set an aPad parameter at start, e.g. SPEED_MAX=0.3 (repeatable)")
     parser.add_argument("--log-dir", metavar="DIR", help="write the aPad's .tlog and event log here")
     parser.add_argument("--duration", type=_duration, metavar="S", help="stop after S seconds (default: until Ctrl-C)")
+    parser.add_argument("--signing-key", type=Path, metavar="FILE",
+                        help="MAVLink 2 signing with the passphrase in FILE (default: $VIL_SIGNING_KEY if set); "
+                             "unsigned commands are then refused")
+    parser.add_argument("--geofence", type=Path, metavar="GEOJSON",
+                        help="water area: Go To targets outside it and undocking outside it are refused")
+
+
+def _fence(path: Path) -> list[tuple[float, float]]:
+    """The outer ring of the first polygon in a GeoJSON file, as (lat, lon)."""
+    import json
+
+    import shapely.geometry
+
+    try:
+        obj = json.loads(path.read_text())
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not JSON: {exc.msg}") from None
+    if obj.get("type") == "FeatureCollection":
+        obj = obj["features"][0]
+    geom = shapely.geometry.shape(obj["geometry"] if obj.get("type") == "Feature" else obj)
+    if geom.geom_type == "MultiPolygon":
+        geom = geom.convex_hull
+    if geom.geom_type != "Polygon":
+        raise ValueError(f"{path}: the geofence must be a Polygon")
+    return [(float(y), float(x)) for x, y in geom.exterior.coords]
 
 
 def _stop(signum: int, frame: FrameType | None) -> None:
@@ -113,9 +140,17 @@ def run(args: argparse.Namespace) -> int:
     lat, lon = args.home
     clock = WallClock(Scheduler())
     try:
+        key = load_key(args.signing_key)
+        fence = _fence(args.geofence) if args.geofence else None
+    except (SigningKeyError, OSError, ValueError, KeyError) as exc:
+        transport.close()
+        print(f"vil sitl: {exc}", file=sys.stderr)
+        return 2
+    try:
         vehicle = SitlVehicle(
             transport, params, lat, lon, system_id=args.sysid, current_mps=args.current,
             log_dir=args.log_dir, rates_hz=REALTIME_RATES_HZ, log_epoch_us=int(time.time() * 1e6),
+            signing_key=key, geofence_deg=fence,
         )
     except OSError as exc:
         transport.close()

@@ -28,7 +28,7 @@ from gcs.headless import run_dir, run_mission
 from gcs.planner import COLLECT
 from gcs.results import RunResult, results_table, seed_stats, seed_stats_table, shape_table
 from gcs.scenario import Scenario, ScenarioError, load_scenario, parse_duration_s
-from gcs.world import LinkOptions
+from gcs.world import LinkOptions, check_inputs
 from mavlink_dialect.signing import SigningKeyError, load_key
 
 # The paper's Table II runs: (scenario, collection strategy).
@@ -157,6 +157,10 @@ def _jobs(args: argparse.Namespace) -> list[Job]:
     seeds: list[int | None] = list(range(1, args.seeds + 1)) if args.seeds else [args.seed]
     cache: dict[str, Scenario] = {}
     options = _link_options(args)
+    for name, _ in pairs:
+        if name not in cache:
+            cache[name] = load_scenario(name)
+            check_inputs(cache[name])
     jobs = []
     for name, strategy in pairs:
         base = cache.setdefault(name, load_scenario(name))

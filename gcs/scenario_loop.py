@@ -253,9 +253,9 @@ class EnergySharingLoop:
         for slot, mussel_id in route:
             self.status.target_mussel = mussel_id
             self._go_to(self.homes[mussel_id])
-            self._undock(slot, mussel_id)
-            self._command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
-            self._log("released", mussel=mussel_id, slot=slot)
+            if self._undock(slot, mussel_id):
+                self._command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
+                self._log("released", mussel=mussel_id, slot=slot)
         self.status.target_mussel = 0
 
     # --- primitives with waiting ------------------------------------------------------------
@@ -294,7 +294,7 @@ class EnergySharingLoop:
         s = self._slot(slot)
         return s.latch == Latch.LATCHED and s.mussel_id == mussel_id
 
-    def _undock(self, slot: int, mussel_id: int) -> None:
+    def _undock(self, slot: int, mussel_id: int) -> bool:
         """Undock until the slot is released. A retransmitted undock is harmless: the aPad re-ACKs it,
         and it names the aMussel, so it can never release another one put in that slot since."""
 
@@ -302,7 +302,9 @@ class EnergySharingLoop:
             s = self._slot(slot)
             return s.mussel_id != mussel_id or s.latch == Latch.OPEN
 
-        while not released():
+        for _ in range(20):  # ~3 min; a refusal that long (e.g. not over water) leaves it on board, logged
+            if released():
+                return True
             if self._slot(slot).latch != Latch.RELEASING:
                 try:
                     self.api.docking(False, slot, mussel_id, self.apad_id)
@@ -310,6 +312,10 @@ class EnergySharingLoop:
                     self._log("command_failed", what=str(exc))
             self._wait_until(lambda: released() or self._slot(slot).latch != Latch.RELEASING,
                              timeout_s=self.settings.poll_s * 8, interruptible=False)
+        if released():
+            return True
+        self._log("undock_failed", mussel=mussel_id, slot=slot, why="the aPad keeps refusing; it stays on board")
+        return False
 
     def _sink(self, mussel_id: int) -> None:
         """Tell a called-up aMussel to go back down, and see that it does (the relay is not acknowledged)."""
@@ -397,10 +403,11 @@ class EnergySharingLoop:
 
     def _call_up_if_in_range(self, mussel_id: int) -> bool:
         """Safety: an aMussel is only called to the surface with an aPad within acoustic range."""
-        if self._distance_to(mussel_id) > self.settings.acoustic_range_m:
+        distance = self._distance_to(mussel_id)
+        if distance > self.settings.acoustic_range_m:
             return False
         self._command(self.api.command_mussel, mussel_id, MusselCommand.SURFACE, self.apad_id)
-        self._log("call_up", mussel=mussel_id)
+        self._log("call_up", mussel=mussel_id, distance_m=round(distance, 2))
         return True
 
     def _take_strategy_switch(self) -> None:

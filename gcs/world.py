@@ -7,6 +7,7 @@ console builds the same pieces on a wall clock with a real transport (`field_wor
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -18,7 +19,7 @@ from gcs.api import ApadApi, Location
 from gcs.events import EventLog
 from gcs.faultproxy import FaultProxy, LinkFaults
 from gcs.link import Link
-from gcs.scenario import Scenario
+from gcs.scenario import Scenario, ScenarioError
 from gcs.scenario_loop import EnergySharingLoop, LoopControl, LoopSettings
 from mavlink_dialect import Codec, mavlink, memory_pair, signing
 from mavlink_dialect.clock import Clock, VirtualClock
@@ -87,6 +88,34 @@ class World:
             self.proxy.close()
         self.link.close()
         self.events.close()
+
+
+def check_inputs(scenario: Scenario) -> None:
+    """Read the scenario's area and start configuration now, so a bad file is one `ScenarioError` line
+    (file: what is wrong) before any mission starts, never a traceback from the middle of one."""
+    files = [("area", scenario.fleet.area)]
+    if scenario.fleet.start_config is not None:
+        files.append(("start configuration", scenario.fleet.start_config))
+    for what, path in files:
+        try:
+            if what == "area":
+                area = load_area(path)
+                if not area.geometry.is_valid:
+                    raise ValueError("the polygon is not valid (self-intersecting or degenerate)")
+                lon_min, lat_min, lon_max, lat_max = area.geometry.bounds
+                if not (-90 <= lat_min <= lat_max <= 90 and -180 <= lon_min <= lon_max <= 180):
+                    raise ValueError("coordinates are not WGS84 degrees [lon, lat] (GeoJSON order)")
+            else:
+                config = load_start_config(path)
+                if config.n != scenario.fleet.count:
+                    raise ValueError(f"holds {config.n} aMussels, the scenario says {scenario.fleet.count}")
+        except OSError as exc:
+            raise ScenarioError(f"{path}: cannot read the {what}: {exc.strerror or exc}") from None
+        except json.JSONDecodeError as exc:
+            raise ScenarioError(f"{path}: the {what} is not JSON: {exc.msg} (line {exc.lineno})") from None
+        except (ValueError, KeyError, TypeError, IndexError, AttributeError) as exc:
+            detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise ScenarioError(f"{path}: bad {what}: {detail}") from None
 
 
 def start_config(scenario: Scenario, area: Area, rng: np.random.Generator) -> tuple[StartConfig, LocalFrame]:
