@@ -218,6 +218,28 @@ class ApadApi:
             self._expected[sysid] = _Expectation(Primitive.UNDOCK, slot, 0)
             self.link.command_long(sysid, MAV_CMD_APAD_UNDOCK, (slot, mussel_id))
 
+    def fresh_slot(self, slot: int, apad_id: int | None = None, timeout_s: float = 2.0, attempts: int = 5) -> SlotView:
+        """The slot as the aPad reports it in answer to a request now (REQUEST_MESSAGE), not a report
+        that may be stale because the on-change one was lost. Raises `CommandError` if it never answers."""
+        view = self.apad(apad_id)
+        old = view.slots[slot]
+        for _ in range(attempts):
+            view.slots[slot] = SlotView(slot, mussel_id=-1)  # unknown until the answer comes
+            try:
+                self.link.command_long(view.system_id, mavlink.MAV_CMD_REQUEST_MESSAGE,
+                                       (mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS, slot))
+            except CommandError:
+                continue
+            deadline = self.clock.time() + timeout_s
+            while view.slots[slot].mussel_id == -1 and self.clock.time() < deadline:
+                self.clock.sleep(0.05)
+            if view.slots[slot].mussel_id != -1:
+                return view.slots[slot]
+        if view.slots[slot].mussel_id == -1:
+            view.slots[slot] = old
+        raise CommandError(view.system_id, mavlink.MAV_CMD_REQUEST_MESSAGE, None,
+                           f"no DOCK_SLOT_STATUS for slot {slot}")
+
     def primitive_status(self, apad_id: int | None = None) -> Progress:
         """Progress of the primitive last commanded through this API (IN_PROGRESS == 1).
 

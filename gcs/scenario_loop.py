@@ -279,20 +279,34 @@ class EnergySharingLoop:
 
     def _dock(self, slot: int, mussel_id: int) -> bool:
         """Dock and wait for the latch. The slot's own report decides, not the ACK or the primitive:
-        an ACK lost on the way back, or a failsafe Hold over the dock, leave the latch closing."""
+        an ACK or a slot report lost on the way back, or a failsafe Hold over the dock, leave the
+        latch closing; so the end is confirmed by asking the aPad for the slot."""
         try:
             self.api.docking(True, slot, mussel_id, self.apad_id)
         except CommandError as exc:
             self._log("command_failed", what=str(exc))
             if exc.result is not None:
                 return False  # refused: nothing happened on the aPad
-            self._sleep(self.settings.poll_s * 4, interruptible=False)  # no ACK: let the slot report
-            if self._slot(slot).mussel_id != mussel_id or self._slot(slot).latch == Latch.OPEN:
-                return False
-        # Never abandon a dock half-way: the wait ignores the end of the mission.
-        self._wait_until(lambda: self._slot(slot).latch != Latch.CLOSING, interruptible=False)
-        s = self._slot(slot)
-        return s.latch == Latch.LATCHED and s.mussel_id == mussel_id
+
+        def ours(latch: Latch) -> bool:
+            s = self._slot(slot)
+            return s.mussel_id == mussel_id and s.latch == latch
+
+        def settled() -> bool:
+            failed = self.api.docking_status(self.apad_id) == Progress.FAILED
+            return ours(Latch.LATCHED) or (failed and not ours(Latch.CLOSING))
+
+        # Never abandon a dock half-way: the waits ignore the end of the mission.
+        self._wait_until(settled, self.settings.surfacing_timeout_s, interruptible=False)
+        while True:
+            try:
+                s = self.api.fresh_slot(slot, self.apad_id)
+            except CommandError as exc:
+                self._log("command_failed", what=str(exc))
+                continue
+            if not (s.mussel_id == mussel_id and s.latch == Latch.CLOSING):
+                return s.mussel_id == mussel_id and s.latch == Latch.LATCHED
+            self._wait_until(lambda: not ours(Latch.CLOSING), self.settings.poll_s * 8, interruptible=False)
 
     def _undock(self, slot: int, mussel_id: int) -> bool:
         """Undock until the slot is released. A retransmitted undock is harmless: the aPad re-ACKs it,

@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+import json
 import socket
+from pathlib import Path
 
 import pytest
 
+from apad_sitl.primitives import Refusal
 from gcs.faultproxy import FaultProxy, LinkFaults
 from gcs.headless import run_mission
 from gcs.scenario import load_scenario
 from gcs.world import LinkOptions
+from mavlink_dialect import MAV_CMD_APAD_UNDOCK
 from mavlink_dialect.clock import VirtualClock
 
 pytestmark = pytest.mark.sitl
@@ -17,10 +21,10 @@ pytestmark = pytest.mark.sitl
 FIELD_WIFI = LinkFaults(loss_frac=0.20, latency_s=0.200, duplicate_frac=0.05, seed=1)
 
 
-def test_pool12_greedy_survives_20pc_loss_200ms_latency_5pc_duplication() -> None:
+def test_pool12_greedy_survives_20pc_loss_200ms_latency_5pc_duplication(tmp_path: Path) -> None:
     s = load_scenario("pool12").with_overrides(strategy="greedy")
     clean = run_mission(s)
-    lossy = run_mission(s, options=LinkOptions(faults=FIELD_WIFI))
+    lossy = run_mission(s, tmp_path, options=LinkOptions(faults=FIELD_WIFI))
     m = lossy.messages
     for way in ("to_apad", "to_gcs"):  # the faults really happened, both ways
         sent = m[f"proxy_{way}_forwarded"] + m[f"proxy_{way}_dropped"] - m[f"proxy_{way}_duplicated"]
@@ -31,6 +35,20 @@ def test_pool12_greedy_survives_20pc_loss_200ms_latency_5pc_duplication() -> Non
     for r in (clean, lossy):  # nothing lost: every aMussel on the seabed near its position, or on a slot
         assert len(r.whereabouts) == 12
         assert [w for w in r.whereabouts if w["where"] == "lost"] == []
+    # Duplicates were harmless: retransmissions reached the aPad and were re-ACKed, not re-executed;
+    # every latch that closed is one the GCS counts as docked, every undock one it counts as released.
+    apad = [json.loads(x) for x in (tmp_path / "apad1.events.jsonl").read_text().splitlines()]
+    gcs = [json.loads(x) for x in (tmp_path / "events.jsonl").read_text().splitlines()]
+    assert any(e["event"] == "command_retry" for e in apad)
+    executed = [e for e in apad if e["event"] == "command" and e["result"] == "ACCEPTED"]
+    latched = [(e["slot"], e["mussel_id"]) for e in apad if e["event"] == "slot" and e["latch"] == "LATCHED"]
+    undocks = [(int(e["params"][0]), int(e["params"][1])) for e in executed if e["command"] == MAV_CMD_APAD_UNDOCK]
+    assert latched == [(e["slot"], e["mussel"]) for e in gcs if e["event"] == "docked"]  # none latched twice
+    assert undocks == [(e["slot"], e["mussel"]) for e in gcs if e["event"] == "released"]
+    # Every undock names its aMussel, so a late duplicate can only find the slot empty, never release another.
+    undock_cmds = [e for e in apad if e["event"] == "command" and e["command"] == MAV_CMD_APAD_UNDOCK]
+    assert all(int(e["params"][1]) != 0 for e in undock_cmds)
+    assert {e["result_param2"] for e in undock_cmds if e["result"] == "DENIED"} <= {Refusal.SLOT_EMPTY}
     # The mission still shares energy: uptime within a few points of the clean run.
     assert lossy.uptime["avg"] == pytest.approx(clean.uptime["avg"], abs=5.0)
     print(f"clean uptime {clean.uptime} cost {clean.cost_m} m; lossy uptime {lossy.uptime} cost {lossy.cost_m} m")
