@@ -151,8 +151,10 @@ def test_manual_go_to_dock_and_undock_of_the_selected_amussel() -> None:
         app, runner = make_app(start_paused=True)
         async with app.run_test(size=SIZE) as pilot:
             await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.hist_t_s.size > 1)
+            await wait_for(pilot, lambda: app.fleet.row_count == 12)
             app.fleet.focus()
             await pilot.press("down", "down")  # aMussel 3
+            await wait_for(pilot, lambda: app.fleet.selected_mussel() == 3)
             await pilot.press("g")
             vehicle = runner.world.vehicle
             await wait_for(pilot, lambda: vehicle.primitive.kind == Primitive.GOTO)

@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 
 import pytest
-from tui_helpers import screen_text
+from tui_helpers import screen_text, wait_for
 
 from gcs.cli import main
 from gcs.replay import ReplayError, load_replay, read_tlog
@@ -68,9 +68,11 @@ def test_replay_keys_play_pause_speed_seek(recorded_run: Path) -> None:
             assert app.speed == 4.0
             await pilot.press("space")
             assert app.playing
-            await pilot.pause(0.5)
+            await wait_for(pilot, lambda: app.position_s > 90.5)  # 4x: 0.4 s of mission per tick
             await pilot.press("space")
-            assert not app.playing and 90.5 < app.position_s < 95.0
+            stopped_at = app.position_s
+            await pilot.pause(0.3)
+            assert not app.playing and app.position_s == stopped_at < 100.0
             await pilot.press("end")
             await pilot.pause(0.2)
             assert app.position_s == app.replay.end_s and "mission ended: operator stop" in screen_text(app)
