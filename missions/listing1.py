@@ -45,6 +45,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--connect", default="udp:127.0.0.1:14550", help="the aPad (default udp:127.0.0.1:14550)")
     parser.add_argument("--distance", type=float, default=10.0, help="how far from the aPad aMussel 24 rests [m]")
     parser.add_argument("--timeout", type=float, default=300.0, help="give up after this many seconds")
+    parser.add_argument("--wait", type=float, default=10.0, help="how long to wait for the aPad's heartbeat [s]")
     args = parser.parse_args(argv)
 
     clock = WallClock()
@@ -56,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     api = ApadApi(link, clock)
     try:
-        id_self = api.wait_apad(timeout_s=10.0)
+        id_self = api.wait_apad(timeout_s=args.wait)
     except TimeoutError as exc:
         print(f"listing1: {exc} (is `vil sitl` running on {args.connect}?)", file=sys.stderr)
         return 1

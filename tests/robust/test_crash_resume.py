@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from gcs.checkpoint import CHECKPOINT_NAME, load
@@ -17,7 +18,7 @@ from gcs.checkpoint import CHECKPOINT_NAME, load
 pytestmark = [pytest.mark.sitl, pytest.mark.slow]
 
 VIL = [sys.executable, "-m", "gcs.cli"]
-ARGS = ["run", "pool12", "--strategy", "greedy", "--duration", "2h", "--jobs", "1"]
+ARGS = ["run", "pool12", "--strategy", "greedy", "--duration", "1h", "--jobs", "1"]
 
 
 def test_sigkill_mid_mission_then_resume_completes_with_every_mussel_accounted_for(tmp_path: Path) -> None:
@@ -40,14 +41,14 @@ def test_sigkill_mid_mission_then_resume_completes_with_every_mussel_accounted_f
         proc.wait(10)
     assert proc.returncode == -signal.SIGKILL
     killed_at_s = load(ckpt).time_us / 1e6
-    assert 1200 < killed_at_s < 7200
+    assert 1200 < killed_at_s < 3600
     assert not (run_dir / "result.json").exists()
 
     done = subprocess.run([*VIL, *ARGS, "--out", str(out), "--resume", "--json", str(tmp_path / "r.json")],
                           capture_output=True, text=True, timeout=120, env=env)
     assert done.returncode == 0, done.stderr
     r = json.loads((tmp_path / "r.json").read_text())
-    assert r["end_reason"] == "mission time" and r["duration_s"] == 7200
+    assert r["end_reason"] == "mission time" and r["duration_s"] == 3600
     assert len(r["whereabouts"]) == 12 and [w for w in r["whereabouts"] if w["where"] == "lost"] == []
     events = [json.loads(x) for x in (run_dir / "events.jsonl").read_text().splitlines()]
     kinds = [e["event"] for e in events]
@@ -56,8 +57,8 @@ def test_sigkill_mid_mission_then_resume_completes_with_every_mussel_accounted_f
     assert events[resume]["t_s"] == pytest.approx(killed_at_s)
     assert not ckpt.exists()  # finished: nothing left to resume
     # The uptime record spans the whole mission, not only the part after the crash.
-    traces = __import__("numpy").load(run_dir / "traces.npz")
-    assert traces["step_time_us"][0] <= 1_000_000 and traces["step_time_us"][-1] >= 7_190_000_000
+    traces = np.load(run_dir / "traces.npz")
+    assert traces["step_time_us"][0] <= 1_000_000 and traces["step_time_us"][-1] >= 3_590_000_000
 
 
 def test_resume_without_a_checkpoint_is_one_line_and_exit_2(tmp_path: Path) -> None:

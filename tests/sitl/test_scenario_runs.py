@@ -133,8 +133,8 @@ def test_a_broken_scenario_file_names_file_and_field(tmp_path: Path) -> None:
 
 def test_seed_statistics_cover_every_strategy_and_report_the_shape(tmp_path: Path) -> None:
     out = tmp_path / "seeds.json"
-    done = vil("run", "pool12", "--seeds", "3", "--jobs", "2", "--json", str(out), "--out", str(tmp_path / "runs"),
-               cwd=tmp_path)
+    done = vil("run", "pool12", "--seeds", "3", "--duration", "10m", "--jobs", "2", "--json", str(out),
+               "--out", str(tmp_path / "runs"), cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert "Shape of Table II, seed by seed" in done.stdout and "greedy beats no charging" in done.stdout
     runs = json.loads(out.read_text())
