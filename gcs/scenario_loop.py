@@ -187,6 +187,7 @@ class EnergySharingLoop:
     def _collect(self, route: list[int]) -> None:
         self._set_phase(Phase.COLLECT)
         for mussel_id in route:
+            self._check_end()  # between aMussels nothing is half done: an operator stop ends here
             free = self._free_slots()
             if not free:
                 break
