@@ -106,24 +106,24 @@ def _fraction(text: str) -> float:
     return value
 
 
-def _non_negative(text: str) -> float:
+def _number(text: str, allow_zero: bool) -> float:
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value >= 0:
+    if allow_zero and not value >= 0:
         raise argparse.ArgumentTypeError(f"must not be negative, got {text}")
+    if not allow_zero and not value > 0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
     return value
+
+
+def _non_negative(text: str) -> float:
+    return _number(text, allow_zero=True)
 
 
 def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
-    return value
+    return _number(text, allow_zero=False)
 
 
 @dataclass(frozen=True)
