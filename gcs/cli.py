@@ -13,43 +13,32 @@ from gcs.tui import cli as console_cli
 Runner = Callable[[argparse.Namespace], int]
 
 
+# name, one-line help, description, add_arguments, runner: the whole command line in one table.
+COMMANDS: tuple[tuple[str, str, str | None, Callable[[argparse.ArgumentParser], None], Runner], ...] = (
+    ("run", "headless mission(s) in lockstep; no scenario: the paper's Table II reproduction",
+     run_cli.__doc__, run_cli.add_arguments, run_cli.run),
+    ("sitl", "the SITL aPad alone, in real time, on UDP/TCP/serial",
+     "Run the SITL kinematic aPad as a MAVLink vehicle in real time.", serve.add_arguments, serve.run),
+    ("gcs", "the operator console, live against an aPad (--sitl embeds one)",
+     console_cli.__doc__, console_cli.add_gcs_arguments, console_cli.run_gcs),
+    ("replay", "the console driven from a recorded run",
+     "Replay a recorded run in the console: play, pause, speed, seek.",
+     console_cli.add_replay_arguments, console_cli.run_replay),
+    ("report", "plots, HTML summary and GeoJSON of a recorded run", report.__doc__, report.add_arguments, report.run),
+)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="vil",
         description="Vehicle-in-the-loop ground-control station for an aPad / aMussel marine robot swarm.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    run_p = sub.add_parser(
-        "run",
-        help="headless mission(s) in lockstep; no scenario: the paper's Table II reproduction",
-        description=run_cli.__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
-    run_cli.add_arguments(run_p)
-    run_p.set_defaults(runner=run_cli.run)
-    sitl = sub.add_parser(
-        "sitl",
-        help="the SITL aPad alone, in real time, on UDP/TCP/serial",
-        description="Run the SITL kinematic aPad as a MAVLink vehicle in real time.",
-    )
-    serve.add_arguments(sitl)
-    sitl.set_defaults(runner=serve.run)
-    gcs = sub.add_parser(
-        "gcs",
-        help="the operator console, live against an aPad (--sitl embeds one)",
-        description=console_cli.__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
-    console_cli.add_gcs_arguments(gcs)
-    gcs.set_defaults(runner=console_cli.run_gcs)
-    replay = sub.add_parser("replay", help="the console driven from a recorded run",
-                            description="Replay a recorded run in the console: play, pause, speed, seek.")
-    console_cli.add_replay_arguments(replay)
-    replay.set_defaults(runner=console_cli.run_replay)
-    report_p = sub.add_parser("report", help="plots, HTML summary and GeoJSON of a recorded run",
-                              description=report.__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    report.add_arguments(report_p)
-    report_p.set_defaults(runner=report.run)
+    for name, summary, description, add_arguments, runner in COMMANDS:
+        command = sub.add_parser(name, help=summary, description=description,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+        add_arguments(command)
+        command.set_defaults(runner=runner)
     return parser
 
 
