@@ -13,16 +13,14 @@ Reordering is what jitter does: each datagram draws its own delay, so a later on
 
 from __future__ import annotations
 
-import contextlib
 import heapq
-import socket
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from mavlink_dialect.clock import Clock, Task, seconds_to_us
+from mavlink_dialect.transport import UdpTransport
 
-MAX_DATAGRAM = 65535
 _IDLE_PERIOD_US = 3600 * 1_000_000  # the delivery task sleeps this long when nothing is held
 
 
@@ -74,28 +72,19 @@ class _Held:
 
 
 class _Side:
-    """One socket of the proxy, polled by the scheduler."""
+    """One UDP transport of the proxy, polled by the scheduler: what it receives goes the other way."""
 
-    def __init__(self, proxy: FaultProxy, sock: socket.socket, to_vehicle: bool) -> None:
-        self.proxy, self.sock, self.to_vehicle = proxy, sock, to_vehicle
-        self.peer: tuple[str, int] | None = None  # who last sent to this side (the GCS), or the vehicle
+    def __init__(self, proxy: FaultProxy, transport: UdpTransport, to_vehicle: bool) -> None:
+        self.proxy, self.transport, self.to_vehicle = proxy, transport, to_vehicle
 
     def poll(self) -> bool:
-        got = False
-        while True:
-            try:
-                data, addr = self.sock.recvfrom(MAX_DATAGRAM)
-            except (BlockingIOError, InterruptedError):
-                return got
-            except OSError:  # ICMP unreachable from an earlier send
-                continue
-            got = True
-            if self.to_vehicle:
-                self.peer = addr  # replies go back to the GCS that spoke last
+        chunks = self.transport.receive()
+        for data in chunks:
             self.proxy._admit(data, self.to_vehicle)
+        return bool(chunks)
 
     def fileno(self) -> int | None:
-        return self.sock.fileno()
+        return self.transport.fileno()
 
 
 class FaultProxy:
@@ -111,11 +100,9 @@ class FaultProxy:
         self._held: list[_Held] = []
         self._seq = 0
         self._last_seq = {True: -1, False: -1}
-        gcs_sock = _udp_socket(listen_host, listen_port)
-        vehicle_sock = _udp_socket("127.0.0.1" if vehicle_addr[0] in ("127.0.0.1", "localhost") else "0.0.0.0", 0)
-        self.gcs_side = _Side(self, gcs_sock, to_vehicle=True)
-        self.vehicle_side = _Side(self, vehicle_sock, to_vehicle=False)
-        self.vehicle_side.peer = vehicle_addr
+        # The GCS side listens and answers whoever spoke; the vehicle side sends to the vehicle.
+        self.gcs_side = _Side(self, UdpTransport(listen_host, listen_port, listen=True), to_vehicle=True)
+        self.vehicle_side = _Side(self, UdpTransport(*vehicle_addr, listen=False), to_vehicle=False)
         sched = clock.scheduler
         self._task: Task = sched.every(_IDLE_PERIOD_US / 1e6, self._deliver_due, "faultproxy.deliver",
                                        clock.now_us + _IDLE_PERIOD_US)
@@ -124,7 +111,7 @@ class FaultProxy:
 
     @property
     def listen_port(self) -> int:
-        return int(self.gcs_side.sock.getsockname()[1])
+        return self.gcs_side.transport.local_port
 
     def _admit(self, data: bytes, to_vehicle: bool) -> None:
         f = self.faults
@@ -157,11 +144,9 @@ class FaultProxy:
             if item.seq < self._last_seq[item.to_vehicle]:
                 stats.reordered += 1
             self._last_seq[item.to_vehicle] = max(self._last_seq[item.to_vehicle], item.seq)
-            side = self.vehicle_side if item.to_vehicle else self.gcs_side
-            target = self.vehicle_addr if item.to_vehicle else self.gcs_side.peer
-            if target is not None:
-                with contextlib.suppress(OSError):
-                    side.sock.sendto(item.data, target)
+            out = (self.vehicle_side if item.to_vehicle else self.gcs_side).transport
+            if out.peers:  # the GCS side has nobody to answer until the GCS has spoken
+                out.send(item.data)
                 stats.forwarded += 1
         next_us = held[0].due_us if held else now_us + _IDLE_PERIOD_US
         self.clock.scheduler.reschedule(self._task, next_us=max(next_us, now_us))
@@ -171,13 +156,5 @@ class FaultProxy:
         sched.remove_poller(self.gcs_side)
         sched.remove_poller(self.vehicle_side)
         sched.reschedule(self._task, active=False)
-        self.gcs_side.sock.close()
-        self.vehicle_side.sock.close()
-
-
-def _udp_socket(host: str, port: int) -> socket.socket:
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 20)
-    sock.bind((host, port))
-    sock.setblocking(False)
-    return sock
+        self.gcs_side.transport.close()
+        self.vehicle_side.transport.close()

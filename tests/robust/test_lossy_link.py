@@ -90,7 +90,7 @@ def test_the_proxy_delays_in_mission_time_reorders_with_jitter_and_answers_back(
     got = [d[0] for d in _drain(vehicle)]
     assert sorted(got) == list(range(50)) and got != sorted(got)  # all there, some overtaken
     assert proxy.stats[True].reordered > 0
-    vehicle.sendto(b"ack", ("127.0.0.1", proxy.vehicle_side.sock.getsockname()[1]))
+    vehicle.sendto(b"ack", ("127.0.0.1", proxy.vehicle_side.transport.local_port))
     clock.sleep(1.0)
     assert _drain(gcs) == [b"ack"]  # back to whoever spoke to the proxy
     proxy.close()
