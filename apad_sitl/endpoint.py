@@ -24,20 +24,11 @@ from apad_sitl.logs import VehicleLog
 from apad_sitl.params import INDEX, PARAMS, ApadParams, ParamError, param_value, with_param
 from apad_sitl.primitives import REFUSAL_TEXT, MusselFix, PrimitiveState, Refusal
 from apad_sitl.vehicle import VehicleState
-from mavlink_dialect import (
-    MAV_CMD_APAD_DOCK,
-    MAV_CMD_APAD_UNDOCK,
-    Codec,
-    Latch,
-    MusselState,
-    Primitive,
-    Progress,
-    Transport,
-    mavlink,
-    signing,
-)
-from mavlink_dialect.clock import Scheduler, Task
+from apad_sitl.vocabulary import Latch, Primitive, Progress
+from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, Codec, Transport, mavlink, signing
+from missiontime import Scheduler, Task
 from mussel_sim.geo import LocalFrame
+from mussel_sim.vocabulary import MusselState
 
 US_PER_S = 1_000_000
 PHYSICS_HZ = 10.0

@@ -13,7 +13,8 @@ import math
 from apad_sitl.params import PARAMS, ApadParams
 from apad_sitl.primitives import PrimitiveState, SlotState
 from apad_sitl.vehicle import BATTERY_EMPTY_V, VehicleState, wrap_pi
-from mavlink_dialect import Primitive, mavlink
+from apad_sitl.vocabulary import Primitive
+from mavlink_dialect import mavlink
 
 ROVER_MODE_HOLD = 4
 ROVER_MODE_GUIDED = 15

@@ -21,8 +21,8 @@ from typing import Any
 from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.params import ApadParams, ParamError, with_param
 from mavlink_dialect import AddressError, mavlink, open_transport
-from mavlink_dialect.clock import Scheduler, WallClock
 from mavlink_dialect.signing import SigningKeyError, load_key
+from missiontime import Scheduler, WallClock
 
 DEFAULT_LISTEN = "udp:127.0.0.1:14550"
 DEFAULT_HOME = (43.9400, 15.4400)  # off Biograd na Moru

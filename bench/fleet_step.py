@@ -19,8 +19,8 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from mavlink_dialect import MusselState
 from mussel_sim.fleet import FleetInputs, FleetParams, FleetState, state_from_arrays, step
+from mussel_sim.vocabulary import MusselState
 
 SIZES = (12, 1_000, 10_000, 100_000)
 LOOP_SUBSET = 10_000  # above this the loop is timed on a subset and scaled linearly

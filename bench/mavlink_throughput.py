@@ -17,8 +17,9 @@ from collections.abc import Callable
 from rich.console import Console
 from rich.table import Table
 
-from mavlink_dialect import Codec, MusselState, mavlink, memory_pair, open_transport
+from mavlink_dialect import Codec, mavlink, memory_pair, open_transport
 from mavlink_dialect.transport import Transport
+from mussel_sim.vocabulary import MusselState
 
 BURST = 200  # datagrams in flight at once: well inside the loopback receive buffer
 

@@ -18,8 +18,8 @@ import time
 from rich.console import Console
 from rich.table import Table
 
-from gcs.headless import run_mission
-from gcs.scenario import load_scenario
+from gcs.mission.headless import run_mission
+from gcs.mission.scenario import load_scenario
 
 # (label, file suffix, function name): entry points whose cumulative times do not overlap.
 PARTS = (

@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from gcs.console_model import ConsoleModel, Snapshot, area_outline
-from gcs.tui.app import ConsoleApp
+from gcs.console.app import ConsoleApp
+from gcs.console.model import ConsoleModel, Snapshot, area_outline
 from mavlink_dialect import mavlink
 from mussel_sim.fleet import FleetInputs, FleetParams, initial_state, step
 from mussel_sim.placement import load_area

@@ -19,17 +19,11 @@ from typing import NamedTuple
 
 import shapely
 
-from gcs.link import CommandError, Link, PrimitiveView, SlotView, VehicleView
-from mavlink_dialect import (
-    MAV_CMD_APAD_DOCK,
-    MAV_CMD_APAD_UNDOCK,
-    MusselCommand,
-    MusselState,
-    Primitive,
-    Progress,
-    mavlink,
-)
-from mavlink_dialect.clock import Clock
+from apad_sitl.vocabulary import Primitive, Progress
+from gcs.link.router import CommandError, Link, PrimitiveView, SlotView, VehicleView
+from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
+from missiontime import Clock
+from mussel_sim.vocabulary import MusselCommand, MusselState
 
 ARDUROVER_HOLD = 4
 ARDUROVER_GUIDED = 15

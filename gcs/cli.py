@@ -7,8 +7,9 @@ import sys
 from collections.abc import Callable, Sequence
 
 from apad_sitl import serve
-from gcs import report, run_cli
-from gcs.tui import cli as console_cli
+from gcs.console import cli as console_cli
+from gcs.mission import run_cli
+from gcs.records import report
 
 Runner = Callable[[argparse.Namespace], int]
 

@@ -16,14 +16,14 @@ import numpy as np
 from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.params import ApadParams
 from gcs.api import ApadApi, Location
-from gcs.events import EventLog
-from gcs.faultproxy import FaultProxy, LinkFaults
-from gcs.link import Link
-from gcs.scenario import Scenario, ScenarioError
-from gcs.scenario_loop import EnergySharingLoop, LoopControl, LoopSettings
+from gcs.link.faultproxy import FaultProxy, LinkFaults
+from gcs.link.router import Link
+from gcs.mission.loop import EnergySharingLoop, LoopControl, LoopSettings
+from gcs.mission.scenario import Scenario, ScenarioError
+from gcs.records.events import EventLog
 from mavlink_dialect import Codec, mavlink, memory_pair, signing
-from mavlink_dialect.clock import Clock, VirtualClock
 from mavlink_dialect.transport import UdpTransport
+from missiontime import Clock, VirtualClock
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner
 from mussel_sim.drift import NO_CURRENT, UniformCurrent
 from mussel_sim.fleet import FleetParams, initial_state

@@ -15,10 +15,11 @@ import sys
 
 import numpy as np
 
+from apad_sitl.vocabulary import Progress
 from gcs.api import ApadApi
-from gcs.link import Link
-from mavlink_dialect import AddressError, Codec, Progress, open_transport
-from mavlink_dialect.clock import WallClock
+from gcs.link.router import Link
+from mavlink_dialect import AddressError, Codec, open_transport
+from missiontime import WallClock
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, FleetRunner
 from mussel_sim.fleet import FleetParams, state_from_arrays
 from mussel_sim.geo import LocalFrame

@@ -24,15 +24,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mavlink_dialect import Codec, Latch, MusselCommand, mavlink
-from mavlink_dialect.clock import Scheduler, Task
+from apad_sitl.vocabulary import Latch
+from mavlink_dialect import Codec, mavlink
 from mavlink_dialect.transport import Transport
+from missiontime import Scheduler, Task
 from mussel_sim.battery import to_millivolts
 from mussel_sim.fleet import FleetInputs, FleetParams, FleetState, StepEvents, step
 from mussel_sim.geo import LocalFrame
 from mussel_sim.recorder import Recorder
 from mussel_sim.sensors import DummySensors, SensorField
 from mussel_sim.startconfig import MAX_MUSSEL_ID
+from mussel_sim.vocabulary import MusselCommand
 
 FLEET_SYSTEM_ID = 251
 FLEET_COMPONENT_ID = 25

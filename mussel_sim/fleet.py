@@ -29,7 +29,6 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mavlink_dialect import MusselState
 from mussel_sim.battery import (
     DEFAULT_CHARGE,
     DEFAULT_DISCHARGE,
@@ -42,6 +41,7 @@ from mussel_sim.battery import (
 from mussel_sim.drift import NO_CURRENT, PAPER_DRIFT_HALF_WIDTH_M, CurrentField, NoCurrent, random_drift_m
 from mussel_sim.geo import LocalFrame, planar_distance_m
 from mussel_sim.startconfig import StartConfig, start_config_from_positions
+from mussel_sim.vocabulary import MusselState
 
 ACTIVE = np.uint8(MusselState.ACTIVE)
 SURFACING = np.uint8(MusselState.SURFACING)

@@ -3,7 +3,7 @@
     python -m mavlink_dialect.run_with_dialect mavlogdump.py --dialect subcultron LOG.tlog
 
 One short real session writes both logs: `vil sitl --log-dir` records what the aPad sent, our
-`gcs.link.Link` (tlog_path=) records everything that crossed it, including what a local party
+`gcs.link.router.Link` (tlog_path=) records everything that crossed it, including what a local party
 (the simulated aMussel fleet) published. The dump must name our messages and carry their fields.
 """
 
@@ -17,10 +17,12 @@ from typing import Any
 import pytest
 from interop_procs import HOME, Procs, free_udp_port
 
-from gcs.link import Link
-from mavlink_dialect import Codec, MusselState, Primitive, mavlink, open_transport
-from mavlink_dialect.clock import WallClock
+from apad_sitl.vocabulary import Primitive
+from gcs.link.router import Link
+from mavlink_dialect import Codec, mavlink, open_transport
+from missiontime import WallClock
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID
+from mussel_sim.vocabulary import MusselState
 
 pytestmark = [pytest.mark.interop, pytest.mark.slow]
 

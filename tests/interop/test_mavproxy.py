@@ -6,7 +6,7 @@ The command line that works (commands on stdin, EOF ends it; MAVProxy always exi
     python -m mavlink_dialect.run_with_dialect mavproxy.py --master=udpout:127.0.0.1:P --mav20 \\
         --no-state --dialect subcultron --default-modules=link,param,arm,mode,cmdlong,misc
 
-What MAVProxy prints is checked against an independent observer: our own `gcs.link.Link` as a
+What MAVProxy prints is checked against an independent observer: our own `gcs.link.router.Link` as a
 second UDP client of the same SITL (a listening SITL answers every peer it has heard), and the
 SITL's event log.
 """
@@ -20,9 +20,10 @@ import pytest
 from interop_procs import Procs, free_udp_port, read_events
 
 from apad_sitl.params import PARAMS
-from gcs.link import Link
-from mavlink_dialect import Primitive, mavlink, open_transport
-from mavlink_dialect.clock import WallClock
+from apad_sitl.vocabulary import Primitive
+from gcs.link.router import Link
+from mavlink_dialect import mavlink, open_transport
+from missiontime import WallClock
 
 pytestmark = [pytest.mark.interop, pytest.mark.slow]
 

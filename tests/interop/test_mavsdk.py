@@ -32,9 +32,10 @@ from mavsdk.asyncio.plugins.param import ParamAsync
 from mavsdk.asyncio.plugins.telemetry import FlightMode, Position, TelemetryAsync
 
 import mavlink_dialect
-from mavlink_dialect import Codec, MusselState, mavlink
+from mavlink_dialect import Codec, mavlink
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID
 from mussel_sim.geo import LocalFrame
+from mussel_sim.vocabulary import MusselState
 
 pytestmark = [pytest.mark.interop, pytest.mark.slow]
 

@@ -7,9 +7,10 @@ from typing import Any
 
 from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.params import ApadParams
-from mavlink_dialect import Codec, MusselState, Transport, mavlink, memory_pair
-from mavlink_dialect.clock import VirtualClock
+from mavlink_dialect import Codec, Transport, mavlink, memory_pair
+from missiontime import VirtualClock
 from mussel_sim.geo import LocalFrame
+from mussel_sim.vocabulary import MusselState
 
 HOME = (43.94, 15.44)
 FRAME = LocalFrame(*HOME)

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gcs.checkpoint import CHECKPOINT_NAME, load
+from gcs.records.checkpoint import CHECKPOINT_NAME, load
 
 pytestmark = [pytest.mark.sitl, pytest.mark.slow]
 

@@ -9,11 +9,12 @@ import pytest
 from robust_helpers import latlon_e7, sitl_pair
 
 from apad_sitl.params import ApadParams
-from gcs.faultproxy import LinkFaults
-from gcs.headless import run_mission
-from gcs.scenario import load_scenario
+from apad_sitl.vocabulary import Latch, Primitive
+from gcs.link.faultproxy import LinkFaults
+from gcs.mission.headless import run_mission
+from gcs.mission.scenario import load_scenario
 from gcs.world import LinkOptions
-from mavlink_dialect import MAV_CMD_APAD_DOCK, Latch, Primitive, mavlink
+from mavlink_dialect import MAV_CMD_APAD_DOCK, mavlink
 
 pytestmark = pytest.mark.sitl
 

@@ -21,9 +21,9 @@ from robust_helpers import HOME, SYSID, latlon_e7
 
 from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.params import ApadParams
-from gcs.link import Link
+from gcs.link.router import Link
 from mavlink_dialect import MAV_CMD_APAD_DOCK, Codec, mavlink, memory_pair
-from mavlink_dialect.clock import VirtualClock
+from missiontime import VirtualClock
 
 EXAMPLES = int(os.environ.get("VIL_FUZZ_EXAMPLES", "300"))
 FUZZ = settings(max_examples=EXAMPLES, deadline=None, derandomize=True, database=None,

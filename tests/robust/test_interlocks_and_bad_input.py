@@ -12,12 +12,14 @@ import numpy as np
 import pytest
 from robust_helpers import FRAME, SYSID, latlon_e7, sitl_pair
 
+from apad_sitl.vocabulary import Latch
 from gcs.api import GeofenceError
-from gcs.headless import run_mission
-from gcs.scenario import load_scenario
+from gcs.mission.headless import run_mission
+from gcs.mission.scenario import load_scenario
 from gcs.world import lockstep_world
-from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, Latch, MusselState, mavlink
+from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
 from mussel_sim.fleet import FleetInputs, step
+from mussel_sim.vocabulary import MusselState
 
 pytestmark = pytest.mark.sitl
 

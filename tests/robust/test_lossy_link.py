@@ -9,12 +9,12 @@ from pathlib import Path
 import pytest
 
 from apad_sitl.primitives import Refusal
-from gcs.faultproxy import FaultProxy, LinkFaults
-from gcs.headless import run_mission
-from gcs.scenario import load_scenario
+from gcs.link.faultproxy import FaultProxy, LinkFaults
+from gcs.mission.headless import run_mission
+from gcs.mission.scenario import load_scenario
 from gcs.world import LinkOptions
 from mavlink_dialect import MAV_CMD_APAD_UNDOCK
-from mavlink_dialect.clock import VirtualClock
+from missiontime import VirtualClock
 
 pytestmark = pytest.mark.sitl
 

@@ -14,14 +14,16 @@ import pytest
 
 from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.params import ApadParams
+from apad_sitl.vocabulary import Latch, Progress
 from gcs.api import ApadApi, Location
-from gcs.link import CommandError, Link
-from mavlink_dialect import Codec, Latch, MusselState, Progress, mavlink, memory_pair, open_transport
-from mavlink_dialect.clock import Clock, VirtualClock, WallClock
+from gcs.link.router import CommandError, Link
+from mavlink_dialect import Codec, mavlink, memory_pair, open_transport
 from mavlink_dialect.transport import MemoryTransport, Transport
+from missiontime import Clock, VirtualClock, WallClock
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, FleetRunner
 from mussel_sim.fleet import FleetParams, state_from_arrays
 from mussel_sim.geo import LocalFrame, distance_m
+from mussel_sim.vocabulary import MusselState
 
 pytestmark = pytest.mark.sitl
 

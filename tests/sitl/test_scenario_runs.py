@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gcs.headless import run_mission
-from gcs.results import RunResult
-from gcs.scenario import load_scenario
+from gcs.mission.headless import run_mission
+from gcs.mission.results import RunResult
+from gcs.mission.scenario import load_scenario
 from mussel_sim.battery import DISCHARGE_ACTIVE_PER_MIN
 
 pytestmark = pytest.mark.sitl
@@ -147,3 +147,22 @@ def test_seed_statistics_cover_every_strategy_and_report_the_shape(tmp_path: Pat
     assert starts[1] != starts[2] != starts[3]
     assert all([m["start_battery"] for m in by[(s, k)]["mussels"]] == starts[k] for s in ("cautious", "greedy")
                for k in (1, 2, 3))
+
+
+PINNED = json.loads((Path(__file__).resolve().parents[1] / "data" / "table2_seed1.json").read_text())
+
+
+@pytest.mark.parametrize("run", sorted(PINNED))
+def test_table_ii_seed_1_is_what_it_was_before_the_redesign(run: str, request: pytest.FixtureRequest) -> None:
+    """tests/data/table2_seed1.json was written by the code before the rooms redesign (commit be9acc0).
+
+    Same seed, same scenario, same figures: a change of structure or speed must not move them.
+    If a fix ever must, rewrite the file in that fix's commit and say why there.
+    """
+    scenario, strategy = run.split("-")
+    r: RunResult = request.getfixturevalue(scenario)[strategy]
+    want = PINNED[run]
+    assert r.uptime == want["uptime"]
+    assert (r.cost_m, r.active_avg, r.cycles, r.travelled_m) == (
+        want["cost_m"], want["active_avg"], want["cycles"], want["travelled_m"])
+    assert {str(m.id): m.uptime_pct for m in r.mussels} == want["mussel_uptime_pct"]

@@ -21,21 +21,19 @@ import pytest
 from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.params import PARAMS, ApadParams
 from apad_sitl.primitives import Refusal
+from apad_sitl.vocabulary import Latch, Primitive, Progress
 from mavlink_dialect import (
     MAV_CMD_APAD_DOCK,
     MAV_CMD_APAD_UNDOCK,
     Codec,
-    Latch,
-    MusselState,
-    Primitive,
-    Progress,
     Transport,
     mavlink,
     memory_pair,
     open_transport,
 )
-from mavlink_dialect.clock import Scheduler, VirtualClock, WallClock
+from missiontime import Scheduler, VirtualClock, WallClock
 from mussel_sim.geo import LocalFrame, distance_m
+from mussel_sim.vocabulary import MusselState
 
 pytestmark = pytest.mark.sitl
 

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from gcs.scenario import load_scenario
-from gcs.scenario_loop import LoopControl
+from gcs.mission.loop import LoopControl
+from gcs.mission.scenario import load_scenario
 from gcs.world import MISSION_TELEMETRY_HZ, lockstep_world
 
 MISSIONS = Path(__file__).resolve().parents[2] / "missions"

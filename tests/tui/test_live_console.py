@@ -12,11 +12,12 @@ from pathlib import Path
 import pytest
 from tui_helpers import screen_text, wait_for
 
-from gcs.console_runner import ConsoleConfig, ConsoleRunner
-from gcs.planner import COLLECT
-from gcs.scenario import load_scenario
-from gcs.tui.app import LiveConsole
-from mavlink_dialect import MusselState, Primitive
+from apad_sitl.vocabulary import Primitive
+from gcs.console.app import LiveConsole
+from gcs.console.runner import ConsoleConfig, ConsoleRunner
+from gcs.mission.planner import COLLECT
+from gcs.mission.scenario import load_scenario
+from mussel_sim.vocabulary import MusselState
 
 pytestmark = [pytest.mark.tui, pytest.mark.sitl]
 

@@ -10,9 +10,9 @@ import pytest
 from tui_helpers import screen_text, wait_for
 
 from gcs.cli import main
-from gcs.replay import ReplayError, load_replay, read_tlog
-from gcs.tui.app import ReplayConsole
-from mavlink_dialect import MusselState
+from gcs.console.app import ReplayConsole
+from gcs.records.replay import ReplayError, load_replay, read_tlog
+from mussel_sim.vocabulary import MusselState
 
 pytestmark = pytest.mark.tui
 

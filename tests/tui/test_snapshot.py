@@ -14,9 +14,9 @@ from pathlib import Path
 import pytest
 from tui_helpers import screen_text
 
-from gcs.replay import load_replay
-from gcs.tui.app import ReplayConsole
-from gcs.tui.widgets import APAD, GREEN, PURPLE, RED
+from gcs.console.app import ReplayConsole
+from gcs.console.widgets import APAD, GREEN, PURPLE, RED
+from gcs.records.replay import load_replay
 
 pytestmark = pytest.mark.tui
 

@@ -12,7 +12,7 @@ from apad_sitl import primitives as prim
 from apad_sitl.params import ApadParams
 from apad_sitl.primitives import IN_PROGRESS, MusselFix, PrimitiveState, Refusal
 from apad_sitl.vehicle import VehicleState, step
-from mavlink_dialect import Latch, Primitive, Progress
+from apad_sitl.vocabulary import Latch, Primitive, Progress
 
 P = ApadParams()
 DT = 0.1

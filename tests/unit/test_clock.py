@@ -7,7 +7,7 @@ import time
 
 import pytest
 
-from mavlink_dialect.clock import Scheduler, VirtualClock, WallClock
+from missiontime import Scheduler, VirtualClock, WallClock
 
 
 class CountingPoller:

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from mavlink_dialect import Codec, MusselState, mavlink
+from mavlink_dialect import Codec, mavlink
+from mussel_sim.vocabulary import MusselState
 
 
 def status(mussel_id: int = 24) -> mavlink.MAVLink_amussel_status_message:

@@ -9,12 +9,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gcs.console_model import ConsoleModel, MarkerColour
-from gcs.console_runner import ConsoleConfig, ConsoleRunner, Hold, PacedClock, UndockMussel
-from gcs.events import Event
-from gcs.scenario import load_scenario
-from gcs.tui.canvas import BrailleCanvas
-from mavlink_dialect import MusselState, Primitive, mavlink
+from apad_sitl.vocabulary import Primitive
+from gcs.console.canvas import BrailleCanvas
+from gcs.console.model import ConsoleModel, MarkerColour
+from gcs.console.runner import ConsoleConfig, ConsoleRunner, Hold, PacedClock, UndockMussel
+from gcs.mission.scenario import load_scenario
+from gcs.records.events import Event
+from mavlink_dialect import mavlink
+from mussel_sim.vocabulary import MusselState
 
 POOL12 = Path(__file__).resolve().parents[2] / "missions" / "pool12.toml"
 

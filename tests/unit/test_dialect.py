@@ -36,3 +36,21 @@ def test_common_messages_keep_their_crc_extra() -> None:
     common = importlib.import_module("pymavlink.dialects.v20.common")
     for msg_id, cls in common.mavlink_map.items():
         assert mavlink.mavlink_map[msg_id].crc_extra == cls.crc_extra
+
+
+def test_the_models_vocabulary_is_what_the_wire_carries() -> None:
+    """Each model enum has exactly the members and values of its dialect enum, no more, no fewer."""
+    from apad_sitl.vocabulary import Latch, Primitive, Progress
+    from mussel_sim.vocabulary import MusselCommand, MusselState
+
+    pairs = {
+        "AMUSSEL_STATE": (MusselState, "AMUSSEL_STATE_"),
+        "AMUSSEL_COMMAND_TYPE": (MusselCommand, "AMUSSEL_COMMAND_"),
+        "DOCK_LATCH_STATE": (Latch, "DOCK_LATCH_STATE_"),
+        "APAD_PRIMITIVE": (Primitive, "APAD_PRIMITIVE_"),
+        "PRIMITIVE_PROGRESS": (Progress, "PRIMITIVE_PROGRESS_"),
+    }
+    for wire_name, (model, prefix) in pairs.items():
+        wire = {e.name.removeprefix(prefix): value for value, e in mavlink.enums[wire_name].items()
+                if not e.name.endswith("_ENUM_END")}
+        assert wire == {m.name: m.value for m in model}, wire_name

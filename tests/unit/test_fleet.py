@@ -10,9 +10,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from mavlink_dialect import MusselState as S
 from mussel_sim.fleet import FleetInputs, FleetParams, FleetState, state_from_arrays, step
 from mussel_sim.recorder import Recorder
+from mussel_sim.vocabulary import MusselState as S
 
 ACTIVE_RATE = 0.0010427134  # eq. (1)
 STILL = FleetParams(drift_half_width_m=0.0)  # positions change only by what a test does

@@ -5,13 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mavlink_dialect import Codec, Latch, MusselCommand, MusselState, mavlink, memory_pair
-from mavlink_dialect.clock import VirtualClock
+from apad_sitl.vocabulary import Latch
+from mavlink_dialect import Codec, mavlink, memory_pair
+from missiontime import VirtualClock
 from mussel_sim.battery import to_millivolts
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner, MusselIdCollision
 from mussel_sim.fleet import FleetParams, state_from_arrays
 from mussel_sim.geo import LocalFrame
 from mussel_sim.sensors import AnoxicPatch, pressure_hpa
+from mussel_sim.vocabulary import MusselCommand, MusselState
 
 FRAME = LocalFrame(43.9400, 15.4400)
 APAD = 1

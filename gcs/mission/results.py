@@ -43,7 +43,7 @@ class RunResult:
     end_reason: str = ""
     out_dir: str = ""
     messages: dict[str, int] = field(default_factory=dict)  # MAVLink counters of the run
-    whereabouts: list[dict[str, Any]] = field(default_factory=list)  # every aMussel at the end (gcs.accounting)
+    whereabouts: list[dict[str, Any]] = field(default_factory=list)  # every aMussel at the end (gcs.mission.accounting)
 
     def to_json(self) -> dict[str, Any]:
         return asdict(self)

@@ -16,8 +16,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import BinaryIO
 
-from mavlink_dialect import Codec, Latch, Primitive, Progress, Transport, mavlink
-from mavlink_dialect.clock import Clock
+from apad_sitl.vocabulary import Latch, Primitive, Progress
+from mavlink_dialect import Codec, Transport, mavlink
+from missiontime import Clock
 
 GCS_SYSTEM_ID = 250
 GCS_COMPONENT_ID = mavlink.MAV_COMP_ID_MISSIONPLANNER

@@ -20,12 +20,12 @@ from textual.reactive import reactive
 from textual.widgets import Footer
 from textual.worker import Worker, WorkerState
 
-from gcs.console_model import Snapshot
-from gcs.console_runner import ConsoleRunner, DockMussel, GoToMussel, Hold, UndockMussel
-from gcs.planner import COLLECT
-from gcs.replay import Replay
-from gcs.tui.help import HelpScreen
-from gcs.tui.widgets import LEGEND, Chart, EventLog, FleetTable, MapView, StatusPanel
+from gcs.console.help import HelpScreen
+from gcs.console.model import Snapshot
+from gcs.console.runner import ConsoleRunner, DockMussel, GoToMussel, Hold, UndockMussel
+from gcs.console.widgets import LEGEND, Chart, EventLog, FleetTable, MapView, StatusPanel
+from gcs.mission.planner import COLLECT
+from gcs.records.replay import Replay
 
 REDRAW_PERIOD_S = 0.1
 

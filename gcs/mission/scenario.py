@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-MISSIONS_DIR = Path(__file__).resolve().parent.parent / "missions"
+MISSIONS_DIR = Path(__file__).resolve().parents[2] / "missions"
 _DURATION = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*(s|m|min|h)?\s*$")
 _UNIT_S = {None: 1.0, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0}
 
@@ -210,7 +210,7 @@ def load_scenario(path: str | Path) -> Scenario:
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
 
-    from gcs.planner import COLLECT, REDEPLOY
+    from gcs.mission.planner import COLLECT, REDEPLOY
     from mussel_sim.battery import CHARGE_PROFILES, DISCHARGE_PROFILES
 
     root = _Table(path, data, "")

@@ -17,9 +17,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from gcs.events import Event
-from mavlink_dialect import Latch, MusselState, Primitive, Progress, mavlink
+from apad_sitl.vocabulary import Latch, Primitive, Progress
+from gcs.records.events import Event
+from mavlink_dialect import mavlink
 from mussel_sim.geo import distance_m
+from mussel_sim.vocabulary import MusselState
 
 TRACE_SAMPLES = 300  # the aPad's recent trace: this many 1 Hz samples
 MODE_NAMES = {4: "HOLD", 15: "GUIDED"}  # ArduRover custom modes the aPad uses

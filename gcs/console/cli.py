@@ -15,9 +15,9 @@ import sys
 import time
 from pathlib import Path
 
-from gcs.scenario import ScenarioError, load_scenario
+from gcs.mission.scenario import MISSIONS_DIR, ScenarioError, load_scenario
 
-DEFAULT_SCENARIO = Path(__file__).resolve().parents[2] / "missions" / "pool12.toml"
+DEFAULT_SCENARIO = MISSIONS_DIR / "pool12.toml"
 
 
 def add_gcs_arguments(parser: argparse.ArgumentParser) -> None:
@@ -35,8 +35,8 @@ def add_gcs_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run_gcs(args: argparse.Namespace) -> int:
-    from gcs.console_runner import ConsoleConfig, ConsoleRunner
-    from gcs.tui.app import LiveConsole
+    from gcs.console.app import LiveConsole
+    from gcs.console.runner import ConsoleConfig, ConsoleRunner
 
     path = Path(args.scenario) if args.scenario else DEFAULT_SCENARIO
     try:
@@ -78,8 +78,8 @@ def add_replay_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run_replay(args: argparse.Namespace) -> int:
-    from gcs.replay import ReplayError, load_replay
-    from gcs.tui.app import ReplayConsole
+    from gcs.console.app import ReplayConsole
+    from gcs.records.replay import ReplayError, load_replay
 
     try:
         replay = load_replay(args.run, args.scenario)

@@ -22,11 +22,11 @@ from pathlib import Path
 
 import numpy as np
 
-from gcs.console_model import Snapshot
-from gcs.replay import ReplayError, load_replay, run_files
-from gcs.results import PAPER_TABLE_II
-from gcs.scenario import ScenarioError
-from mavlink_dialect import MusselState
+from gcs.console.model import Snapshot
+from gcs.mission.results import PAPER_TABLE_II
+from gcs.mission.scenario import ScenarioError
+from gcs.records.replay import ReplayError, load_replay, run_files
+from mussel_sim.vocabulary import MusselState
 
 M_PER_DEG_LAT = 110_574.0
 GREEN, RED, PURPLE, GREY, BLUE, ORANGE = "#16a34a", "#dc2626", "#a21caf", "#6b7280", "#2563eb", "#ea580c"

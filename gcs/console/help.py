@@ -12,7 +12,7 @@ from textual.binding import Binding, BindingType
 from textual.screen import ModalScreen
 from textual.widgets import Static
 
-from gcs.tui.widgets import LEGEND
+from gcs.console.widgets import LEGEND
 
 
 class HelpScreen(ModalScreen[None]):

@@ -24,16 +24,18 @@ from typing import Any
 import numpy as np
 
 from apad_sitl.endpoint import SitlVehicle
+from apad_sitl.vocabulary import Latch, Primitive, Progress
 from gcs.api import CommandError
-from gcs.console_model import ConsoleModel, Snapshot, area_outline
-from gcs.events import Event
-from gcs.scenario import Scenario
-from gcs.scenario_loop import EndReason, EnergySharingLoop, LoopControl, MissionEnded
+from gcs.console.model import ConsoleModel, Snapshot, area_outline
+from gcs.mission.loop import EndReason, EnergySharingLoop, LoopControl, MissionEnded
+from gcs.mission.scenario import Scenario
+from gcs.records.events import Event
 from gcs.world import MISSION_TELEMETRY_HZ, World, apad_params, build_world
-from mavlink_dialect import Latch, MusselCommand, MusselState, Primitive, Progress, memory_pair, open_transport
-from mavlink_dialect.clock import Clock, VirtualClock, WallClock, seconds_to_us
+from mavlink_dialect import memory_pair, open_transport
 from mavlink_dialect.transport import UdpTransport
+from missiontime import Clock, VirtualClock, WallClock, seconds_to_us
 from mussel_sim.placement import load_area
+from mussel_sim.vocabulary import MusselCommand, MusselState
 
 PUBLISH_PERIOD_S = 0.1  # the UI redraws at 10 Hz at most
 SAMPLE_PERIOD_S = 1.0  # one point on the plots per second of mission time

@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from gcs import checkpoint
-from gcs.accounting import account
-from gcs.results import MusselResult, RunResult
-from gcs.scenario import Scenario
+from gcs.mission.accounting import account
+from gcs.mission.results import MusselResult, RunResult
+from gcs.mission.scenario import Scenario
+from gcs.records import checkpoint
 from gcs.world import MISSION_TELEMETRY_HZ, LinkOptions, World, lockstep_world
 
 ProgressFn = Callable[[float], None]  # receives mission time done, seconds

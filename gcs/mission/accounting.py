@@ -11,10 +11,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gcs.link import VehicleView
-from mavlink_dialect import Latch, MusselState
+from apad_sitl.vocabulary import Latch
+from gcs.link.router import VehicleView
 from mussel_sim.fleet import FleetState
 from mussel_sim.geo import LocalFrame
+from mussel_sim.vocabulary import MusselState
 
 # Farther than this from where it started or was put back, a submerged aMussel is somewhere unexpected.
 HOME_TOLERANCE_M = 10.0

@@ -18,14 +18,15 @@ from enum import StrEnum
 
 import numpy as np
 
+from apad_sitl.vocabulary import Latch, Progress
 from gcs.api import ApadApi, CommandError, GeofenceError, Location, MusselView
-from gcs.events import EventLog
-from gcs.link import SlotView
-from gcs.planner import CostWeights, PlanInput, plan
-from gcs.scenario import MissionConfig
-from mavlink_dialect import Latch, MusselCommand, MusselState, Progress
-from mavlink_dialect.clock import Clock
+from gcs.link.router import SlotView
+from gcs.mission.planner import CostWeights, PlanInput, plan
+from gcs.mission.scenario import MissionConfig
+from gcs.records.events import EventLog
+from missiontime import Clock
 from mussel_sim.geo import distance_m
+from mussel_sim.vocabulary import MusselCommand, MusselState
 
 
 class Phase(StrEnum):

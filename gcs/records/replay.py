@@ -18,14 +18,14 @@ from pathlib import Path
 
 import numpy as np
 
-from gcs.console_model import ConsoleModel, Snapshot, area_outline
-from gcs.events import Event
-from gcs.link import GCS_SYSTEM_ID
-from gcs.scenario import Scenario, ScenarioError, load_scenario
+from gcs.console.model import ConsoleModel, Snapshot, area_outline
+from gcs.link.router import GCS_SYSTEM_ID
+from gcs.mission.scenario import MISSIONS_DIR, Scenario, ScenarioError, load_scenario
+from gcs.records.events import Event
 from mavlink_dialect import Codec, mavlink
 from mussel_sim.placement import load_area
 
-REPO_MISSIONS = Path(__file__).resolve().parents[1] / "missions"
+REPO_MISSIONS = MISSIONS_DIR
 
 
 class ReplayError(ValueError):

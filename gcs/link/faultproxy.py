@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mavlink_dialect.clock import Clock, Task, seconds_to_us
 from mavlink_dialect.transport import UdpTransport
+from missiontime import Clock, Task, seconds_to_us
 
 _IDLE_PERIOD_US = 3600 * 1_000_000  # the delivery task sleeps this long when nothing is held
 

@@ -22,12 +22,12 @@ from pathlib import Path
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from gcs.checkpoint import CHECKPOINT_NAME
-from gcs.faultproxy import LinkFaults
-from gcs.headless import run_dir, run_mission
-from gcs.planner import COLLECT
-from gcs.results import RunResult, results_table, seed_stats, seed_stats_table, shape_table
-from gcs.scenario import Scenario, ScenarioError, load_scenario, parse_duration_s
+from gcs.link.faultproxy import LinkFaults
+from gcs.mission.headless import run_dir, run_mission
+from gcs.mission.planner import COLLECT
+from gcs.mission.results import RunResult, results_table, seed_stats, seed_stats_table, shape_table
+from gcs.mission.scenario import Scenario, ScenarioError, load_scenario, parse_duration_s
+from gcs.records.checkpoint import CHECKPOINT_NAME
 from gcs.world import LinkOptions, check_inputs
 from mavlink_dialect.signing import SigningKeyError, load_key
 

@@ -28,13 +28,13 @@ from typing import TYPE_CHECKING, Any
 from apad_sitl.primitives import PrimitiveState
 from apad_sitl.vehicle import VehicleState
 from gcs.api import MusselView
-from gcs.link import VehicleView
-from gcs.scenario_loop import LoopStatus
+from gcs.link.router import VehicleView
+from gcs.mission.loop import LoopStatus
 from mussel_sim.fleet import FleetState
 from mussel_sim.recorder import Recorder
 
 if TYPE_CHECKING:
-    from gcs.scenario_loop import EnergySharingLoop
+    from gcs.mission.loop import EnergySharingLoop
     from gcs.world import World
 
 CHECKPOINT_NAME = "checkpoint.pkl"

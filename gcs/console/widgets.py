@@ -11,9 +11,9 @@ from textual.strip import Strip
 from textual.widget import Widget
 from textual.widgets import DataTable, Static
 
-from gcs.console_model import MarkerColour, Snapshot
-from gcs.tui.canvas import BrailleCanvas, scale_to
-from mavlink_dialect import MusselState
+from gcs.console.canvas import BrailleCanvas, scale_to
+from gcs.console.model import MarkerColour, Snapshot
+from mussel_sim.vocabulary import MusselState
 
 # Explicit hex colours: named red and magenta look alike in exports (NOTES.md).
 GREEN, RED, GREY, PURPLE = "#22c55e", "#ef4444", "#9ca3af", "#c026d3"

@@ -1,0 +1,1 @@
+"""The mission: scenario files, the planner and its strategies, the energy-sharing loop, results."""

@@ -1,1 +1,0 @@
-"""The operator console (Textual): live against an aPad (`vil gcs`) or from a recorded run (`vil replay`)."""

@@ -1,0 +1,25 @@
+"""Mission time and the one scheduler that drives the world (lockstep or wall clock)."""
+
+from missiontime.clocks import (
+    MAX_DRAIN_ROUNDS,
+    US_PER_S,
+    Clock,
+    Poller,
+    Scheduler,
+    Task,
+    VirtualClock,
+    WallClock,
+    seconds_to_us,
+)
+
+__all__ = [
+    "MAX_DRAIN_ROUNDS",
+    "US_PER_S",
+    "Clock",
+    "Poller",
+    "Scheduler",
+    "Task",
+    "VirtualClock",
+    "WallClock",
+    "seconds_to_us",
+]
