@@ -27,8 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 from apad_sitl.primitives import PrimitiveState
 from apad_sitl.vehicle import VehicleState
-from gcs.api import MusselView
-from gcs.link.router import VehicleView
+from gcs.link.registry import VehicleRegistry
 from gcs.mission.loop import LoopStatus
 from mussel_sim.fleet import FleetState
 from mussel_sim.recorder import Recorder
@@ -66,8 +65,7 @@ class Checkpoint:
     fleet_rng_state: dict[str, Any]
     recorder: Recorder
     loop_status: LoopStatus
-    mussels: dict[int, MusselView]
-    vehicles: dict[int, VehicleView]
+    registry: VehicleRegistry  # what the GCS had heard: the aPads' views and the aMussel table
     vehicle: VehicleSnapshot | None
 
 
@@ -84,7 +82,7 @@ def capture(world: World, loop: EnergySharingLoop) -> Checkpoint:
     fleet = world.fleet
     return Checkpoint(
         FORMAT_VERSION, run_key(world), world.clock.now_us, fleet.state, fleet.rng.bit_generator.state,
-        fleet.recorder, loop.status, dict(world.api.mussels), dict(world.link.vehicles), snapshot,
+        fleet.recorder, loop.status, world.link.registry, snapshot,
     )
 
 
@@ -119,8 +117,7 @@ def restore(world: World, ckpt: Checkpoint) -> None:
     fleet.state = ckpt.fleet_state
     fleet.rng.bit_generator.state = ckpt.fleet_rng_state
     fleet.recorder = ckpt.recorder
-    world.api.mussels.update(ckpt.mussels)
-    world.link.vehicles.update(ckpt.vehicles)
+    world.link.registry = ckpt.registry
     v, snap = world.vehicle, ckpt.vehicle
     if v is not None and snap is not None:
         v.state, v.mode, v.armed = snap.state, snap.mode, snap.armed
