@@ -14,21 +14,20 @@ The planner, the scenario loop and the operator console are written on this API.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import NamedTuple
 
 import shapely
 
-from apad_sitl.vocabulary import Primitive, Progress
-from gcs.link.router import CommandError, Link, PrimitiveView, SlotView, VehicleView
+from apad_sitl.vocabulary import Primitive, Progress, RoverMode
+from gcs.link.commands import CommandError
+from gcs.link.fleet_table import MusselTable, MusselView
+from gcs.link.registry import VehicleView
+from gcs.link.router import Link
+from gcs.link.telemetry import Location, SlotView
 from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
 from missiontime import Clock
-from mussel_sim.vocabulary import MusselCommand, MusselState
+from mussel_sim.vocabulary import MusselCommand
 
-ARDUROVER_HOLD = 4
-ARDUROVER_GUIDED = 15
-
-__all__ = ["ApadApi", "CommandError", "GeofenceError", "Location", "MusselView", "Progress"]
+__all__ = ["ApadApi", "CommandError", "GeofenceError", "Location", "MusselView", "Progress", "UnknownMussel"]
 
 
 class GeofenceError(CommandError):
@@ -39,52 +38,14 @@ class GeofenceError(CommandError):
                          f"target {lat:.7f}, {lon:.7f} outside the geofence; not sent")
 
 
-class Location(NamedTuple):
-    lat: float  # deg, WGS84
-    lon: float  # deg, WGS84
-
-
-@dataclass
-class MusselView:
-    """The latest AMUSSEL_STATUS heard for one aMussel (simulated or real)."""
-
-    mussel_id: int
-    location: Location
-    depth_m: float
-    battery_frac: float
-    battery_mv: int
-    state: MusselState
-    simulated: bool
-    time_us: int
-
-
-@dataclass
-class _Expectation:
-    """The primitive last commanded: kind and its key (target degE7, or slot and aMussel)."""
-
-    kind: Primitive
-    a: int
-    b: int
-    seen: bool = False  # the aPad has reported on this very primitive
-
-    def matches(self, status: PrimitiveView) -> bool:
-        if status.primitive != self.kind:
-            return False
-        if self.kind == Primitive.GOTO:
-            return (status.target_lat_e7, status.target_lon_e7) == (self.a, self.b)
-        if self.kind == Primitive.DOCK:
-            return (status.slot, status.mussel_id) == (self.a, self.b)
-        if self.kind == Primitive.UNDOCK:
-            return status.slot == self.a
-        return True
-
-
 class UnknownMussel(KeyError):
     def __str__(self) -> str:
         return f"no status heard from aMussel {self.args[0]}"
 
 
 class ApadApi:
+    """Listing 1's calls over one `Link`: state from its registry, commands through its command client."""
+
     def __init__(
         self, link: Link, clock: Clock, default_apad: int | None = None,
         geofence_deg: Sequence[tuple[float, float]] | None = None,
@@ -97,22 +58,11 @@ class ApadApi:
             shapely.prepare(self._fence)
         self.clock = clock
         self.default_apad = default_apad
-        self.mussels: dict[int, MusselView] = {}
-        # What we last asked each aPad to do: a status report counts only once it is about that.
-        self._expected: dict[int, _Expectation] = {}
-        link.attach(self._handle)
 
-    def _handle(self, msg: mavlink.MAVLink_message) -> None:
-        kind = msg.get_type()
-        if kind == "PRIMITIVE_STATUS":
-            expected = self._expected.get(msg.get_srcSystem())
-            if expected is not None and expected.matches(self.link.vehicles[msg.get_srcSystem()].primitive):
-                expected.seen = True
-        elif kind == "AMUSSEL_STATUS":
-            self.mussels[msg.mussel_id] = MusselView(
-                msg.mussel_id, Location(msg.lat / 1e7, msg.lon / 1e7), msg.depth, msg.battery,
-                msg.battery_voltage, MusselState(msg.state), bool(msg.simulated), msg.time_us,
-            )
+    @property
+    def mussels(self) -> MusselTable:
+        """Every aMussel heard (simulated or real), by id."""
+        return self.link.registry.mussels
 
     # --- vehicles ---------------------------------------------------------------------------
 
@@ -144,7 +94,7 @@ class ApadApi:
         sysid = self.apad(apad_id).system_id
         for msg_id, hz in rates_hz.items():
             interval_us = round(1e6 / hz) if hz > 0 else -1
-            self.link.command_long(sysid, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, (msg_id, interval_us))
+            self.link.commands.send_long(sysid, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, (msg_id, interval_us))
 
     def position(self, apad_id: int | None = None) -> Location:
         view = self.apad(apad_id)
@@ -186,8 +136,8 @@ class ApadApi:
         if self._fence is not None and not shapely.intersects_xy(self._fence, latlon[1], latlon[0]):
             raise GeofenceError(sysid, latlon[0], latlon[1])
         lat_e7, lon_e7 = round(latlon[0] * 1e7), round(latlon[1] * 1e7)
-        self._expected[sysid] = _Expectation(Primitive.GOTO, lat_e7, lon_e7)
-        self.link.command_int(
+        self.link.registry.expect(sysid, Primitive.GOTO, lat_e7, lon_e7)
+        self.link.commands.send_int(
             sysid, mavlink.MAV_CMD_DO_REPOSITION, mavlink.MAV_FRAME_GLOBAL_INT,
             (speed, float(mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE), radius, float("nan")),
             lat_e7, lon_e7,
@@ -196,21 +146,20 @@ class ApadApi:
     def hold(self, apad_id: int | None = None) -> None:
         """Hold Position (dynamic positioning) where the aPad is now."""
         sysid = self.apad(apad_id).system_id
-        self._expected[sysid] = _Expectation(Primitive.HOLD, 0, 0)
-        self.link.command_long(
-            sysid, mavlink.MAV_CMD_DO_SET_MODE,
-            (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, ARDUROVER_HOLD),
+        self.link.registry.expect(sysid, Primitive.HOLD)
+        self.link.commands.send_long(
+            sysid, mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, RoverMode.HOLD)
         )
 
     def docking(self, dock: bool, slot: int, mussel_id: int = 0, apad_id: int | None = None) -> None:
         """Dock `mussel_id` into `slot` (1..4), or undock the slot (mussel_id 0: whatever is there)."""
         sysid = self.apad(apad_id).system_id
         if dock:
-            self._expected[sysid] = _Expectation(Primitive.DOCK, slot, mussel_id)
-            self.link.command_long(sysid, MAV_CMD_APAD_DOCK, (slot, mussel_id))
+            self.link.registry.expect(sysid, Primitive.DOCK, slot, mussel_id)
+            self.link.commands.send_long(sysid, MAV_CMD_APAD_DOCK, (slot, mussel_id))
         else:
-            self._expected[sysid] = _Expectation(Primitive.UNDOCK, slot, 0)
-            self.link.command_long(sysid, MAV_CMD_APAD_UNDOCK, (slot, mussel_id))
+            self.link.registry.expect(sysid, Primitive.UNDOCK, slot)
+            self.link.commands.send_long(sysid, MAV_CMD_APAD_UNDOCK, (slot, mussel_id))
 
     def fresh_slot(self, slot: int, apad_id: int | None = None, timeout_s: float = 2.0, attempts: int = 5) -> SlotView:
         """The slot as the aPad reports it in answer to a request now (REQUEST_MESSAGE), not a report
@@ -220,7 +169,7 @@ class ApadApi:
         for _ in range(attempts):
             view.slots[slot] = SlotView(slot, mussel_id=-1)  # unknown until the answer comes
             try:
-                self.link.command_long(view.system_id, mavlink.MAV_CMD_REQUEST_MESSAGE,
+                self.link.commands.send_long(view.system_id, mavlink.MAV_CMD_REQUEST_MESSAGE,
                                        (mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS, slot))
             except CommandError:
                 continue
@@ -242,7 +191,7 @@ class ApadApi:
         once it has, a report about another primitive means ours was preempted: FAILED.
         """
         view = self.apad(apad_id)
-        expected = self._expected.get(view.system_id)
+        expected = view.expected
         if expected is None:
             return view.primitive.progress
         if not expected.seen:

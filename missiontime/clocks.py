@@ -230,3 +230,25 @@ class WallClock:
                 select.select(fds, [], [], timeout_s)
             else:
                 time.sleep(timeout_s)
+
+
+class PacedClock(VirtualClock):
+    """Lockstep time that runs at most `speed` times the wall clock: a deterministic world a
+    person (or a Pilot test) can watch. `speed` 1 looks like the field; the bits do not depend on it."""
+
+    def __init__(self, speed: float) -> None:
+        super().__init__()
+        if speed <= 0:
+            raise ValueError(f"speed must be positive, got {speed}")
+        self.speed = speed
+        self._wall0 = time.monotonic()
+
+    def sleep(self, dt_s: float) -> None:
+        target_us = self.now_us + seconds_to_us(max(dt_s, 0.0))
+        while True:
+            self.advance_to(min(target_us, self.now_us + 100_000))
+            ahead_s = self.now_us / 1e6 / self.speed - (time.monotonic() - self._wall0)
+            if ahead_s > 0:
+                time.sleep(ahead_s)
+            if self.now_us >= target_us:
+                return

@@ -1,12 +1,10 @@
-"""What the operator console shows, built from what crossed the GCS link plus the mission events.
+"""What the operator console shows: the link's registry now, its history, and the mission events.
 
-One model for the live console and for replay: feed it every MAVLink message the GCS saw (the
-same stream its .tlog records: aMussel statuses, aPad telemetry, the GCS's own commands) and the
-mission loop's events; call `sample(t_s)` once per second of mission time to extend the plots;
-`snapshot(t_s)` returns a frozen `Snapshot` the UI can read from any thread.
-
-The movement cost is computed from the Go To commands seen on the link (aPad position to
-setpoint), the paper's definition, so a replay shows the same figure the live run did.
+One model for the live console and for replay: it reads the one `VehicleRegistry` the link (or,
+in replay, the recorded .tlog) feeds, takes the mission loop's events, extends the plots once per
+second of mission time (`sample(t_s)`), and hands the UI a frozen `Snapshot` it can read from any
+thread. The movement cost is the registry's (aPad-to-setpoint distance per Go To seen on the
+link, the paper's definition), so a replay shows the figure the live run did.
 """
 
 from __future__ import annotations
@@ -17,14 +15,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from apad_sitl.vocabulary import Latch, Primitive, Progress
+from apad_sitl.vocabulary import Primitive, RoverMode
+from gcs.link.fleet_table import MusselTable
+from gcs.link.registry import VehicleRegistry, VehicleView
+from gcs.link.telemetry import DEG_E7, PrimitiveView
 from gcs.records.events import Event
-from mavlink_dialect import mavlink
-from mussel_sim.geo import distance_m
 from mussel_sim.vocabulary import MusselState
 
 TRACE_SAMPLES = 300  # the aPad's recent trace: this many 1 Hz samples
-MODE_NAMES = {4: "HOLD", 15: "GUIDED"}  # ArduRover custom modes the aPad uses
 
 
 class MarkerColour:
@@ -119,8 +117,12 @@ class _Growing:
 
 
 class ConsoleModel:
+    """The console's view of one aPad and the fleet: current state read from the link's registry,
+    history sampled once per second of mission time, the mission loop's events."""
+
     def __init__(
         self,
+        registry: VehicleRegistry,
         apad_id: int,
         pool_threshold: float,
         duration_s: float,
@@ -128,35 +130,21 @@ class ConsoleModel:
         mussel_ids: NDArray[np.int64] | None = None,
         outline: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
     ) -> None:
+        self.registry = registry
         self.apad_id = apad_id
         self.pool_threshold = pool_threshold
         self.duration_s = duration_s
         self.source = source
         self.outline = outline or (np.zeros(0), np.zeros(0))
-        ids = np.zeros(0, np.int64) if mussel_ids is None else np.sort(np.asarray(mussel_ids, np.int64))
-        self.ids = ids
-        self._col = {int(i): c for c, i in enumerate(ids)}
-        n = ids.size
-        self.lat = np.full(n, np.nan)
-        self.lon = np.full(n, np.nan)
-        self.battery = np.full(n, np.nan)
-        self.state = np.full(n, MusselState.ACTIVE, np.uint8)
+        self.ids = np.zeros(0, np.int64) if mussel_ids is None else np.sort(np.asarray(mussel_ids, np.int64))
+        n = self.ids.size
         self.active_samples = np.zeros(n, np.int64)
         self.samples = 0
-        self.apad_lat: float | None = None
-        self.apad_lon: float | None = None
-        self.apad_v: float | None = None
-        self.apad_pct = -1
-        self.mode = "-"
-        self.primitive = "-"
-        self.slots = {s: SlotSnapshot(s, 0, Latch.OPEN.name, False) for s in range(1, 5)}
         self.phase = "-"
         self.strategy = "-"
-        self.cost_m = 0.0
         self.cycles = 0
         self.ended: str | None = None
         self.log: list[str] = []
-        self._last_goto: tuple[int, int] | None = None
         self._redeploying = False
         self.hist_t = _Growing(0, np.float64)
         self.hist_active = _Growing(0, np.int32)
@@ -164,60 +152,30 @@ class ConsoleModel:
         self.hist_apad_v = _Growing(0, np.float64, np.nan)
         self.trace_lat = _Growing(0, np.float64, np.nan)
         self.trace_lon = _Growing(0, np.float64, np.nan)
-        self.version = 0  # bumped on every change the screen could show
+        self._own_version = 0
+        self._fleet: tuple[int, FleetColumns] | None = None  # (registry version, columns) last gathered
+
+    @property
+    def version(self) -> int:
+        """Changes whenever anything the screen shows may have changed."""
+        return self.registry.version + self._own_version
 
     # --- input -------------------------------------------------------------------------------
 
-    def _column(self, mussel_id: int) -> int:
-        col = self._col.get(mussel_id)
-        if col is not None:
-            return col
-        # A newcomer (a real aMussel joining): grow every per-aMussel array by one column.
-        col = self.ids.size
-        self._col[mussel_id] = col
-        self.ids = np.append(self.ids, mussel_id)
-        self.lat, self.lon, self.battery = (np.append(a, np.nan) for a in (self.lat, self.lon, self.battery))
-        self.state = np.append(self.state, np.uint8(MusselState.ACTIVE))
-        self.active_samples = np.append(self.active_samples, 0)
-        self.hist_battery.widen(self.ids.size)
-        return col
-
-    def handle(self, msg: mavlink.MAVLink_message) -> None:
-        kind = msg.get_type()
-        if kind == "AMUSSEL_STATUS":
-            c = self._column(msg.mussel_id)
-            self.lat[c], self.lon[c] = msg.lat / 1e7, msg.lon / 1e7
-            self.battery[c] = msg.battery
-            self.state[c] = msg.state
-        elif msg.get_srcSystem() == self.apad_id:
-            self._handle_apad(kind, msg)
-        elif kind == "COMMAND_INT" and msg.command == mavlink.MAV_CMD_DO_REPOSITION:
-            self._count_goto(msg)
-        else:
-            return
-        self.version += 1
-
-    def _handle_apad(self, kind: str, msg: Any) -> None:
-        if kind == "GLOBAL_POSITION_INT":
-            self.apad_lat, self.apad_lon = msg.lat / 1e7, msg.lon / 1e7
-        elif kind == "HEARTBEAT":
-            self.mode = MODE_NAMES.get(msg.custom_mode, str(msg.custom_mode))
-        elif kind == "SYS_STATUS":
-            if msg.voltage_battery != 65535:
-                self.apad_v = msg.voltage_battery / 1000.0
-            self.apad_pct = msg.battery_remaining
-        elif kind == "PRIMITIVE_STATUS":
-            self.primitive = _primitive_text(msg)
-        elif kind == "DOCK_SLOT_STATUS" and 1 <= msg.slot <= 4:
-            self.slots[msg.slot] = SlotSnapshot(msg.slot, msg.mussel_id, Latch(msg.latch).name, bool(msg.charging))
-
-    def _count_goto(self, msg: Any) -> None:
-        """The paper's cost: aPad-to-setpoint distance per Go To (a retried command counts once)."""
-        target = (msg.x, msg.y)
-        if target == self._last_goto or self.apad_lat is None or self.apad_lon is None:
-            return
-        self._last_goto = target
-        self.cost_m += float(distance_m(self.apad_lat, self.apad_lon, msg.x / 1e7, msg.y / 1e7))
+    def fleet(self) -> FleetColumns:
+        """Every aMussel's latest report, in this model's column order (newcomers join at the end)."""
+        cached = self._fleet
+        if cached is not None and cached[0] == self.registry.version:
+            return cached[1]
+        table = self.registry.mussels
+        new = np.setdiff1d(table.ids, self.ids)
+        if new.size:  # real aMussels joining: every per-aMussel column grows
+            self.ids = np.concatenate([self.ids, new])
+            self.active_samples = np.concatenate([self.active_samples, np.zeros(new.size, np.int64)])
+            self.hist_battery.widen(self.ids.size)
+        cols = FleetColumns.of(table, self.ids)
+        self._fleet = (self.registry.version, cols)
+        return cols
 
     def event(self, ev: Event) -> None:
         f = ev.fields
@@ -238,25 +196,30 @@ class ConsoleModel:
         if ev.kind != "phase" or f.get("phase") != "idle wait":  # idle wait repeats every cycle
             self.log.append(_event_text(ev))
             del self.log[:-50]
-        self.version += 1
+        self._own_version += 1
 
     def sample(self, t_s: float) -> None:
         """One point on every plot; uptime counts ACTIVE samples (eq. 3 over the mission so far)."""
-        active = self.state == MusselState.ACTIVE
+        cols = self.fleet()
+        active = cols.state == MusselState.ACTIVE
         self.active_samples += active
         self.samples += 1
+        view = self.registry.vehicles.get(self.apad_id)
         self.hist_t.append(t_s)
         self.hist_active.append(int(np.count_nonzero(active)))
-        self.hist_battery.append(self.battery)
-        self.hist_apad_v.append(np.nan if self.apad_v is None else self.apad_v)
-        self.trace_lat.append(np.nan if self.apad_lat is None else self.apad_lat)
-        self.trace_lon.append(np.nan if self.apad_lon is None else self.apad_lon)
-        self.version += 1
+        self.hist_battery.append(cols.battery_frac)
+        self.hist_apad_v.append(np.nan if view is None or view.battery_v is None else view.battery_v)
+        self.trace_lat.append(np.nan if view is None or view.lat_deg is None else view.lat_deg)
+        self.trace_lon.append(np.nan if view is None or view.lon_deg is None else view.lon_deg)
+        self._own_version += 1
 
     # --- output ------------------------------------------------------------------------------
 
     def snapshot(self, t_s: float, **extra: Any) -> Snapshot:
         """A frozen copy of the model; `extra` sets the operator fields (paused, notice, ...)."""
+        cols = self.fleet()
+        view = self.registry.vehicles.get(self.apad_id) or VehicleView(self.apad_id)
+        heard = self.apad_id in self.registry.vehicles
         uptime = 100.0 * self.active_samples / self.samples if self.samples else np.zeros(self.ids.size)
         k0 = max(self.trace_lat.n - TRACE_SAMPLES, 0)
         return Snapshot(
@@ -266,23 +229,23 @@ class ConsoleModel:
             source=self.source,
             pool_threshold=self.pool_threshold,
             mussel_ids=self.ids.copy(),
-            lat_deg=self.lat.copy(),
-            lon_deg=self.lon.copy(),
-            battery_frac=self.battery.copy(),
-            state=self.state.copy(),
+            lat_deg=cols.lat_deg,  # gathered afresh for each registry version: never written again
+            lon_deg=cols.lon_deg,
+            battery_frac=cols.battery_frac,
+            state=cols.state,
             uptime_pct=np.asarray(uptime, np.float64).copy(),
-            apad_lat_deg=self.apad_lat,
-            apad_lon_deg=self.apad_lon,
+            apad_lat_deg=view.lat_deg,
+            apad_lon_deg=view.lon_deg,
             trace_lat_deg=self.trace_lat.rows()[k0:].copy(),
             trace_lon_deg=self.trace_lon.rows()[k0:].copy(),
-            apad_battery_v=self.apad_v,
-            apad_battery_pct=self.apad_pct,
-            mode=self.mode,
-            primitive=self.primitive,
-            slots=tuple(self.slots[s] for s in range(1, 5)),
+            apad_battery_v=view.battery_v,
+            apad_battery_pct=view.battery_pct,
+            mode=_mode_name(view.custom_mode) if heard else "-",
+            primitive=_primitive_text(view.primitive) if heard else "-",
+            slots=tuple(SlotSnapshot(s.slot, s.mussel_id, s.latch.name, s.charging) for s in view.slots.values()),
             phase=self.phase,
             strategy=self.strategy,
-            cost_m=self.cost_m,
+            cost_m=view.goto_cost_m,
             cycles=self.cycles,
             # History rows are written once and never again: views are as good as copies.
             hist_t_s=self.hist_t.rows(),
@@ -297,6 +260,34 @@ class ConsoleModel:
         )
 
 
+@dataclass(frozen=True)
+class FleetColumns:
+    """The latest report of each aMussel, `(n,)` in a given id order; NaN / ACTIVE where never heard."""
+
+    lat_deg: NDArray[np.float64]
+    lon_deg: NDArray[np.float64]
+    battery_frac: NDArray[np.float64]
+    state: NDArray[np.uint8]
+
+    @staticmethod
+    def of(table: MusselTable, ids: NDArray[np.int64]) -> FleetColumns:
+        n = ids.size
+        lat, lon, battery = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
+        state = np.full(n, MusselState.ACTIVE, np.uint8)
+        if table.ids.size:
+            order = np.argsort(table.ids)
+            pos = np.searchsorted(table.ids, ids, sorter=order)
+            pos = np.minimum(pos, table.ids.size - 1)
+            rows = order[pos]
+            heard = table.ids[rows] == ids
+            rows = rows[heard]
+            lat[heard] = table.lat_e7[rows] / DEG_E7
+            lon[heard] = table.lon_e7[rows] / DEG_E7
+            battery[heard] = table.battery_frac[rows]
+            state[heard] = table.state[rows]
+        return FleetColumns(lat, lon, battery, state)
+
+
 def area_outline(geometry: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(lat, lon) of a Polygon's or MultiPolygon's exterior rings, NaN between rings."""
     polys = list(getattr(geometry, "geoms", [geometry]))
@@ -309,14 +300,17 @@ def area_outline(geometry: Any) -> tuple[NDArray[np.float64], NDArray[np.float64
     return np.asarray(lat[:-1], np.float64), np.asarray(lon[:-1], np.float64)
 
 
-def _primitive_text(msg: Any) -> str:
-    kind = Primitive(msg.primitive).name
-    progress = Progress(msg.progress).name.replace("_", " ").lower()
-    if msg.primitive == Primitive.GOTO:
-        return f"GOTO {progress}, {msg.distance_to_go:.1f} m to go"
-    if msg.primitive in (Primitive.DOCK, Primitive.UNDOCK):
-        return f"{kind} slot {msg.slot} aMussel {msg.mussel_id} {progress}"
-    return f"{kind} {progress}"
+def _mode_name(custom_mode: int) -> str:
+    return RoverMode(custom_mode).name if custom_mode in RoverMode.__members__.values() else str(custom_mode)
+
+
+def _primitive_text(p: PrimitiveView) -> str:
+    progress = p.progress.name.replace("_", " ").lower()
+    if p.primitive == Primitive.GOTO:
+        return f"GOTO {progress}, {p.distance_to_go_m:.1f} m to go"
+    if p.primitive in (Primitive.DOCK, Primitive.UNDOCK):
+        return f"{p.primitive.name} slot {p.slot} aMussel {p.mussel_id} {progress}"
+    return f"{p.primitive.name} {progress}"
 
 
 def _event_text(ev: Event) -> str:

@@ -19,21 +19,17 @@ import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.vocabulary import Latch, Primitive, Progress
 from gcs.api import CommandError
 from gcs.console.model import ConsoleModel, Snapshot, area_outline
-from gcs.mission.loop import EndReason, EnergySharingLoop, LoopControl, MissionEnded
+from gcs.mission.loop import EnergySharingLoop, LoopControl
 from gcs.mission.scenario import Scenario
 from gcs.records.events import Event
-from gcs.world import MISSION_TELEMETRY_HZ, World, apad_params, build_world
-from mavlink_dialect import memory_pair, open_transport
-from mavlink_dialect.transport import UdpTransport
-from missiontime import Clock, VirtualClock, WallClock, seconds_to_us
+from gcs.world import MISSION_TELEMETRY_HZ, LinkOptions, World, build_world
+from missiontime import Clock, PacedClock, WallClock
 from mussel_sim.placement import load_area
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
@@ -41,28 +37,6 @@ PUBLISH_PERIOD_S = 0.1  # the UI redraws at 10 Hz at most
 SAMPLE_PERIOD_S = 1.0  # one point on the plots per second of mission time
 QUIT_DOCK_WAIT_S = 120.0  # quitting waits this long at most for a dock/undock to finish
 SINK_MARGIN_S = 10.0  # quit-now waits for surfacing aMussels to float (then sinks them), this much extra
-
-
-class PacedClock(VirtualClock):
-    """Lockstep time that runs at most `speed` times the wall clock: a deterministic world a
-    person (or a Pilot test) can watch. `speed` 1 looks like the field; the bits do not depend on it."""
-
-    def __init__(self, speed: float) -> None:
-        super().__init__()
-        if speed <= 0:
-            raise ValueError(f"speed must be positive, got {speed}")
-        self.speed = speed
-        self._wall0 = time.monotonic()
-
-    def sleep(self, dt_s: float) -> None:
-        target_us = self.now_us + seconds_to_us(max(dt_s, 0.0))
-        while True:
-            self.advance_to(min(target_us, self.now_us + 100_000))
-            ahead_s = self.now_us / 1e6 / self.speed - (time.monotonic() - self._wall0)
-            if ahead_s > 0:
-                time.sleep(ahead_s)
-            if self.now_us >= target_us:
-                return
 
 
 # --- operator commands: plain values the UI puts on the queue ---------------------------------
@@ -103,60 +77,12 @@ class ConsoleConfig:
 
 
 def open_world(config: ConsoleConfig) -> World:
-    """Fleet, link and API on the console's clock, with an aPad transport: remote or embedded SITL."""
-    s = config.scenario
+    """The mission's world on the console's clock, with a remote aPad or the embedded SITL one."""
     if (config.connect is None) == (config.sitl is None):
         raise ValueError("give exactly one of connect or sitl")
     clock: Clock = WallClock() if config.speed is None else PacedClock(config.speed)
-    epoch_us = int(time.time() * 1e6)  # live .tlog stamps are real dates
-    if config.connect is not None:
-        transport = open_transport(config.connect)
-        world = build_world(s, clock, config.out_dir, epoch_us)
-        world.link.add_transport(transport)
-        return world
-    world = build_world(s, clock, config.out_dir, epoch_us)
-    if config.sitl == "udp":
-        apad_end: Any = UdpTransport("127.0.0.1", 0, listen=True)
-        gcs_end: Any = open_transport(f"udp:127.0.0.1:{apad_end.local_port}")
-    else:
-        gcs_end, apad_end = memory_pair("apad")
-    a = s.apad
-    vehicle = SitlVehicle(
-        apad_end, apad_params(s), a.home_lat_deg, a.home_lon_deg, system_id=a.system_id,
-        current_mps=(s.environment.current_east_mps, s.environment.current_north_mps),
-        log_dir=config.out_dir, log_epoch_us=epoch_us,
-    )
-    vehicle.attach(clock.scheduler, clock.now_us)
-    world.link.add_transport(gcs_end)
-    world.vehicle = vehicle
-    return world
-
-
-class _ServingClock:
-    """The loop's clock: before each wait it runs the operator's queued commands.
-
-    Only the loop's own waits go through here; the API's ACK waits use the raw clock, so an
-    operator command never starts inside another command.
-    """
-
-    def __init__(self, clock: Clock, serve: Any, abort: Any) -> None:
-        self._clock = clock
-        self._serve = serve
-        self._abort = abort  # True: end the mission at this wait (an operator's quit-now)
-        self.scheduler = clock.scheduler
-
-    @property
-    def now_us(self) -> int:
-        return self._clock.now_us
-
-    def time(self) -> float:
-        return self._clock.time()
-
-    def sleep(self, dt_s: float) -> None:
-        self._serve()
-        if self._abort():
-            raise MissionEnded(EndReason.OPERATOR)
-        self._clock.sleep(dt_s)
+    options = LinkOptions(connect=config.connect, sitl_medium=config.sitl or "memory")
+    return build_world(config.scenario, clock, config.out_dir, options, epoch_us=int(time.time() * 1e6))
 
 
 class ConsoleRunner:
@@ -229,12 +155,11 @@ class ConsoleRunner:
         clock = world.clock
         source = self.config.connect or f"embedded SITL ({self.config.sitl})"
         model = ConsoleModel(
-            s.apad.system_id, s.mission.pool_threshold, s.mission.duration_s, source,
+            world.link.registry, s.apad.system_id, s.mission.pool_threshold, s.mission.duration_s, source,
             world.start.ids.astype(np.int64), area_outline(load_area(s.fleet.area).geometry),
         )
         model.strategy = s.mission.collect_strategy  # until the loop says otherwise
         self._model = model
-        world.link.attach(model.handle)  # sees all the .tlog sees, the GCS's own commands included
         clock.scheduler.every(PUBLISH_PERIOD_S, self._publish, "console.publish", clock.now_us)
         clock.scheduler.every(SAMPLE_PERIOD_S, lambda now_us: model.sample(now_us / 1e6), "console.sample",
                               clock.now_us)
@@ -246,9 +171,9 @@ class ConsoleRunner:
             self._serve()
             clock.sleep(PUBLISH_PERIOD_S)
         if not self._quit.is_set():
-            self.loop = loop = world.mission_loop(self.control)
             # Operator commands run between the loop's waits; a quit-now ends it at one (never mid-dock).
-            loop.clock = _ServingClock(clock, self._serve, lambda: self._quit_now.is_set() and not _docking(world))
+            self.control.before_wait = lambda: self._before_wait(world)
+            self.loop = loop = world.mission_loop(self.control)
             self._notice = ""
             end = loop.run()
             self._notice = f"mission ended: {end}"
@@ -256,6 +181,11 @@ class ConsoleRunner:
             self._serve()
             clock.sleep(PUBLISH_PERIOD_S)
         self._leave_holding(world)
+
+    def _before_wait(self, world: World) -> bool:
+        """The loop's hook: run queued operator commands; True ends the mission (quit now, no dock running)."""
+        self._serve()
+        return self._quit_now.is_set() and not _docking(world)
 
     def _wait_for_apad(self, world: World) -> bool:
         while not self._quit.is_set():
@@ -289,8 +219,8 @@ class ConsoleRunner:
         deadline = world.clock.time() + world.scenario.fleet.surfacing_time_s + SINK_MARGIN_S
         while world.clock.time() < deadline:
             docked = {s.mussel_id for s in api.slots(apad) if s.mussel_id}
-            up = {m: v.state for m, v in api.mussels.items()
-                  if v.state in (MusselState.SURFACING, MusselState.FLOATING) and m not in docked}
+            up = {m: api.mussels[m].state for m in api.mussels.select((MusselState.SURFACING, MusselState.FLOATING))
+                  if m not in docked}
             if not up:
                 return
             self._notice = f"quitting now: sending aMussel {', '.join(map(str, sorted(up)))} back down"
@@ -323,7 +253,7 @@ class ConsoleRunner:
                 api.go_to(api.get_location(mussel_id), apad_id=apad)
                 return f"manual: going to aMussel {mussel_id}, loop paused"
             case DockMussel(mussel_id):
-                free = [s.slot for s in api.slots(apad) if s.latch == Latch.OPEN and s.mussel_id == 0]
+                free = api.apad(apad).free_slots()
                 if not free:
                     return "refused: no free slot"
                 api.command_mussel(mussel_id, MusselCommand.SURFACE, apad)
@@ -377,6 +307,5 @@ __all__ = [
     "GoToMussel",
     "Hold",
     "OperatorCommand",
-    "PacedClock",
     "UndockMussel",
 ]

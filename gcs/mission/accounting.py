@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from apad_sitl.vocabulary import Latch
-from gcs.link.router import VehicleView
+from gcs.link.registry import VehicleView
 from mussel_sim.fleet import FleetState
 from mussel_sim.geo import LocalFrame
 from mussel_sim.vocabulary import MusselState

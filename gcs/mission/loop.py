@@ -20,7 +20,7 @@ import numpy as np
 
 from apad_sitl.vocabulary import Latch, Progress
 from gcs.api import ApadApi, CommandError, GeofenceError, Location, MusselView
-from gcs.link.router import SlotView
+from gcs.link.telemetry import SlotView
 from gcs.mission.planner import CostWeights, PlanInput, plan
 from gcs.mission.scenario import MissionConfig
 from gcs.records.events import EventLog
@@ -59,6 +59,9 @@ class LoopControl:
     stop: bool = False
     strategy: str | None = None  # a new collection strategy, taken at the next planning step
     lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+    # Called before each of the loop's own waits (never inside a command's ACK wait): the console
+    # runs the operator's queued commands here. True ends the mission at this wait (quit now).
+    before_wait: Callable[[], bool] | None = field(default=None, repr=False)
 
 
 @dataclass
@@ -144,9 +147,9 @@ class EnergySharingLoop:
         self._wait_until(lambda: not any(s.latch in (Latch.CLOSING, Latch.RELEASING)
                                          for s in self.api.slots(self.apad_id)), interruptible=False)
         on_board = set(self._docked().values())
-        for mussel_id, view in sorted(self.api.mussels.items()):
-            if view.state in (MusselState.FLOATING, MusselState.SURFACING) and mussel_id not in on_board:
-                self._log("recover", mussel=mussel_id, action="sink", state=view.state.name)
+        for mussel_id in self.api.mussels.select((MusselState.FLOATING, MusselState.SURFACING)):
+            if mussel_id not in on_board:
+                self._log("recover", mussel=mussel_id, action="sink", state=self._state(mussel_id).name)
                 self._sink(mussel_id)
         if self._docked():
             self._log("recover", action="finish charging cycle", docked=sorted(on_board))
@@ -365,9 +368,15 @@ class EnergySharingLoop:
     def _sleep(self, dt_s: float, interruptible: bool = True) -> None:
         if interruptible:
             self._check_end()
-        self.clock.sleep(dt_s)
+        self._wait(dt_s)
         while self.control.paused and not self.control.stop:
-            self.clock.sleep(dt_s)
+            self._wait(dt_s)
+
+    def _wait(self, dt_s: float) -> None:
+        hook = self.control.before_wait
+        if hook is not None and hook():
+            raise MissionEnded(EndReason.OPERATOR)
+        self.clock.sleep(dt_s)
 
     def _check_end(self) -> None:
         if self.control.stop:
@@ -389,14 +398,12 @@ class EnergySharingLoop:
 
     def _candidates(self) -> list[MusselView]:
         """The charging pool: active aMussels below the pool threshold, lowest id first."""
-        threshold = self.settings.mission.pool_threshold
-        return [
-            m for _, m in sorted(self.api.mussels.items())
-            if m.state == MusselState.ACTIVE and m.battery_frac < threshold and m.mussel_id in self.homes
-        ]
+        mussels = self.api.mussels
+        ids = mussels.select((MusselState.ACTIVE,), battery_below=self.settings.mission.pool_threshold)
+        return [mussels[m] for m in ids if m in self.homes]
 
     def _free_slots(self) -> list[int]:
-        return [s.slot for s in self.api.slots(self.apad_id) if s.latch == Latch.OPEN and s.mussel_id == 0]
+        return self.api.apad(self.apad_id).free_slots()
 
     def _slot(self, slot: int) -> SlotView:
         return self.api.slots(self.apad_id)[slot - 1]

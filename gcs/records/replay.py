@@ -11,18 +11,20 @@ from __future__ import annotations
 
 import bisect
 import json
-import struct
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from gcs.console.model import ConsoleModel, Snapshot, area_outline
+from gcs.link import telemetry
+from gcs.link.registry import VehicleRegistry
 from gcs.link.router import GCS_SYSTEM_ID
 from gcs.mission.scenario import MISSIONS_DIR, Scenario, ScenarioError, load_scenario
 from gcs.records.events import Event
-from mavlink_dialect import Codec, mavlink
+from mavlink_dialect import Codec, mavlink, tlog
 from mussel_sim.placement import load_area
 
 REPO_MISSIONS = MISSIONS_DIR
@@ -32,24 +34,15 @@ class ReplayError(ValueError):
     pass
 
 
-def read_tlog(path: Path) -> Iterator[tuple[int, mavlink.MAVLink_message]]:
-    """(time_us, message) per record: an 8-byte big-endian stamp, then one MAVLink frame."""
-    data = path.read_bytes()
+def read_tlog(path: Path) -> Iterator[tuple[int, Any]]:
+    """(stamp_us, message) per record of a .tlog."""
     codec = Codec(GCS_SYSTEM_ID, 0)
-    i = 0
-    while i + 9 < len(data):
-        (stamp,) = struct.unpack_from(">Q", data, i)
-        magic, length = data[i + 8], data[i + 9]
-        if magic == 0xFD:
-            signed = len(data) > i + 10 and data[i + 10] & 0x01
-            size = 12 + length + (13 if signed else 0)
-        elif magic == 0xFE:
-            size = 8 + length
-        else:
-            raise ReplayError(f"{path}: not a MAVLink .tlog (bad frame at byte {i + 8})")
-        for msg in codec.decode(data[i + 8 : i + 8 + size]):
-            yield stamp, msg
-        i += 8 + size
+    try:
+        for stamp, frame in tlog.frames(path):
+            for msg in codec.decode(frame):
+                yield stamp, msg
+    except tlog.TlogError as exc:
+        raise ReplayError(str(exc)) from None
 
 
 def read_events(path: Path) -> list[Event]:
@@ -136,12 +129,13 @@ def load_replay(path: str | Path, scenario: str | Path | None = None) -> Replay:
         raise ReplayError(f"{files.tlog}: empty log")
     t0_us = stream[0][0]
     apad_id, ids = _apad_and_mussels(stream)
+    registry = VehicleRegistry()
     if found is not None:
         outline = area_outline(load_area(found.fleet.area).geometry)
-        model = ConsoleModel(found.apad.system_id, found.mission.pool_threshold, found.mission.duration_s,
-                             str(files.folder), ids, outline)
+        model = ConsoleModel(registry, found.apad.system_id, found.mission.pool_threshold,
+                             found.mission.duration_s, str(files.folder), ids, outline)
     else:
-        model = ConsoleModel(apad_id, 0.8, (stream[-1][0] - t0_us) / 1e6, str(files.folder), ids)
+        model = ConsoleModel(registry, apad_id, 0.8, (stream[-1][0] - t0_us) / 1e6, str(files.folder), ids)
     events = read_events(files.events)
     frames: list[Snapshot] = []
     next_sample_s = 0.0
@@ -161,7 +155,9 @@ def load_replay(path: str | Path, scenario: str | Path | None = None) -> Replay:
         t_s = (stamp - t0_us) / 1e6
         if t_s >= next_sample_s:
             sample_until(t_s - 1e-9)
-        model.handle(msg)
+        record = telemetry.read(msg)  # what the live link read from the same message
+        if record is not None and not isinstance(record, telemetry.Rejected | telemetry.CommandAck):
+            registry.apply(msg.get_srcSystem(), record, stamp - t0_us)
     end_s = stream[-1][0] - t0_us
     sample_until(end_s / 1e6)
     for ev in events[e:]:

@@ -51,7 +51,7 @@ def record_a_session(procs: Procs, sitl_logs: Path, gcs_tlog: Path) -> None:
         link.wait_vehicle(timeout_s=5.0, system_id=1)
         fleet = link.attach(None)
         fleet.send(Codec(FLEET_SYSTEM_ID, FLEET_COMPONENT_ID).encode(mavlink.MAVLink_amussel_status_message(**STATUS)))
-        link.command_int(1, mavlink.MAV_CMD_DO_REPOSITION, mavlink.MAV_FRAME_GLOBAL_INT, (-1.0, 1.0, 0.0, 0.0),
+        link.commands.send_int(1, mavlink.MAV_CMD_DO_REPOSITION, mavlink.MAV_FRAME_GLOBAL_INT, (-1.0, 1.0, 0.0, 0.0),
                          *TARGET_E7)
         clock.sleep(1.2)  # the Go To's PRIMITIVE_STATUS and a full round of DOCK_SLOT_STATUS
     finally:

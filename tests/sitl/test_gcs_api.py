@@ -16,6 +16,7 @@ from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.params import ApadParams
 from apad_sitl.vocabulary import Latch, Progress
 from gcs.api import ApadApi, Location
+from gcs.link.commands import BACKOFF
 from gcs.link.router import CommandError, Link
 from mavlink_dialect import Codec, mavlink, memory_pair, open_transport
 from mavlink_dialect.transport import MemoryTransport, Transport
@@ -106,7 +107,7 @@ def test_without_hold_the_current_carries_the_apad_away() -> None:
     # The same current with the thrusters idle (disarmed): proves the hold test measures control.
     w = lockstep(current=(0.2, 0.0))
     start = w.api.position(w.apad_id)
-    w.link.command_long(w.apad_id, mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0,))
+    w.link.commands.send_long(w.apad_id, mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0,))
     w.clock.sleep(30)
     assert w.apad_distance_to(start) > 4.0
 
@@ -150,7 +151,7 @@ def test_a_parameter_set_changes_behaviour() -> None:
     def go_to_time(speed_max: float | None) -> float:
         w = lockstep()
         if speed_max is not None:
-            assert w.link.param_set(w.apad_id, "SPEED_MAX", speed_max) == pytest.approx(speed_max)
+            assert w.link.params.set(w.apad_id, "SPEED_MAX", speed_max) == pytest.approx(speed_max)
         start = w.clock.time()
         w.api.go_to(w.api.get_location(13))  # speed <= 0: the aPad's own SPEED_MAX
         assert w.wait_primitive() == Progress.DONE
@@ -163,13 +164,13 @@ def test_a_parameter_set_changes_behaviour() -> None:
 def test_an_out_of_range_parameter_is_refused() -> None:
     w = lockstep()
     with pytest.raises(ValueError, match="refused SPEED_MAX"):
-        w.link.param_set(w.apad_id, "SPEED_MAX", 99.0)
+        w.link.params.set(w.apad_id, "SPEED_MAX", 99.0)
 
 
 def test_an_unknown_command_is_nacked_never_silent() -> None:
     w = lockstep()
     with pytest.raises(CommandError) as err:
-        w.link.command_long(w.apad_id, mavlink.MAV_CMD_USER_1, (1, 2, 3))
+        w.link.commands.send_long(w.apad_id, mavlink.MAV_CMD_USER_1, (1, 2, 3))
     assert err.value.result == mavlink.MAV_RESULT_UNSUPPORTED
 
 
@@ -210,7 +211,8 @@ def test_no_ack_at_all_surfaces_as_a_command_error() -> None:
     start = w.clock.time()
     with pytest.raises(CommandError, match="no COMMAND_ACK"):
         w.api.hold()
-    assert w.clock.time() - start == pytest.approx(4.0, abs=0.1)  # 4 attempts of 1 s
+    # 4 attempts, each waiting BACKOFF times longer than the one before: 1 + 1.5 + 2.25 + 3.375 s.
+    assert w.clock.time() - start == pytest.approx(sum(BACKOFF**k for k in range(4)), abs=0.1)
 
 
 def test_several_apads_are_kept_apart_by_system_id() -> None:

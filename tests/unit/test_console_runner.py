@@ -13,40 +13,48 @@ from apad_sitl.vocabulary import Primitive
 from gcs.console.canvas import BrailleCanvas
 from gcs.console.model import ConsoleModel, MarkerColour
 from gcs.console.runner import ConsoleConfig, ConsoleRunner, Hold, PacedClock, UndockMussel
+from gcs.link import telemetry
+from gcs.link.registry import VehicleRegistry
 from gcs.mission.scenario import load_scenario
 from gcs.records.events import Event
-from mavlink_dialect import mavlink
+from mavlink_dialect import Codec, mavlink
 from mussel_sim.vocabulary import MusselState
 
 POOL12 = Path(__file__).resolve().parents[2] / "missions" / "pool12.toml"
 
 
-def _status(mussel_id: int, battery: float, state: MusselState) -> mavlink.MAVLink_message:
-    return mavlink.MAVLink_amussel_status_message(0, mussel_id, 439400000, 154400000, 3.0, battery, 4000,
-                                                  int(state), 1)
+def _status(registry: VehicleRegistry, mussel_id: int, battery: float, state: MusselState) -> None:
+    """One AMUSSEL_STATUS as the link hands it to the registry: real bytes, read once."""
+    msg = Codec(251, 25).encode(mavlink.MAVLink_amussel_status_message(
+        0, mussel_id, 439400000, 154400000, 3.0, battery, 4000, int(state), 1))
+    (decoded,) = Codec(250, 190).decode(msg)
+    record = telemetry.read(decoded)
+    assert isinstance(record, telemetry.MusselReport)
+    registry.apply(251, record, 0)
 
 
 def test_model_classes_uptime_and_copies() -> None:
-    model = ConsoleModel(1, 0.8, 60.0, "test", np.array([1, 2, 3, 4]))
+    registry = VehicleRegistry()
+    model = ConsoleModel(registry, 1, 0.8, 60.0, "test", np.array([1, 2, 3, 4]))
     for mussel_id, battery, state in ((1, 0.9, MusselState.ACTIVE), (2, 0.5, MusselState.ACTIVE),
                                       (3, 0.0, MusselState.DEPLETED), (4, 0.7, MusselState.DOCKED)):
-        model.handle(_status(mussel_id, battery, state))
+        _status(registry, mussel_id, battery, state)
     model.sample(0.0)
-    model.handle(_status(1, 0.9, MusselState.SURFACING))
+    _status(registry, 1, 0.9, MusselState.SURFACING)
     model.sample(1.0)
     snap = model.snapshot(1.0)
     assert list(snap.marker_classes()) == [MarkerColour.CHARGED, MarkerColour.CANDIDATE, MarkerColour.DEPLETED,
                                            MarkerColour.DOCKED]
     assert list(snap.uptime_pct) == [50.0, 100.0, 0.0, 0.0]
     assert list(snap.hist_active) == [2, 1]
-    model.handle(_status(2, 0.1, MusselState.ACTIVE))
-    model.handle(_status(9, 0.5, MusselState.ACTIVE))  # a newcomer grows the fleet
+    _status(registry, 2, 0.1, MusselState.ACTIVE)
+    _status(registry, 9, 0.5, MusselState.ACTIVE)  # a newcomer grows the fleet
     assert snap.battery_frac[1] == 0.5 and snap.mussel_ids.size == 4  # the snapshot is a copy
     assert list(model.snapshot(2.0).mussel_ids) == [1, 2, 3, 4, 9]
 
 
 def test_model_counts_cycles_and_strategy_from_events() -> None:
-    model = ConsoleModel(1, 0.8, 60.0, "test")
+    model = ConsoleModel(VehicleRegistry(), 1, 0.8, 60.0, "test")
     for kind, fields in (("mission_start", {"strategy": "cautious"}), ("phase", {"phase": "idle wait"}),
                          ("strategy_switch", {"old": "cautious", "new": "greedy"}),
                          ("plan_redeployment", {"route": [1]}), ("phase", {"phase": "idle wait"}),

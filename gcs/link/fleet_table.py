@@ -1,0 +1,148 @@
+"""The aMussel table: the latest status heard from every aMussel, simulated or real, as columns.
+
+A fleet of hundreds reports every second, so the table is numpy columns `(n,)` in the order ids
+were first heard, updated one report at a time (a real node) or a whole batch at once (the
+simulated fleet, or a datagram of many reports). Reads by id build a `MusselView` on demand;
+questions over the whole fleet (`select`) are vectorised.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gcs.link.telemetry import DEG_E7, Location, MusselReport
+from mussel_sim.vocabulary import MusselState
+
+_N_STATES = len(MusselState)
+
+
+@dataclass(frozen=True, slots=True)
+class MusselView:
+    """The latest AMUSSEL_STATUS heard for one aMussel."""
+
+    mussel_id: int
+    location: Location
+    depth_m: float
+    battery_frac: float
+    battery_mv: int
+    state: MusselState
+    simulated: bool
+    time_us: int
+
+
+@dataclass(frozen=True)
+class MusselBatch:
+    """Many AMUSSEL_STATUS at once, one array `(n,)` per field (wire units)."""
+
+    mussel_id: NDArray[np.integer]
+    lat_e7: NDArray[np.integer]
+    lon_e7: NDArray[np.integer]
+    depth_m: NDArray[np.floating]
+    battery_frac: NDArray[np.floating]
+    battery_mv: NDArray[np.integer]
+    state: NDArray[np.integer]
+    simulated: NDArray[np.integer]
+    time_us: NDArray[np.integer]
+
+
+class MusselTable(Mapping[int, MusselView]):
+    def __init__(self) -> None:
+        self.ids = np.zeros(0, np.int64)
+        self.lat_e7 = np.zeros(0, np.int64)
+        self.lon_e7 = np.zeros(0, np.int64)
+        self.depth_m = np.zeros(0)
+        self.battery_frac = np.zeros(0)
+        self.battery_mv = np.zeros(0, np.int64)
+        self.state = np.zeros(0, np.uint8)
+        self.simulated = np.zeros(0, bool)
+        self.time_us = np.zeros(0, np.int64)
+        self._row: dict[int, int] = {}
+        self._last_ids: NDArray[np.integer] | None = None  # a batch of the same ids reuses its rows
+        self._last_rows = np.zeros(0, np.intp)
+
+    # --- updates -----------------------------------------------------------------------------
+
+    def update(self, r: MusselReport) -> None:
+        row = self._rows_of(np.array([r.mussel_id]))[0]
+        self.lat_e7[row], self.lon_e7[row] = r.lat_e7, r.lon_e7
+        self.depth_m[row], self.battery_frac[row], self.battery_mv[row] = r.depth_m, r.battery_frac, r.battery_mv
+        self.state[row], self.simulated[row], self.time_us[row] = int(r.state), r.simulated, r.time_us
+
+    def update_batch(self, b: MusselBatch) -> Counter[str]:
+        """Take every valid row of `b`; return the rejected rows counted by reason."""
+        bad = batch_rejections(b)
+        ok = ~np.any(np.stack(list(bad.values())), axis=0) if bad else np.ones(b.mussel_id.size, bool)
+        rejected = Counter({reason: int(mask.sum()) for reason, mask in bad.items() if mask.any()})
+        if not ok.all():
+            b = MusselBatch(*(getattr(b, f)[ok] for f in MusselBatch.__dataclass_fields__))
+        rows = self._rows_of(b.mussel_id)
+        self.lat_e7[rows], self.lon_e7[rows], self.depth_m[rows] = b.lat_e7, b.lon_e7, b.depth_m
+        self.battery_frac[rows], self.battery_mv[rows] = b.battery_frac, b.battery_mv
+        self.state[rows], self.simulated[rows], self.time_us[rows] = b.state, b.simulated, b.time_us
+        return rejected
+
+    def _rows_of(self, ids: NDArray[np.integer]) -> NDArray[np.intp]:
+        last = self._last_ids
+        if last is not None and last.shape == ids.shape and np.array_equal(last, ids):
+            return self._last_rows
+        new = [int(i) for i in ids if int(i) not in self._row]
+        if new:
+            for i in dict.fromkeys(new):
+                self._row[i] = len(self._row)
+            self._grow(np.array(list(dict.fromkeys(new)), np.int64))
+        rows = np.fromiter((self._row[int(i)] for i in ids), np.intp, ids.size)
+        self._last_ids, self._last_rows = ids.copy(), rows
+        return rows
+
+    def _grow(self, new_ids: NDArray[np.int64]) -> None:
+        k = new_ids.size
+        self.ids = np.concatenate([self.ids, new_ids])
+        for name, dtype in (("lat_e7", np.int64), ("lon_e7", np.int64), ("depth_m", float), ("battery_frac", float),
+                            ("battery_mv", np.int64), ("state", np.uint8), ("simulated", bool), ("time_us", np.int64)):
+            setattr(self, name, np.concatenate([getattr(self, name), np.zeros(k, dtype)]))
+
+    # --- reads -------------------------------------------------------------------------------
+
+    def __getitem__(self, mussel_id: int) -> MusselView:
+        k = self._row[mussel_id]  # KeyError: never heard
+        return MusselView(
+            mussel_id, Location(int(self.lat_e7[k]) / DEG_E7, int(self.lon_e7[k]) / DEG_E7), float(self.depth_m[k]),
+            float(self.battery_frac[k]), int(self.battery_mv[k]), MusselState(int(self.state[k])),
+            bool(self.simulated[k]), int(self.time_us[k]),
+        )
+
+    def __iter__(self) -> Iterator[int]:
+        return iter(self._row)
+
+    def __len__(self) -> int:
+        return len(self._row)
+
+    def __contains__(self, mussel_id: object) -> bool:
+        return mussel_id in self._row
+
+    def select(self, states: tuple[MusselState, ...], battery_below: float | None = None) -> list[int]:
+        """Ids in one of `states` (and below a battery fraction), lowest id first."""
+        mask = np.isin(self.state, np.array([int(s) for s in states], np.uint8))
+        if battery_below is not None:
+            mask &= self.battery_frac < battery_below
+        return sorted(int(i) for i in self.ids[mask])
+
+
+def batch_rejections(b: MusselBatch) -> dict[str, NDArray[np.bool_]]:
+    """Per reason, the rows of a batch that fail validation (the rules of `telemetry._mussel`)."""
+    lat_lon_bad = (np.abs(b.lat_e7) > 90 * DEG_E7) | (np.abs(b.lon_e7) > 180 * DEG_E7)
+    with np.errstate(invalid="ignore"):
+        level_bad = ~(np.isfinite(b.depth_m) & np.isfinite(b.battery_frac) & (b.battery_frac >= 0.0)
+                      & (b.battery_frac <= 1.0) & (b.depth_m >= 0.0))
+    return {
+        "AMUSSEL_STATUS.mussel_id": b.mussel_id == 0,
+        "AMUSSEL_STATUS.lat_lon": lat_lon_bad,
+        "AMUSSEL_STATUS.battery_depth": level_bad,
+        "AMUSSEL_STATUS.state": b.state >= _N_STATES,
+        "AMUSSEL_STATUS.simulated": b.simulated > 1,
+    }

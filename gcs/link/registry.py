@@ -1,0 +1,149 @@
+"""The one state the GCS holds about the swarm: a view per aPad system id and the aMussel table.
+
+The router feeds it typed, validated records (`gcs.link.telemetry`); the aPad API, the mission
+loop, the console and replay read it. Nothing else keeps a second copy of what was heard.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from apad_sitl.vocabulary import N_SLOTS, Primitive
+from gcs.link.fleet_table import MusselTable
+from gcs.link.telemetry import (
+    DEG_E7,
+    Battery,
+    CommandAck,
+    GoToSent,
+    Heartbeat,
+    Home,
+    MusselReport,
+    ParamValue,
+    Position,
+    PrimitiveView,
+    Record,
+    SlotView,
+    StatusText,
+)
+from mussel_sim.geo import distance_m
+
+STATUSTEXT_KEPT = 50
+
+
+@dataclass
+class Expectation:
+    """The primitive last commanded: its kind and key (target degE7, or slot and aMussel)."""
+
+    kind: Primitive
+    a: int
+    b: int
+    seen: bool = False  # the aPad has reported on this very primitive
+
+    def matches(self, status: PrimitiveView) -> bool:
+        if status.primitive != self.kind:
+            return False
+        if self.kind == Primitive.GOTO:
+            return (status.target_lat_e7, status.target_lon_e7) == (self.a, self.b)
+        if self.kind == Primitive.DOCK:
+            return (status.slot, status.mussel_id) == (self.a, self.b)
+        if self.kind == Primitive.UNDOCK:
+            return status.slot == self.a
+        return True
+
+
+@dataclass
+class VehicleView:
+    """Everything the GCS knows about one aPad, from its own telemetry and our commands to it."""
+
+    system_id: int
+    last_heartbeat_us: int = 0
+    custom_mode: int = 0
+    armed: bool = False
+    lat_deg: float | None = None
+    lon_deg: float | None = None
+    heading_deg: float = 0.0
+    battery_v: float | None = None
+    battery_pct: int = -1
+    home: tuple[float, float] | None = None
+    primitive: PrimitiveView = field(default_factory=PrimitiveView)
+    slots: dict[int, SlotView] = field(default_factory=lambda: {s: SlotView(s) for s in range(1, N_SLOTS + 1)})
+    params: dict[str, float] = field(default_factory=dict)
+    statustext: list[str] = field(default_factory=list)
+    expected: Expectation | None = None
+    # The paper's movement cost as seen on the link: aPad-to-setpoint distance per new Go To target.
+    goto_cost_m: float = 0.0
+    last_goto_e7: tuple[int, int] | None = None
+
+    def free_slots(self) -> list[int]:
+        return [s.slot for s in self.slots.values() if s.free]
+
+
+class VehicleRegistry:
+    """One `VehicleView` per aPad system id (created by its first heartbeat) and one `MusselTable`."""
+
+    def __init__(self) -> None:
+        self.vehicles: dict[int, VehicleView] = {}
+        self.mussels = MusselTable()
+        self.acks: list[tuple[int, CommandAck]] = []  # (system id, ack) not yet taken by the command client
+        self.version = 0  # bumped on every change a screen could show
+
+    def apply(self, system_id: int, record: Record, now_us: int) -> None:
+        """Fold one record from `system_id` into the state."""
+        if isinstance(record, MusselReport):
+            self.mussels.update(record)
+            self.version += 1
+            return
+        if isinstance(record, GoToSent):
+            self._goto_sent(record)
+            return
+        if isinstance(record, Heartbeat):
+            view = self.vehicles.get(system_id)
+            if view is None:
+                view = self.vehicles[system_id] = VehicleView(system_id)
+            view.last_heartbeat_us = now_us
+            view.custom_mode, view.armed = record.custom_mode, record.armed
+            self.version += 1
+            return
+        view = self.vehicles.get(system_id)
+        if view is None:
+            return  # not (yet) a vehicle: its heartbeat makes it one
+        match record:
+            case Position():
+                view.lat_deg, view.lon_deg = record.lat_deg, record.lon_deg
+                if record.heading_deg is not None:
+                    view.heading_deg = record.heading_deg
+            case PrimitiveView():
+                view.primitive = record
+                if view.expected is not None and view.expected.matches(record):
+                    view.expected.seen = True
+            case SlotView():
+                view.slots[record.slot] = record
+            case Battery():
+                if record.voltage_v is not None:
+                    view.battery_v = record.voltage_v
+                view.battery_pct = record.remaining_pct
+            case Home():
+                view.home = (record.lat_deg, record.lon_deg)
+            case ParamValue():
+                view.params[record.name] = record.value
+            case StatusText():
+                view.statustext.append(record.text)
+                del view.statustext[:-STATUSTEXT_KEPT]
+            case CommandAck():
+                self.acks.append((system_id, record))
+                return
+        self.version += 1
+
+    def expect(self, system_id: int, kind: Primitive, a: int = 0, b: int = 0) -> None:
+        """We are about to command `kind` on this aPad: its reports count once they are about it."""
+        self.vehicles[system_id].expected = Expectation(kind, a, b)
+
+    def _goto_sent(self, goto: GoToSent) -> None:
+        """Count the paper's cost once per new target (a retransmission carries the same one)."""
+        view = self.vehicles.get(goto.target_system)
+        target = (goto.lat_e7, goto.lon_e7)
+        if view is None or view.lat_deg is None or view.lon_deg is None or target == view.last_goto_e7:
+            return
+        view.last_goto_e7 = target
+        view.goto_cost_m += float(distance_m(view.lat_deg, view.lon_deg, goto.lat_e7 / DEG_E7, goto.lon_e7 / DEG_E7))
+        self.version += 1

@@ -1,0 +1,107 @@
+"""What a scenario means to the models: fleet and aPad parameters, the start configuration, the
+sensor field and the geofence, and a check that reads the scenario's files before a mission starts."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+
+from apad_sitl.params import ApadParams
+from gcs.mission.scenario import Scenario, ScenarioError
+from mussel_sim.drift import NO_CURRENT, UniformCurrent
+from mussel_sim.fleet import FleetParams
+from mussel_sim.geo import LocalFrame
+from mussel_sim.placement import Area, load_area
+from mussel_sim.sensors import AnoxicPatch, DummySensors, SensorField
+from mussel_sim.startconfig import StartConfig, generate_start_config, load_start_config
+
+
+def check_inputs(scenario: Scenario) -> None:
+    """Read the scenario's area and start configuration now, so a bad file is one `ScenarioError` line
+    (file: what is wrong) before any mission starts, never a traceback from the middle of one."""
+    files = [("area", scenario.fleet.area)]
+    if scenario.fleet.start_config is not None:
+        files.append(("start configuration", scenario.fleet.start_config))
+    for what, path in files:
+        try:
+            if what == "area":
+                area = load_area(path)
+                if not area.geometry.is_valid:
+                    raise ValueError("the polygon is not valid (self-intersecting or degenerate)")
+                lon_min, lat_min, lon_max, lat_max = area.geometry.bounds
+                if not (-90 <= lat_min <= lat_max <= 90 and -180 <= lon_min <= lon_max <= 180):
+                    raise ValueError("coordinates are not WGS84 degrees [lon, lat] (GeoJSON order)")
+            else:
+                config = load_start_config(path)
+                if config.n != scenario.fleet.count:
+                    raise ValueError(f"holds {config.n} aMussels, the scenario says {scenario.fleet.count}")
+        except OSError as exc:
+            raise ScenarioError(f"{path}: cannot read the {what}: {exc.strerror or exc}") from None
+        except json.JSONDecodeError as exc:
+            raise ScenarioError(f"{path}: the {what} is not JSON: {exc.msg} (line {exc.lineno})") from None
+        except (ValueError, KeyError, TypeError, IndexError, AttributeError) as exc:
+            detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise ScenarioError(f"{path}: bad {what}: {detail}") from None
+
+
+def start_config(scenario: Scenario, area: Area, rng: np.random.Generator) -> tuple[StartConfig, LocalFrame]:
+    """The scenario's saved start configuration, or one drawn from its area with the run's rng."""
+    frame = area.frame()
+    if scenario.fleet.start_config is not None:
+        config = load_start_config(scenario.fleet.start_config)
+        if config.n != scenario.fleet.count:
+            raise ValueError(
+                f"{scenario.fleet.start_config}: holds {config.n} aMussels, the scenario says {scenario.fleet.count}"
+            )
+        return config, frame
+    battery = (scenario.fleet.battery_min, scenario.fleet.battery_max)
+    return generate_start_config(area, scenario.fleet.count, frame, rng, battery_range=battery), frame
+
+
+def fleet_params(scenario: Scenario) -> FleetParams:
+    f, env = scenario.fleet, scenario.environment
+    current = (
+        UniformCurrent(env.current_east_mps, env.current_north_mps)
+        if (env.current_east_mps, env.current_north_mps) != (0.0, 0.0) else NO_CURRENT
+    )
+    return FleetParams(
+        theta=scenario.mission.theta,
+        discharge_profile=f.discharge,
+        charge_profile=f.charge,
+        surfacing_time_s=f.surfacing_time_s,
+        sinking_time_s=f.sinking_time_s,
+        acoustic_range_m=f.acoustic_range_m,
+        drift_half_width_m=f.drift_cm / 100.0,
+        current=current,
+    )
+
+
+def apad_params(scenario: Scenario) -> ApadParams:
+    a = scenario.apad
+    return replace(
+        ApadParams(), speed_max_mps=a.speed_mps, wp_radius_m=a.victory_radius_m, dock_reach_m=a.dock_reach_m,
+        dock_time_s=a.dock_time_s, undock_time_s=a.undock_time_s, sysid_thismav=a.system_id,
+    )
+
+
+def sensor_field(scenario: Scenario, area: Area, frame: LocalFrame) -> SensorField:
+    """Dummy values, or an anoxic patch a quarter of the area wide, centred in it, drifting east."""
+    if scenario.fleet.sensor_field == "dummy":
+        return DummySensors()
+    local = area.to_local(frame)
+    centre = local.representative_point()
+    return AnoxicPatch(centre.x, centre.y, sigma_m=0.25 * local.area**0.5, velocity_east_mps=0.002)
+
+
+def geofence_ring(area: Area, frame: LocalFrame, buffer_m: float) -> list[tuple[float, float]]:
+    """The water area grown by `buffer_m`, as one (lat, lon) ring (several basins: their convex hull)."""
+    local = area.to_local(frame).buffer(buffer_m)
+    if local.geom_type != "Polygon":
+        local = local.convex_hull
+    x, y = local.exterior.xy
+    lat, lon = frame.to_geodetic(np.asarray(x), np.asarray(y))
+    return [(float(a), float(b)) for a, b in zip(lat, lon, strict=True)]
+
+
