@@ -35,6 +35,9 @@ LOCKSTEP_EPOCH_US = 1_591_920_000_000_000
 # The geofence is the scenario's water area grown by this much (GPS error, drift of the aMussels).
 GEOFENCE_BUFFER_M = 10.0
 GCS_SIGNING_LINK_ID = 1
+# What the aPad uses of the fleet's traffic: positions to dock by. Sensor readings and the fleet's
+# warnings are for the GCS alone, so they stay off the aPad link.
+APAD_HEARS_FROM_FLEET = frozenset({mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS})
 
 
 @dataclass(frozen=True)
@@ -120,12 +123,12 @@ def build_world(
     link = Link(clock, tlog_path=out_dir / "gcs.tlog" if out_dir else None, tlog_epoch_us=epoch_us,
                 append=append_logs)
     events = EventLog(out_dir / "events.jsonl" if out_dir else None, append=append_logs)
-    port = link.attach(None)
+    port = link.attach(None, forward=APAD_HEARS_FROM_FLEET)
     fleet = FleetRunner(
         initial_state(config, frame, params, clock.now_us), params, rng, frame,
         Codec(FLEET_SYSTEM_ID, FLEET_COMPONENT_ID), port.send_bytes, sensor_field(scenario, area, frame),
         CommsConfig(status_rate_hz=scenario.fleet.status_rate_hz, sensors_rate_hz=scenario.fleet.sensors_rate_hz),
-        local=port.send_local,
+        local=port.send_local, local_batch=port.send_batch,
     )
     port.handler = fleet.handle
     fleet.register(clock.scheduler, clock.now_us, end_us=start_us + seconds_to_us(scenario.mission.duration_s))

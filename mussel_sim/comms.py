@@ -21,11 +21,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from apad_sitl.vocabulary import Latch
-from mavlink_dialect import Codec, mavlink
+from mavlink_dialect import Codec, hot, mavlink
 from mavlink_dialect.transport import Transport
 from missiontime import Scheduler, Task
 from mussel_sim.battery import to_millivolts
@@ -41,7 +41,12 @@ FLEET_COMPONENT_ID = 25
 US_PER_S = 1_000_000
 DEG_E7 = 1e7
 STATUSTEXT_MAX = 50
-HOLDING_LATCHES = (int(Latch.CLOSING), int(Latch.LATCHED))
+# DOCK_SLOT_STATUS latch values that hold an aMussel (the aPad's words, read here as wire values).
+HOLDING_LATCHES = (mavlink.DOCK_LATCH_STATE_CLOSING, mavlink.DOCK_LATCH_STATE_LATCHED)
+
+
+# Where a co-located router takes whole batches: (message id, frames, columns by wire field name).
+BatchSink = Callable[[int, list[bytes], dict[str, Any]], None]
 
 
 class MusselIdCollision(RuntimeError):
@@ -85,9 +90,12 @@ class FleetRunner:
         recorder: Recorder | None = None,
         on_events: Callable[[StepEvents], None] | None = None,
         local: Callable[[mavlink.MAVLink_message], None] | None = None,
+        local_batch: BatchSink | None = None,
     ) -> None:
-        """`send` gets every encoded frame; `local`, if given, also gets every message object, for
-        a party in the same process (the GCS router) that would otherwise parse our bytes back."""
+        """`send` gets every encoded frame (the fleet's statuses and sensors packed several to a
+        datagram). A party in the same process (the GCS router) that would otherwise parse our bytes
+        back takes the objects instead: `local` each single message, and `local_batch`, if given,
+        every status and sensor batch as (message id, frames, columns by wire name) in place of `send`."""
         if state.n and int(state.ids[-1]) > MAX_MUSSEL_ID:
             raise ValueError(f"aMussel ids above {MAX_MUSSEL_ID} cannot be sent over MAVLink (uint16 mussel_id)")
         self.state = state
@@ -101,6 +109,7 @@ class FleetRunner:
         self.recorder = recorder if recorder is not None else Recorder(state.ids)
         self.on_events = on_events
         self.local = local
+        self.local_batch = local_batch
         self.end_us: int | None = None  # no steps past this mission time (see `register`)
         self.last_events: StepEvents | None = None
         self._ids = {int(i) for i in state.ids}
@@ -150,29 +159,33 @@ class FleetRunner:
     def publish_status_task(self, now_us: int) -> None:
         s = self.state
         lat, lon = self.frame.to_geodetic(s.x_m, s.y_m)
-        lat_e7 = np.round(lat * DEG_E7).astype(np.int64)
-        lon_e7 = np.round(lon * DEG_E7).astype(np.int64)
-        mv = np.round(to_millivolts(s.battery_frac)).astype(np.int64)
-        for i in range(s.n):
-            self._send(
-                mavlink.MAVLink_amussel_status_message(
-                    now_us, int(s.ids[i]), int(lat_e7[i]), int(lon_e7[i]), float(s.depth_m[i]),
-                    float(s.battery_frac[i]), int(mv[i]), int(s.state[i]), 1,
-                )
-            )
+        self._send_batch(hot.AMUSSEL_STATUS, {
+            "time_us": now_us, "mussel_id": s.ids, "lat": np.round(lat * DEG_E7).astype(np.int64),
+            "lon": np.round(lon * DEG_E7).astype(np.int64), "depth": s.depth_m, "battery": s.battery_frac,
+            "battery_voltage": np.round(to_millivolts(s.battery_frac)).astype(np.int64), "state": s.state,
+            "simulated": 1,
+        })
 
     publish_task = publish_status_task
 
     def publish_sensors_task(self, now_us: int) -> None:
         s = self.state
         r = self.sensors.sample(s.x_m, s.y_m, s.depth_m, now_us / US_PER_S)
-        for i in range(s.n):
-            self._send(
-                mavlink.MAVLink_amussel_sensors_message(
-                    now_us, int(s.ids[i]), float(r.dissolved_oxygen_mg_l[i]), float(r.temperature_degc[i]),
-                    float(r.pressure_hpa[i]), float(r.turbidity_ntu[i]),
-                )
-            )
+        self._send_batch(hot.AMUSSEL_SENSORS, {
+            "time_us": now_us, "mussel_id": s.ids, "dissolved_oxygen": r.dissolved_oxygen_mg_l,
+            "temperature": r.temperature_degc, "pressure": r.pressure_hpa, "turbidity": r.turbidity_ntu,
+        })
+
+    def _send_batch(self, spec: hot.HotSpec, columns: dict[str, Any]) -> None:
+        """One message per aMussel, packed as a batch: byte for byte what one-by-one encoding makes."""
+        if not self.state.n:
+            return
+        frames = hot.encode_batch(self.codec, spec, columns)
+        if self.local_batch is not None:
+            self.local_batch(spec.msg_id, frames, columns)
+        else:
+            for datagram in hot.pack_datagrams(frames):
+                self.send(datagram)
 
     # --- incoming ---------------------------------------------------------------------------------------
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -49,6 +50,19 @@ class MusselBatch:
     simulated: NDArray[np.integer]
     time_us: NDArray[np.integer]
 
+    @staticmethod
+    def from_wire(fields: Mapping[str, Any]) -> MusselBatch:
+        """From AMUSSEL_STATUS columns by their wire names (a scalar stands for every row)."""
+        ids = np.asarray(fields["mussel_id"])
+        n = ids.size
+
+        def col(name: str, dtype: Any) -> NDArray[Any]:
+            return np.broadcast_to(np.asarray(fields[name], dtype), (n,))
+
+        return MusselBatch(ids, col("lat", np.int64), col("lon", np.int64), col("depth", np.float64),
+                           col("battery", np.float64), col("battery_voltage", np.int64), col("state", np.int64),
+                           col("simulated", np.int64), col("time_us", np.int64))
+
 
 class MusselTable(Mapping[int, MusselView]):
     def __init__(self) -> None:
@@ -68,7 +82,10 @@ class MusselTable(Mapping[int, MusselView]):
     # --- updates -----------------------------------------------------------------------------
 
     def update(self, r: MusselReport) -> None:
-        row = self._rows_of(np.array([r.mussel_id]))[0]
+        row = self._row.get(r.mussel_id)
+        if row is None:
+            row = self._row[r.mussel_id] = len(self._row)
+            self._grow(np.array([r.mussel_id], np.int64))
         self.lat_e7[row], self.lon_e7[row] = r.lat_e7, r.lon_e7
         self.depth_m[row], self.battery_frac[row], self.battery_mv[row] = r.depth_m, r.battery_frac, r.battery_mv
         self.state[row], self.simulated[row], self.time_us[row] = int(r.state), r.simulated, r.time_us

@@ -13,16 +13,18 @@ its COMMAND_ACKs to the `CommandClient`, and, as the message itself, to every ot
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
+
+from numpy.typing import NDArray
 
 from gcs.link.commands import CommandClient, CommandError
 from gcs.link.fleet_table import MusselBatch
 from gcs.link.params import ParamClient
 from gcs.link.registry import VehicleRegistry, VehicleView
 from gcs.link.telemetry import CommandAck, Rejected, read
-from mavlink_dialect import Codec, Transport, mavlink
+from mavlink_dialect import Codec, Transport, hot, mavlink
 from mavlink_dialect.tlog import TlogWriter
 from missiontime import Clock, seconds_to_us
 
@@ -44,30 +46,47 @@ class Port:
     here, for the others).
     """
 
-    def __init__(self, link: Link, handler: Handler | None) -> None:
+    def __init__(self, link: Link, handler: Handler | None, forward: frozenset[int] | None = None) -> None:
+        """`forward`: the message ids of this party that go out to the vehicles (None: all of them);
+        a router sends a listener what it uses, as mavlink-router's filters do."""
         self.link = link
         self.handler = handler
+        self.forward = forward
+
+    def _out(self, data: bytes) -> None:
+        if self.forward is None or frame_msg_id(data) in self.forward:
+            self.link._out(data)
 
     def send(self, data: bytes) -> None:
-        self.link._out(data)
+        self._out(data)
         for msg in self.link._loopback.decode(data):
             self.link._deliver(self, msg)
 
     def send_bytes(self, data: bytes) -> None:
-        self.link._out(data)
+        self._out(data)
 
     def send_local(self, msg: Any) -> None:
         self.link._deliver(self, msg)
 
-    def send_batch(self, frames: Sequence[bytes], datagrams: Sequence[bytes], batch: MusselBatch) -> None:
-        """Many AMUSSEL_STATUS at once: `datagrams` go out, `frames` to the .tlog, `batch` to the registry."""
+    def send_batch(self, msg_id: int, frames: Sequence[bytes], columns: Mapping[str, NDArray[Any]]) -> None:
+        """Many messages of one id at once (`mavlink_dialect.hot`): out to the vehicles in datagrams,
+        into the .tlog, and AMUSSEL_STATUS into the registry's aMussel table. Local parties get none."""
         link = self.link
-        for data in datagrams:
-            link._out(data)
+        if self.forward is None or msg_id in self.forward:
+            for data in hot.pack_datagrams(frames):
+                link._out(data)
         if link._tlog is not None:
             link._tlog.write_many(link.clock.now_us, frames)
-        link.dropped.update(link.registry.mussels.update_batch(batch))
-        link.registry.version += 1
+        if msg_id == mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS:
+            link.dropped.update(link.registry.mussels.update_batch(MusselBatch.from_wire(columns)))
+            link.registry.version += 1
+
+
+def frame_msg_id(frame: bytes) -> int:
+    """The message id in a MAVLink 2 (or 1) frame's header, without parsing the frame."""
+    if frame[0] == mavlink.PROTOCOL_MARKER_V2:
+        return int.from_bytes(frame[7:10], "little")
+    return frame[5]
 
 
 class _TransportPoller:
@@ -148,8 +167,8 @@ class Link:
         for poller in self._pollers:
             poller.codec.enable_signing(key, link_id, ticks)
 
-    def attach(self, handler: Handler | None) -> Port:
-        port = Port(self, handler)
+    def attach(self, handler: Handler | None, forward: frozenset[int] | None = None) -> Port:
+        port = Port(self, handler, forward)
         self._ports.append(port)
         return port
 

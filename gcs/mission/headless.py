@@ -37,12 +37,12 @@ def run_mission(
     run checkpoints itself there; `resume` continues from that checkpoint (after a crash).
     """
     wall_start = time.perf_counter()
-    ckpt_path = out_dir / checkpoint.CHECKPOINT_NAME if out_dir is not None else None
+    ckpt_files = checkpoint.CheckpointFiles(out_dir / checkpoint.CHECKPOINT_NAME) if out_dir is not None else None
     saved = None
     if resume:
-        if ckpt_path is None:
+        if ckpt_files is None:
             raise checkpoint.CheckpointError("resuming needs the run's output folder")
-        saved = checkpoint.load(ckpt_path)
+        saved = checkpoint.load(ckpt_files)
     world = lockstep_world(scenario, out_dir, options, start_us=saved.time_us if saved else 0,
                            append_logs=saved is not None)
     try:
@@ -55,10 +55,10 @@ def run_mission(
         loop = world.mission_loop()
         if saved is not None:
             loop.status = saved.loop_status
-        if ckpt_path is not None:
-            path = ckpt_path
+        if ckpt_files is not None:
+            files = ckpt_files
             world.clock.scheduler.every(
-                checkpoint.CHECKPOINT_PERIOD_S, lambda now_us: checkpoint.save(path, checkpoint.capture(world, loop)),
+                checkpoint.CHECKPOINT_PERIOD_S, lambda now_us: checkpoint.save(files, checkpoint.capture(world, loop)),
                 "checkpoint", world.clock.now_us + round(checkpoint.CHECKPOINT_PERIOD_S * 1e6),
             )
         end = loop.run(resume=saved is not None)
@@ -66,10 +66,12 @@ def run_mission(
                          out_dir)
         if out_dir is not None:
             _write_outputs(world, result, out_dir)
-        if ckpt_path is not None:
-            ckpt_path.unlink(missing_ok=True)  # finished: nothing to resume
+        if ckpt_files is not None:
+            ckpt_files.remove()  # finished: nothing to resume
         return result
     finally:
+        if ckpt_files is not None:
+            ckpt_files.close()
         world.close()
 
 

@@ -1,0 +1,72 @@
+"""The energy-sharing loop's vocabulary and settings: its phases, why it ends, the operator's
+controls and the status it shows."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from enum import StrEnum
+
+from gcs.mission.scenario import MissionConfig
+
+
+class Phase(StrEnum):
+    IDLE_WAIT = "idle wait"
+    PLAN_COLLECT = "plan collection"
+    COLLECT = "collect"
+    CHARGING_WAIT = "charging wait"
+    PLAN_REDEPLOY = "plan redeployment"
+    REDEPLOY = "redeploy"
+    ENDED = "ended"
+
+
+class EndReason(StrEnum):
+    MISSION_TIME = "mission time"
+    APAD_BATTERY = "aPad battery"
+    OPERATOR = "operator stop"
+
+
+class MissionEnded(Exception):
+    def __init__(self, reason: EndReason) -> None:
+        super().__init__(str(reason))
+        self.reason = reason
+
+
+@dataclass
+class LoopControl:
+    """What the operator may change while the loop runs (set from any thread)."""
+
+    paused: bool = False
+    stop: bool = False
+    strategy: str | None = None  # a new collection strategy, taken at the next planning step
+    lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+    # Called before each of the loop's own waits (never inside a command's ACK wait): the console
+    # runs the operator's queued commands here. True ends the mission at this wait (quit now).
+    before_wait: Callable[[], bool] | None = field(default=None, repr=False)
+
+
+@dataclass
+class LoopStatus:
+    """What the loop is doing, for the console and the results."""
+
+    phase: Phase = Phase.IDLE_WAIT
+    strategy: str = ""
+    route: list[int] = field(default_factory=list)
+    target_mussel: int = 0
+    cost_m: float = 0.0  # the paper's movement cost: aPad-to-setpoint distance summed over Go To commands
+    cycles: int = 0  # completed collect-charge-redeploy cycles
+    end_reason: EndReason | None = None
+
+
+@dataclass(frozen=True)
+class LoopSettings:
+    mission: MissionConfig
+    acoustic_range_m: float
+    dock_reach_m: float
+    battery_end_v: float
+    surfacing_timeout_s: float = 120.0  # an aMussel that does not float by then is skipped
+    # No aMussel is called up later than this before the mission end: once called up it is docked
+    # (or sent down again) whatever the clock says, so it is never left at the surface.
+    call_up_margin_s: float = 300.0
+    poll_s: float = 0.5  # how often waits look again (mission time)
