@@ -26,7 +26,7 @@ class VehicleLog:
         self._tlog = open(self.tlog_path, "ab" if append else "wb")  # noqa: SIM115 - lives until close()
         self._events = open(self.events_path, "a" if append else "w", encoding="utf-8")  # noqa: SIM115
 
-    def message(self, time_us: int, frame: bytes) -> None:
+    def message(self, time_us: int, frame: bytes | bytearray) -> None:
         self._tlog.write(_STAMP.pack(self.epoch_us + time_us) + frame)
 
     def event(self, time_us: int, event: str, **fields: Any) -> None:

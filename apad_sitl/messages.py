@@ -1,7 +1,7 @@
 """MAVLink messages of the SITL aPad, built from model state. Pure: state in, message out.
 
 What ArduRover sends is the reference, so stock clients (MAVSDK, MAVProxy) read us as a boat:
-custom modes HOLD = 4 and GUIDED = 15, SYS_STATUS health bits with PREARM_CHECK (MAVSDK's
+ArduRover's custom modes (`vocabulary.RoverMode`), SYS_STATUS health bits with PREARM_CHECK (MAVSDK's
 "armable"), battery in SYS_STATUS and BATTERY_STATUS. Frames: GLOBAL_POSITION_INT velocities are
 NED (vx north, vy east), the models' are east/north.
 """
@@ -9,16 +9,13 @@ NED (vx north, vy east), the models' are east/north.
 from __future__ import annotations
 
 import math
+from typing import Any, cast
 
 from apad_sitl.params import PARAMS, ApadParams
 from apad_sitl.primitives import PrimitiveState, SlotState
 from apad_sitl.vehicle import BATTERY_EMPTY_V, VehicleState, wrap_pi
 from apad_sitl.vocabulary import Primitive
 from mavlink_dialect import mavlink
-
-ROVER_MODE_HOLD = 4
-ROVER_MODE_GUIDED = 15
-ROVER_MODE_NAMES = {ROVER_MODE_HOLD: "HOLD", ROVER_MODE_GUIDED: "GUIDED"}
 
 # Sensors a real aPad has and reports healthy (GPS, IMU, compass, thrusters, battery, position
 # control); PREARM_CHECK healthy is what MAVSDK's health.is_armable reads.
@@ -60,6 +57,7 @@ def time_boot_ms(now_us: int) -> int:
 
 
 def heartbeat(mode: int, armed: bool) -> mavlink.MAVLink_message:
+    """`mode` is the custom mode, a `RoverMode`."""
     base_mode = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
     if armed:
         base_mode |= mavlink.MAV_MODE_FLAG_SAFETY_ARMED
@@ -171,7 +169,7 @@ def ftp_reply(request: mavlink.MAVLink_message) -> mavlink.MAVLink_message:
 
     A NAK lets MAVProxy fall back to PARAM_REQUEST_LIST at once instead of timing out.
     """
-    payload = bytes(request.payload)
+    payload = bytes(cast(Any, request).payload)  # FILE_TRANSFER_PROTOCOL's; the stub types the base class
     seq = payload[0] | (payload[1] << 8)
     session, opcode = payload[2], payload[3]
     if opcode in (FTP_OP_TERMINATE_SESSION, FTP_OP_RESET_SESSIONS):

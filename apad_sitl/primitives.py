@@ -26,9 +26,8 @@ from enum import IntEnum
 
 from apad_sitl.params import ApadParams
 from apad_sitl.vehicle import VehicleState
-from apad_sitl.vocabulary import Latch, Primitive, Progress
+from apad_sitl.vocabulary import N_SLOTS, Latch, Primitive, Progress
 
-N_SLOTS = 4
 IN_PROGRESS = Progress.IN_PROGRESS  # == 1, the paper's `goto_status == 1`
 
 

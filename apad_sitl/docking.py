@@ -1,0 +1,195 @@
+"""Docking: the table of aMussel fixes the aPad has heard, and the dialect's Dock and Undock commands.
+
+`MusselTable` keeps the latest AMUSSEL_STATUS of each aMussel as received (degE7, state) and turns
+it into local metres only when a dock asks (most aMussels are never docked by this aPad). It
+validates what it takes, once: an id in 1..MAX_MUSSEL_ID, latitude and longitude in range, a known
+MusselState; anything else is dropped and counted ("invalid:AMUSSEL_STATUS:lat"). `update` takes
+one message; `update_many` takes the columns of a batch decoder.
+
+Dock (slot, aMussel id) and Undock (slot, expected aMussel id or 0) go to the primitives model;
+its refusal travels in COMMAND_ACK.result_param2 and as a STATUSTEXT.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Iterator, Mapping
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from apad_sitl import primitives as prim
+from apad_sitl.commands import ACCEPT, DENIED, Command, Reply, whole
+from apad_sitl.primitives import REFUSAL_TEXT, MusselFix, PrimitiveState, Refusal
+from apad_sitl.vocabulary import N_SLOTS, Latch
+from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
+from mussel_sim.geo import LocalFrame
+from mussel_sim.vocabulary import MusselState
+
+if TYPE_CHECKING:
+    from apad_sitl.endpoint import SitlVehicle
+
+MAX_MUSSEL_ID = 0xFFFF  # AMUSSEL_STATUS.mussel_id is a uint16; 0 is no aMussel
+MAX_LAT_E7 = 90 * 10**7
+MAX_LON_E7 = 180 * 10**7
+KNOWN_STATES = np.array([int(s) for s in MusselState])
+_STATES = frozenset(KNOWN_STATES.tolist())
+STATUS = "AMUSSEL_STATUS"
+
+
+class MusselTable(Mapping[int, MusselFix]):
+    """Latest valid AMUSSEL_STATUS per aMussel id; converted to local metres lazily, only when asked."""
+
+    def __init__(self, frame: LocalFrame, dropped: Counter[str] | None = None) -> None:
+        """`dropped` counts what fails validation, by reason (the vehicle's drop counter)."""
+        self._frame = frame
+        self.dropped: Counter[str] = dropped if dropped is not None else Counter()
+        self._raw: dict[int, tuple[int, int, int]] = {}  # id -> (lat degE7, lon degE7, state)
+        self._fixes: dict[int, MusselFix] = {}
+
+    def update(self, mussel_id: int, lat_e7: int, lon_e7: int, state: int) -> bool:
+        """Take one status; False (and counted) if a field is out of range."""
+        if not 1 <= mussel_id <= MAX_MUSSEL_ID:
+            field = "mussel_id"
+        elif not -MAX_LAT_E7 <= lat_e7 <= MAX_LAT_E7:
+            field = "lat"
+        elif not -MAX_LON_E7 <= lon_e7 <= MAX_LON_E7:
+            field = "lon"
+        elif state not in _STATES:
+            field = "state"
+        else:
+            self._store(mussel_id, lat_e7, lon_e7, state)
+            return True
+        self.dropped[f"invalid:{STATUS}:{field}"] += 1
+        return False
+
+    def update_many(
+        self,
+        ids: NDArray[np.integer[Any]],
+        lat_e7: NDArray[np.integer[Any]],
+        lon_e7: NDArray[np.integer[Any]],
+        state: NDArray[np.integer[Any]],
+    ) -> int:
+        """Take a batch of statuses, each an integer array of shape (n,), in arrival order (a later row
+        of the same aMussel wins). Rows failing validation are dropped and counted, by their first
+        bad field; returns how many rows were taken. ValueError if the arrays are not (n,) integers."""
+        columns = [np.asarray(a) for a in (ids, lat_e7, lon_e7, state)]
+        n = columns[0].shape[0] if columns[0].ndim == 1 else -1
+        for a in columns:
+            if a.shape != (n,) or not np.issubdtype(a.dtype, np.integer):
+                raise ValueError("update_many takes integer arrays of one shape (n,)")
+        i, la, lo, st = columns
+        checks = (
+            ("mussel_id", (i >= 1) & (i <= MAX_MUSSEL_ID)),
+            ("lat", (la >= -MAX_LAT_E7) & (la <= MAX_LAT_E7)),
+            ("lon", (lo >= -MAX_LON_E7) & (lo <= MAX_LON_E7)),
+            ("state", np.isin(st, KNOWN_STATES)),
+        )
+        good = np.ones(n, dtype=bool)
+        for field, ok in checks:
+            bad = int(np.count_nonzero(good & ~ok))
+            if bad:
+                self.dropped[f"invalid:{STATUS}:{field}"] += bad
+            good &= ok
+        rows = zip(i[good].tolist(), la[good].tolist(), lo[good].tolist(), st[good].tolist(), strict=True)
+        taken = 0
+        for row in rows:
+            self._store(*row)
+            taken += 1
+        return taken
+
+    def _store(self, mussel_id: int, lat_e7: int, lon_e7: int, state: int) -> None:
+        raw = (lat_e7, lon_e7, state)
+        if self._raw.get(mussel_id) != raw:
+            self._raw[mussel_id] = raw
+            self._fixes.pop(mussel_id, None)
+
+    def __getitem__(self, mussel_id: int) -> MusselFix:
+        fix = self._fixes.get(mussel_id)
+        if fix is None:
+            lat_e7, lon_e7, state = self._raw[mussel_id]
+            x, y = self._frame.to_local(lat_e7 / 1e7, lon_e7 / 1e7)
+            fix = MusselFix(float(x), float(y), docked=state == MusselState.DOCKED)
+            self._fixes[mussel_id] = fix
+        return fix
+
+    def __iter__(self) -> Iterator[int]:
+        return iter(self._raw)
+
+    def __len__(self) -> int:
+        return len(self._raw)
+
+
+class Docking:
+    """The vehicle's docking part: feeds the aMussel table, runs Dock and Undock, reports the latches."""
+
+    def __init__(self, vehicle: SitlVehicle) -> None:
+        self._v = vehicle
+        self.mussels = MusselTable(vehicle.frame, vehicle.dropped)
+        vehicle.on(mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS, self._on_amussel_status)
+        vehicle.commands.register(MAV_CMD_APAD_DOCK, self._cmd_dock, stateful=True)
+        vehicle.commands.register(MAV_CMD_APAD_UNDOCK, self._cmd_undock, stateful=True)
+
+    def _on_amussel_status(self, msg: Any) -> None:
+        self.mussels.update(msg.mussel_id, msg.lat, msg.lon, msg.state)
+
+    def _cmd_dock(self, cmd: Command) -> Reply:
+        slot, mussel_id = whole(cmd.params[0], 1, N_SLOTS), whole(cmd.params[1], 1, MAX_MUSSEL_ID)
+        if slot is None:
+            return self._refuse("Dock", cmd, Refusal.BAD_SLOT, cmd.field(1))
+        if mussel_id is None:
+            return self._refuse("Dock", cmd, Refusal.BAD_MUSSEL_ID, cmd.field(2))
+        v = self._v
+        new, refusal = prim.dock(v.primitive, slot, mussel_id, v.state.x_m, v.state.y_m, self.mussels, v.params)
+        return self._result("Dock", slot, mussel_id, new, refusal)
+
+    def _cmd_undock(self, cmd: Command) -> Reply:
+        slot, mussel_id = whole(cmd.params[0], 1, N_SLOTS), whole(cmd.params[1], 0, MAX_MUSSEL_ID)
+        if slot is None:
+            return self._refuse("Undock", cmd, Refusal.BAD_SLOT, cmd.field(1))
+        if mussel_id is None:
+            return self._refuse("Undock", cmd, Refusal.BAD_MUSSEL_ID, cmd.field(2))
+        v = self._v
+        if v.geofence is not None and not v.geofence.contains(v.state.x_m, v.state.y_m):
+            v.statustext(mavlink.MAV_SEVERITY_WARNING, f"Undock slot {slot} refused: not over water")
+            v.event("geofence", what="undock", slot=slot)
+            return Reply(DENIED)
+        new, refusal = prim.undock(v.primitive, slot, mussel_id, v.state.x_m, v.state.y_m, v.params)
+        return self._result("Undock", slot, mussel_id, new, refusal)
+
+    def _refuse(self, what: str, cmd: Command, refusal: Refusal, field: str) -> Reply:
+        """A slot or aMussel id that is none: refused like the model refuses, and counted."""
+        slot, mussel_id = (_shown(p) for p in cmd.params[:2])
+        self._warn(what, slot, mussel_id, refusal)
+        return Reply(DENIED, int(refusal), invalid=field)
+
+    def _result(self, what: str, slot: int, mussel_id: int, new: PrimitiveState, refusal: Refusal | None) -> Reply:
+        if refusal is not None:
+            self._warn(what, slot, mussel_id, refusal)
+            return Reply(DENIED, int(refusal))
+        self._v.set_primitive(new)
+        return ACCEPT
+
+    def _warn(self, what: str, slot: int, mussel_id: int, refusal: Refusal) -> None:
+        self._v.statustext(mavlink.MAV_SEVERITY_WARNING,
+                           f"{what} slot {slot} aMussel {mussel_id}: {REFUSAL_TEXT[refusal]}")
+
+    def slots_changed(self, old: PrimitiveState, new: PrimitiveState) -> None:
+        """Log every slot that changed; a latch that reopened while closing is a failed dock."""
+        v = self._v
+        for i, (a, b) in enumerate(zip(old.slots, new.slots, strict=True)):
+            if (a.mussel_id, a.latch, a.charging) == (b.mussel_id, b.latch, b.charging):
+                continue
+            slot = i + 1
+            v.event("slot", slot=slot, mussel_id=b.mussel_id, latch=b.latch.name, charging=b.charging)
+            if a.latch == Latch.CLOSING and b.latch == Latch.OPEN:
+                text = f"Dock slot {slot} aMussel {a.mussel_id} failed: out of reach"
+                v.statustext(mavlink.MAV_SEVERITY_WARNING, text)
+                v.event("dock_failed", slot=slot, mussel_id=a.mussel_id, reason="out of reach")
+
+
+def _shown(value: float) -> int:
+    """A parameter as the refusal text shows it: the whole number, or -1 if it is none."""
+    shown = whole(value, -(2**31), 2**31 - 1)
+    return -1 if shown is None else shown

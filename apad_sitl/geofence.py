@@ -1,0 +1,38 @@
+"""The aPad's geofence: the water area, in its local metres. Go To targets outside it and undocking
+outside it are refused (an aMussel released on land is lost)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from mussel_sim.geo import LocalFrame
+
+
+@dataclass(frozen=True)
+class Geofence:
+    """The water area in the aPad's local metres; a point on the boundary is inside."""
+
+    polygon: Any  # shapely Polygon, prepared
+
+    @staticmethod
+    def of(ring_deg: Sequence[tuple[float, float]], frame: LocalFrame) -> Geofence:
+        """From a (lat, lon) ring; ValueError if it is no simple polygon with an area."""
+        import shapely
+
+        if len(ring_deg) < 3:
+            raise ValueError("a geofence needs at least 3 (lat, lon) vertices")
+        lat = [p[0] for p in ring_deg]
+        lon = [p[1] for p in ring_deg]
+        x, y = frame.to_local(lat, lon)
+        polygon = shapely.Polygon(list(zip(map(float, x), map(float, y), strict=True)))
+        if not polygon.is_valid or polygon.area <= 0:
+            raise ValueError("the geofence polygon is not a simple ring with an area")
+        shapely.prepare(polygon)
+        return Geofence(polygon)
+
+    def contains(self, x_m: float, y_m: float) -> bool:
+        import shapely
+
+        return bool(shapely.intersects_xy(self.polygon, x_m, y_m))

@@ -1,0 +1,143 @@
+"""Modes, arming and the GCS failsafe of the aPad: ArduRover's HOLD and GUIDED, as stock tools expect.
+
+HOLD runs Hold Position; GUIDED takes Go To targets (and holds until one comes). DO_SET_MODE and
+the legacy SET_MODE message switch between them; COMPONENT_ARM_DISARM arms (the aPad boots armed).
+The failsafe: with FS_GCS_ENABLE, a GCS heard once and then silent for FS_GCS_TIMEOUT makes a busy
+aPad hold where it is; a Dock or Undock's latch carries on. Mode and arming are the vehicle's
+state (`vehicle.mode`, `vehicle.armed`); this part changes them.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from apad_sitl import messages as msgs
+from apad_sitl import primitives as prim
+from apad_sitl.commands import ACCEPT, DENY, Command, Reply, invalid, whole
+from apad_sitl.vocabulary import Primitive, Progress, RoverMode
+from mavlink_dialect import mavlink
+from missiontime import US_PER_S
+
+if TYPE_CHECKING:
+    from apad_sitl.endpoint import SitlVehicle
+
+UINT8_MAX = 0xFF
+UINT32_MAX = 0xFFFF_FFFF
+
+
+def mode_name(mode: int) -> str:
+    try:
+        return RoverMode(mode).name
+    except ValueError:
+        return str(mode)
+
+
+class Modes:
+    """The vehicle's mode part; also answers GCS heartbeats (the failsafe's input)."""
+
+    def __init__(self, vehicle: SitlVehicle) -> None:
+        self._v = vehicle
+        self.last_gcs_heartbeat_us: int | None = None  # mission time of the last GCS HEARTBEAT
+        self.failsafe_active = False
+        vehicle.on(mavlink.MAVLINK_MSG_ID_HEARTBEAT, self._on_heartbeat)
+        vehicle.on(mavlink.MAVLINK_MSG_ID_SET_MODE, self._on_set_mode)
+        vehicle.commands.register(mavlink.MAV_CMD_DO_SET_MODE, self._cmd_set_mode, stateful=True)
+        vehicle.commands.register(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, self._cmd_arm, stateful=True)
+
+    # ------------------------------------------------------------------ modes
+
+    def set_mode(self, mode: RoverMode) -> None:
+        v = self._v
+        if mode != v.mode:
+            v.event("mode", mode=mode_name(mode))
+            v.mode = mode
+            v.streams.send_heartbeat()  # consoles show the new mode now, not up to a second later
+
+    def enter_hold(self) -> None:
+        """HOLD mode running Hold Position: at the point already held, else where the hull is.
+
+        A Dock or Undock in progress gives way to Hold, its latch carries on.
+        """
+        v = self._v
+        self.set_mode(RoverMode.HOLD)
+        p = v.primitive
+        if p.kind != Primitive.HOLD:
+            hx, hy = prim.hold_point(p, v.state.x_m, v.state.y_m)
+            v.set_primitive(prim.hold(p, hx, hy))
+
+    def enter_guided(self) -> None:
+        """GUIDED mode; with nothing to do it holds where it is until a target comes."""
+        v = self._v
+        self.set_mode(RoverMode.GUIDED)
+        if v.primitive.kind == Primitive.IDLE:
+            v.set_primitive(prim.hold(v.primitive, v.state.x_m, v.state.y_m))
+
+    def _change_mode(self, base_mode: int, custom_mode: int, custom_field: str) -> Reply:
+        if not base_mode & mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
+            return DENY
+        if custom_mode == RoverMode.HOLD:
+            self.enter_hold()
+            return ACCEPT
+        if custom_mode == RoverMode.GUIDED:
+            self.enter_guided()
+            return ACCEPT
+        return invalid(custom_field)  # not a mode of the aPad
+
+    def _cmd_set_mode(self, cmd: Command) -> Reply:
+        base_mode = whole(cmd.params[0], 0, UINT8_MAX)
+        if base_mode is None:
+            return invalid(cmd.field(1))
+        custom_mode = whole(cmd.params[1], 0, UINT32_MAX)
+        if custom_mode is None:
+            return invalid(cmd.field(2))
+        return self._change_mode(base_mode, custom_mode, cmd.field(2))
+
+    def _on_set_mode(self, msg: Any) -> None:
+        """Legacy SET_MODE message; ArduPilot answers it with a COMMAND_ACK too."""
+        v = self._v
+        if msg.target_system not in (0, v.system_id):
+            return
+        reply = self._change_mode(msg.base_mode, msg.custom_mode, "custom_mode")
+        if reply.invalid is not None:
+            v.count_invalid("SET_MODE", reply.invalid)
+        v.send(msgs.command_ack(mavlink.MAVLINK_MSG_ID_SET_MODE, reply.result, 0,
+                                msg.get_srcSystem(), msg.get_srcComponent()))
+
+    # ------------------------------------------------------------------ arming
+
+    def _cmd_arm(self, cmd: Command) -> Reply:
+        if cmd.params[0] not in (0.0, 1.0):
+            return invalid(cmd.field(1))
+        v = self._v
+        armed = cmd.params[0] == 1.0
+        if armed != v.armed:
+            v.armed = armed
+            v.event("arm" if armed else "disarm")
+            v.streams.send_heartbeat()
+        return ACCEPT
+
+    # ------------------------------------------------------------------ GCS failsafe
+
+    def _on_heartbeat(self, msg: Any) -> None:
+        if msg.type == mavlink.MAV_TYPE_GCS:
+            self.last_gcs_heartbeat_us = self._v.now_us
+
+    def gcs_link_lost(self) -> bool:
+        """True if a GCS was heard and has been silent for FS_GCS_TIMEOUT."""
+        last, v = self.last_gcs_heartbeat_us, self._v
+        return last is not None and v.now_us - last > v.params.fs_gcs_timeout_s * US_PER_S
+
+    def check_failsafe(self) -> None:
+        """Called every physics step while FS_GCS_ENABLE is set."""
+        if not self.gcs_link_lost():
+            self.failsafe_active = False
+            return
+        # Anything but holding: a Go To stops; a Dock or Undock gives way to Hold and its latch carries on,
+        # so docked aMussels stay latched and charging. The GCS re-commands what it wants when it is back.
+        v = self._v
+        busy = v.primitive.kind != Primitive.HOLD and v.primitive.progress == Progress.IN_PROGRESS
+        if busy and not self.failsafe_active:
+            self.failsafe_active = True
+            v.statustext(mavlink.MAV_SEVERITY_WARNING, "GCS failsafe: heartbeat lost, holding")
+            v.event("failsafe", reason="gcs heartbeat lost")
+            self.enter_hold()

@@ -1,0 +1,230 @@
+"""Telemetry of the aPad: periodic streams, SET_MESSAGE_INTERVAL, requested messages, on-change status.
+
+One scheduler task per stream, at its rate in mission time (`DEFAULT_RATES_HZ`, overridable per
+vehicle and at run time by SET_MESSAGE_INTERVAL). REQUEST_MESSAGE (and the older
+REQUEST_AUTOPILOT_CAPABILITIES, GET_HOME_POSITION) sends one message after the ACK.
+PRIMITIVE_STATUS and DOCK_SLOT_STATUS also go out the moment they change (`announce`), so a
+script never waits a stream period to see its command take effect.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
+
+from apad_sitl import messages as msgs
+from apad_sitl.commands import ACCEPT, ACCEPTED, DENY, Command, Reply, invalid, whole
+from apad_sitl.primitives import SlotState
+from apad_sitl.vocabulary import N_SLOTS, Primitive
+from mavlink_dialect import mavlink
+from missiontime import US_PER_S, Scheduler, Task
+from mussel_sim.geo import LocalFrame
+
+if TYPE_CHECKING:
+    from apad_sitl.endpoint import SitlVehicle
+
+# Telemetry streams: message id -> default rate in Hz (0: only on request or SET_MESSAGE_INTERVAL).
+DEFAULT_RATES_HZ: dict[int, float] = {
+    mavlink.MAVLINK_MSG_ID_HEARTBEAT: 1.0,
+    mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: 4.0,
+    mavlink.MAVLINK_MSG_ID_SYS_STATUS: 1.0,
+    mavlink.MAVLINK_MSG_ID_BATTERY_STATUS: 1.0,
+    mavlink.MAVLINK_MSG_ID_PRIMITIVE_STATUS: 2.0,
+    mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS: 1.0,  # every slot at this rate
+    mavlink.MAVLINK_MSG_ID_ATTITUDE: 0.0,
+    mavlink.MAVLINK_MSG_ID_VFR_HUD: 0.0,
+    mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: 0.0,
+    mavlink.MAVLINK_MSG_ID_HOME_POSITION: 0.0,
+    mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION: 0.0,
+}
+MAX_MSG_ID = 2**24 - 1  # MAVLink 2 message ids are 24 bits
+MAX_INTERVAL_US = 2**31 - 1  # an int32 of microseconds (~36 min); longer is a typo, not a rate
+
+
+class DegE7:
+    """Local metres -> degE7 through the frame, remembering the last point (most sends repeat it)."""
+
+    def __init__(self, frame: LocalFrame) -> None:
+        self.frame = frame
+        self._last: tuple[float, float, int, int] = (math.nan, math.nan, 0, 0)
+
+    def remember(self, x_m: float, y_m: float, lat_e7: int, lon_e7: int) -> None:
+        self._last = (x_m, y_m, lat_e7, lon_e7)
+
+    def of(self, x_m: float, y_m: float) -> tuple[int, int]:
+        cx, cy, lat_e7, lon_e7 = self._last
+        if x_m != cx or y_m != cy:
+            lat, lon = self.frame.to_geodetic(x_m, y_m)
+            lat_e7, lon_e7 = round(float(lat) * 1e7), round(float(lon) * 1e7)
+            self._last = (x_m, y_m, lat_e7, lon_e7)
+        return lat_e7, lon_e7
+
+
+class Streams:
+    """The vehicle's telemetry part. `attach` makes the tasks; `stop` ends them."""
+
+    def __init__(self, vehicle: SitlVehicle, rates_hz: Mapping[int, float] | None = None) -> None:
+        self._v = vehicle
+        self.position_e7 = DegE7(vehicle.frame)  # where the aPad is
+        self.target_e7 = DegE7(vehicle.frame)  # where its primitive is going
+        self._rates_hz = dict(DEFAULT_RATES_HZ)
+        for msg_id, hz in (rates_hz or {}).items():
+            if msg_id not in DEFAULT_RATES_HZ:
+                raise ValueError(f"message id {msg_id} is not a telemetry stream of the aPad")
+            self._rates_hz[msg_id] = hz
+        self._interval_us = {mid: hz_to_us(hz) for mid, hz in self._rates_hz.items()}
+        self._scheduler: Scheduler | None = None
+        self._tasks: dict[int, Task] = {}
+        self._sent_primitive: tuple[Any, ...] | None = None
+        self._sent_slots: list[SlotState | None] = [None] * N_SLOTS
+
+        v = vehicle
+        self._senders: dict[int, Callable[[int], None]] = {
+            mavlink.MAVLINK_MSG_ID_HEARTBEAT: lambda now: self.send_heartbeat(),
+            mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: self._send_position,
+            mavlink.MAVLINK_MSG_ID_SYS_STATUS: lambda now: v.send(msgs.sys_status(v.state)),
+            mavlink.MAVLINK_MSG_ID_BATTERY_STATUS: lambda now: v.send(msgs.battery_status(v.state)),
+            mavlink.MAVLINK_MSG_ID_PRIMITIVE_STATUS: self._send_primitive_status,
+            mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS: self._send_all_slots,
+            mavlink.MAVLINK_MSG_ID_ATTITUDE: lambda now: v.send(msgs.attitude(now, v.state)),
+            mavlink.MAVLINK_MSG_ID_VFR_HUD: lambda now: v.send(msgs.vfr_hud(v.state, v.params)),
+            mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: lambda now: v.send(msgs.extended_sys_state()),
+            mavlink.MAVLINK_MSG_ID_HOME_POSITION: self._send_home,
+            mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION: lambda now: v.send(msgs.autopilot_version(v.system_id)),
+        }
+        commands = vehicle.commands
+        commands.register(mavlink.MAV_CMD_REQUEST_MESSAGE, self._cmd_request_message)
+        commands.register(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, self._cmd_set_message_interval)
+        commands.register(mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES, self._cmd_request_autopilot_capabilities)
+        commands.register(mavlink.MAV_CMD_GET_HOME_POSITION, self._cmd_get_home_position)
+
+    # ------------------------------------------------------------------ tasks
+
+    def attach(self, scheduler: Scheduler, start_us: int, name: str) -> None:
+        """One task per stream, first firing at `start_us` if its rate is not 0."""
+        self._scheduler = scheduler
+        for msg_id, sender in self._senders.items():
+            task = scheduler.every(1.0, self._stream_callback(sender), f"{name}.{_msg_name(msg_id)}", start_us)
+            self._tasks[msg_id] = task
+            self._apply_interval(msg_id, task, start_us)
+
+    def stop(self) -> None:
+        for task in self._tasks.values():
+            task.active = False
+
+    def _stream_callback(self, sender: Callable[[int], None]) -> Callable[[int], None]:
+        v = self._v
+
+        def callback(now_us: int) -> None:
+            v.now_us = now_us
+            sender(now_us)
+
+        return callback
+
+    def _apply_interval(self, msg_id: int, task: Task, now_us: int) -> None:
+        interval_us = self._interval_us[msg_id]
+        if interval_us > 0 and not self._v.closed and self._scheduler is not None:
+            self._scheduler.reschedule(
+                task, period_us=interval_us, next_us=max(now_us, min(task.next_us, now_us + interval_us)), active=True
+            )
+        else:
+            task.active = False
+
+    # ------------------------------------------------------------------ commands
+
+    def _cmd_request_message(self, cmd: Command) -> Reply:
+        msg_id = whole(cmd.params[0], 0, MAX_MSG_ID)
+        if msg_id is None:
+            return invalid(cmd.field(1))
+        if msg_id not in self._senders:
+            return DENY  # a message, but not one the aPad sends
+        if msg_id == mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS:
+            slot = whole(cmd.params[1], 0, N_SLOTS)  # param2 picks one slot; 0 sends all four
+            if slot is None:
+                return invalid(cmd.field(2))
+            if slot:
+                return Reply(ACCEPTED, then=lambda: self.send_slot(slot))
+        return Reply(ACCEPTED, then=lambda: self._senders[msg_id](self._v.now_us))
+
+    def _cmd_request_autopilot_capabilities(self, cmd: Command) -> Reply:
+        return Reply(ACCEPTED, then=lambda: self._senders[mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION](self._v.now_us))
+
+    def _cmd_get_home_position(self, cmd: Command) -> Reply:
+        return Reply(ACCEPTED, then=lambda: self._senders[mavlink.MAVLINK_MSG_ID_HOME_POSITION](self._v.now_us))
+
+    def _cmd_set_message_interval(self, cmd: Command) -> Reply:
+        msg_id = whole(cmd.params[0], 0, MAX_MSG_ID)
+        if msg_id is None:
+            return invalid(cmd.field(1))
+        if msg_id not in self._senders:
+            return DENY
+        interval = cmd.params[1]
+        if interval == -1:  # MAVLink: stop sending it
+            interval_us = 0
+        elif interval == 0:  # MAVLink: back to the default rate
+            interval_us = hz_to_us(self._rates_hz[msg_id])
+        elif math.isfinite(interval) and 1 <= interval <= MAX_INTERVAL_US:
+            interval_us = int(interval)
+        else:
+            return invalid(cmd.field(2))
+        self._interval_us[msg_id] = interval_us
+        task = self._tasks.get(msg_id)
+        if task is not None:
+            self._apply_interval(msg_id, task, self._v.now_us)
+        return ACCEPT
+
+    # ------------------------------------------------------------------ sending
+
+    def send_heartbeat(self) -> None:
+        v = self._v
+        if not v.closed:
+            v.send(msgs.heartbeat(v.mode, v.armed))
+
+    def _send_position(self, now_us: int) -> None:
+        v = self._v
+        lat_e7, lon_e7 = self.position_e7.of(v.state.x_m, v.state.y_m)
+        v.send(msgs.global_position_int(now_us, lat_e7, lon_e7, v.state))
+
+    def _send_home(self, now_us: int) -> None:
+        v = self._v
+        v.send(msgs.home_position(now_us, round(v.home_lat_deg * 1e7), round(v.home_lon_deg * 1e7)))
+
+    def _primitive_key(self) -> tuple[Any, ...]:
+        p = self._v.primitive
+        return (p.kind, p.progress, p.target_x_m, p.target_y_m, p.slot, p.mussel_id)
+
+    def _send_primitive_status(self, now_us: int) -> None:
+        v = self._v
+        p = v.primitive
+        lat_e7, lon_e7 = (0, 0) if p.kind == Primitive.IDLE else self.target_e7.of(p.target_x_m, p.target_y_m)
+        v.send(msgs.primitive_status(now_us, p, lat_e7, lon_e7, v.state))
+        self._sent_primitive = self._primitive_key()
+
+    def send_slot(self, slot: int) -> None:
+        v = self._v
+        s = v.primitive.slot_state(slot)
+        v.send(msgs.dock_slot_status(v.now_us, slot, s))
+        self._sent_slots[slot - 1] = s
+
+    def _send_all_slots(self, now_us: int) -> None:
+        for slot in range(1, N_SLOTS + 1):
+            self.send_slot(slot)
+
+    def announce(self) -> None:
+        """On-change telemetry: every slot that differs from what was last sent, then the primitive."""
+        for i, s in enumerate(self._v.primitive.slots):
+            sent = self._sent_slots[i]
+            if sent is None or (sent.mussel_id, sent.latch, sent.charging) != (s.mussel_id, s.latch, s.charging):
+                self.send_slot(i + 1)
+        if self._primitive_key() != self._sent_primitive:
+            self._send_primitive_status(self._v.now_us)
+
+
+def hz_to_us(hz: float) -> int:
+    return round(US_PER_S / hz) if hz > 0 else 0
+
+
+def _msg_name(msg_id: int) -> str:
+    cls = mavlink.mavlink_map.get(msg_id)
+    return cls.msgname if cls is not None else str(msg_id)
