@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields, replace
+from typing import Any
 
 
 class ParamError(ValueError):
@@ -107,4 +108,5 @@ def with_param(params: ApadParams, name: str, value: float) -> ApadParams:
     if spec.integral and math.isfinite(value) and abs(value - round(value)) <= FLOAT32_EPS * max(abs(value), 1.0):
         value = float(round(value))
     _check(spec, value)
-    return replace(params, **{spec.field: int(value) if spec.integral else value})
+    changes: dict[str, Any] = {spec.field: int(value) if spec.integral else value}
+    return replace(params, **changes)
