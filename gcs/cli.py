@@ -1,50 +1,65 @@
-"""`vil`: the command line. Each subcommand's module adds its arguments and runs it."""
+"""`vil`: the command line. Each subcommand's module adds its arguments and runs it.
+
+Only the chosen subcommand's module is imported (the others bring MAVLink, numpy and Textual
+with them), so `vil --help` answers at once.
+"""
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
 from collections.abc import Callable, Sequence
-
-from apad_sitl import serve
-from gcs.console import cli as console_cli
-from gcs.mission import run_cli
-from gcs.records import report
+from typing import NamedTuple
 
 Runner = Callable[[argparse.Namespace], int]
 
 
-# name, one-line help, description, add_arguments, runner: the whole command line in one table.
-COMMANDS: tuple[tuple[str, str, str | None, Callable[[argparse.ArgumentParser], None], Runner], ...] = (
-    ("run", "headless mission(s) in lockstep; no scenario: the paper's Table II reproduction",
-     run_cli.__doc__, run_cli.add_arguments, run_cli.run),
-    ("sitl", "the SITL aPad alone, in real time, on UDP/TCP/serial",
-     "Run the SITL kinematic aPad as a MAVLink vehicle in real time.", serve.add_arguments, serve.run),
-    ("gcs", "the operator console, live against an aPad (--sitl embeds one)",
-     console_cli.__doc__, console_cli.add_gcs_arguments, console_cli.run_gcs),
-    ("replay", "the console driven from a recorded run",
-     "Replay a recorded run in the console: play, pause, speed, seek.",
-     console_cli.add_replay_arguments, console_cli.run_replay),
-    ("report", "plots, HTML summary and GeoJSON of a recorded run", report.__doc__, report.add_arguments, report.run),
+class Command(NamedTuple):
+    name: str
+    summary: str  # one line in `vil --help`
+    module: str  # defines the two functions below; its docstring is the command's description
+    add_arguments: str
+    run: str
+
+
+# The whole command line in one table.
+COMMANDS = (
+    Command("run", "headless mission(s) in lockstep; no scenario: the paper's Table II reproduction",
+            "gcs.mission.run_cli", "add_arguments", "run"),
+    Command("sitl", "the SITL aPad alone, in real time, on UDP/TCP/serial", "apad_sitl.serve", "add_arguments", "run"),
+    Command("gcs", "the operator console, live against an aPad (--sitl embeds one)",
+            "gcs.console.cli", "add_gcs_arguments", "run_gcs"),
+    Command("replay", "the console driven from a recorded run", "gcs.console.cli", "add_replay_arguments",
+            "run_replay"),
+    Command("report", "plots, HTML summary and GeoJSON of a recorded run", "gcs.records.report", "add_arguments",
+            "run"),
 )
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="vil",
         description="Vehicle-in-the-loop ground-control station for an aPad / aMussel marine robot swarm.",
+        epilog="vil COMMAND --help explains each command.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for name, summary, description, add_arguments, runner in COMMANDS:
-        command = sub.add_parser(name, help=summary, description=description,
+    chosen = next((a for a in argv if not a.startswith("-")), None)
+    for command in COMMANDS:
+        if command.name != chosen:
+            sub.add_parser(command.name, help=command.summary)
+            continue
+        module = importlib.import_module(command.module)
+        parser_ = sub.add_parser(command.name, help=command.summary, description=module.__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-        add_arguments(command)
-        command.set_defaults(runner=runner)
+        getattr(module, command.add_arguments)(parser_)
+        parser_.set_defaults(runner=getattr(module, command.run))
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    args = build_parser(argv).parse_args(argv)
     runner: Runner = args.runner
     return runner(args)
 
