@@ -49,6 +49,13 @@ class Codec:
         self.stats.sent += 1
         return bytes(buf)
 
+    def next_seq(self, n: int) -> int:
+        """Take `n` consecutive sequence numbers for frames packed elsewhere (`hot`); returns the first."""
+        first = int(self.mav.seq)
+        self.mav.seq = (first + n) % 256
+        self.stats.sent += n
+        return first
+
     def enable_signing(
         self, key: bytes, link_id: int, ticks: Callable[[], int], allow_unsigned_ids: Collection[int] = ()
     ) -> None:
