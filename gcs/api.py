@@ -24,7 +24,7 @@ from gcs.link.registry import VehicleView
 from gcs.link.router import Link
 from gcs.link.telemetry import Location, SlotView
 from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
-from missiontime import Clock
+from missiontime import Clock, seconds_to_us
 from mussel_sim.vocabulary import MusselCommand
 
 __all__ = ["ApadApi", "CommandError", "GeofenceError", "Location", "MusselView", "Progress", "UnknownMussel"]
@@ -93,7 +93,7 @@ class ApadApi:
         """Ask the aPad for each message id at a rate (Hz; 0 stops it), as stock GCSs do."""
         sysid = self.apad(apad_id).system_id
         for msg_id, hz in rates_hz.items():
-            interval_us = round(1e6 / hz) if hz > 0 else -1
+            interval_us = seconds_to_us(1.0 / hz) if hz > 0 else -1
             self.link.commands.send_long(sysid, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, (msg_id, interval_us))
 
     def position(self, apad_id: int | None = None) -> Location:

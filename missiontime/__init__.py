@@ -10,7 +10,10 @@ from missiontime.clocks import (
     Task,
     VirtualClock,
     WallClock,
+    mm_ss,
     seconds_to_us,
+    unix_time_us,
+    us_to_s,
 )
 
 __all__ = [
@@ -23,5 +26,8 @@ __all__ = [
     "Task",
     "VirtualClock",
     "WallClock",
+    "mm_ss",
     "seconds_to_us",
+    "unix_time_us",
+    "us_to_s",
 ]

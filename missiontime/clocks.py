@@ -27,6 +27,21 @@ def seconds_to_us(t_s: float) -> int:
     return round(t_s * US_PER_S)
 
 
+def us_to_s(t_us: int) -> float:
+    return t_us / US_PER_S
+
+
+def unix_time_us() -> int:
+    """Wall-clock Unix time now: the epoch of a live run's logs (mission time 0 is then)."""
+    return int(time.time() * US_PER_S)
+
+
+def mm_ss(t_s: float) -> str:
+    """Mission time as the console and the logs show it: minutes:seconds, whole seconds."""
+    t = max(int(t_s), 0)
+    return f"{t // 60:02d}:{t % 60:02d}"
+
+
 @dataclass(eq=False)
 class Task:
     """A callback run every `period_us` of mission time, first at `next_us`.
@@ -247,7 +262,7 @@ class PacedClock(VirtualClock):
         target_us = self.now_us + seconds_to_us(max(dt_s, 0.0))
         while True:
             self.advance_to(min(target_us, self.now_us + 100_000))
-            ahead_s = self.now_us / 1e6 / self.speed - (time.monotonic() - self._wall0)
+            ahead_s = us_to_s(self.now_us) / self.speed - (time.monotonic() - self._wall0)
             if ahead_s > 0:
                 time.sleep(ahead_s)
             if self.now_us >= target_us:

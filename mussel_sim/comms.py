@@ -27,7 +27,7 @@ import numpy as np
 
 from mavlink_dialect import Codec, hot, mavlink
 from mavlink_dialect.transport import Transport
-from missiontime import Scheduler, Task
+from missiontime import US_PER_S, Scheduler, Task
 from mussel_sim.battery import to_millivolts
 from mussel_sim.fleet import FleetInputs, FleetParams, FleetState, StepEvents, step
 from mussel_sim.geo import LocalFrame
@@ -38,7 +38,6 @@ from mussel_sim.vocabulary import MusselCommand
 
 FLEET_SYSTEM_ID = 251
 FLEET_COMPONENT_ID = 25
-US_PER_S = 1_000_000
 DEG_E7 = 1e7
 STATUSTEXT_MAX = 50
 # DOCK_SLOT_STATUS latch values that hold an aMussel (the aPad's words, read here as wire values).
@@ -200,21 +199,20 @@ class FleetRunner:
         src = int(msg.get_srcSystem())
         if src == self.codec.system_id:
             return  # our own traffic echoed back by a router
-        kind = msg.get_type()
-        if kind == "GLOBAL_POSITION_INT":
+        if isinstance(msg, mavlink.MAVLink_global_position_int_message):
             if self.config.apad_ids is None or src in self.config.apad_ids:
                 self.apad_positions[src] = (msg.lat / DEG_E7, msg.lon / DEG_E7)
-        elif kind == "DOCK_SLOT_STATUS":
-            self._slot_status(src, int(msg.slot), int(msg.mussel_id), int(msg.latch))
-        elif kind == "AMUSSEL_COMMAND":
-            mussel_id = int(msg.mussel_id)
+        elif isinstance(msg, mavlink.MAVLink_dock_slot_status_message):
+            self._slot_status(src, msg.slot, msg.mussel_id, msg.latch)
+        elif isinstance(msg, mavlink.MAVLink_amussel_command_message):
+            mussel_id = msg.mussel_id
             if mussel_id in self._ids:
                 if msg.command == MusselCommand.SURFACE:
                     self._surface.append(mussel_id)
                 elif msg.command == MusselCommand.SINK:
                     self._sink.append(mussel_id)
-        elif kind == "AMUSSEL_STATUS" and msg.simulated == 0:
-            mussel_id = int(msg.mussel_id)
+        elif isinstance(msg, mavlink.MAVLink_amussel_status_message) and msg.simulated == 0:
+            mussel_id = msg.mussel_id
             if mussel_id in self._ids:
                 raise MusselIdCollision(mussel_id, src)
             self.real_mussel_ids.add(mussel_id)

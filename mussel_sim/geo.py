@@ -66,3 +66,20 @@ def planar_distance_m(
     dx = np.asarray(x2_m, float) - np.asarray(x1_m, float)
     dy = np.asarray(y2_m, float) - np.asarray(y1_m, float)
     return np.hypot(dx, dy)
+
+
+# Metres per degree of latitude, WGS84, at mid latitudes; for pictures only (see `flat_m`).
+M_PER_DEG_LAT = 110_574.0
+
+
+def flat_m(
+    lat_deg: ArrayLike, lon_deg: ArrayLike, lat0_deg: float, lon0_deg: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """(x_m east, y_m north) by the equirectangular approximation around (lat0, lon0).
+
+    For drawing maps and plots: cheap per frame and good to a fraction of a percent over a bay.
+    Anything that decides (ranges, costs, geofences) uses `LocalFrame` or `distance_m`.
+    """
+    kx = M_PER_DEG_LAT * np.cos(np.radians(lat0_deg))
+    return (np.asarray(lon_deg, float) - lon0_deg) * kx, (np.asarray(lat_deg, float) - lat0_deg) * M_PER_DEG_LAT
+

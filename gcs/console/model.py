@@ -20,6 +20,7 @@ from gcs.link.fleet_table import MusselTable
 from gcs.link.registry import VehicleRegistry, VehicleView
 from gcs.link.telemetry import DEG_E7, PrimitiveView
 from gcs.records.events import Event
+from missiontime import mm_ss
 from mussel_sim.vocabulary import MusselState
 
 TRACE_SAMPLES = 300  # the aPad's recent trace: this many 1 Hz samples
@@ -325,9 +326,4 @@ def _event_text(ev: Event) -> str:
         body = f"{ev.kind} {f.get('strategy', '')} {f['route']}"
     else:
         body = " ".join([ev.kind, *(f"{k}={v}" for k, v in f.items())])
-    return f"{_clock(ev.t_s)} {body}"
-
-
-def _clock(t_s: float) -> str:
-    t = int(t_s)
-    return f"{t // 60:02d}:{t % 60:02d}"
+    return f"{mm_ss(ev.t_s)} {body}"

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import queue
 import threading
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -29,7 +28,7 @@ from gcs.mission.loop import EnergySharingLoop, LoopControl
 from gcs.mission.scenario import Scenario
 from gcs.records.events import Event
 from gcs.world import MISSION_TELEMETRY_HZ, LinkOptions, World, build_world
-from missiontime import Clock, PacedClock, WallClock
+from missiontime import Clock, PacedClock, WallClock, unix_time_us, us_to_s
 from mussel_sim.placement import load_area
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
@@ -82,7 +81,7 @@ def open_world(config: ConsoleConfig) -> World:
         raise ValueError("give exactly one of connect or sitl")
     clock: Clock = WallClock() if config.speed is None else PacedClock(config.speed)
     options = LinkOptions(connect=config.connect, sitl_medium=config.sitl or "memory")
-    return build_world(config.scenario, clock, config.out_dir, options, epoch_us=int(time.time() * 1e6))
+    return build_world(config.scenario, clock, config.out_dir, options, epoch_us=unix_time_us())
 
 
 class ConsoleRunner:
@@ -161,7 +160,7 @@ class ConsoleRunner:
         model.strategy = s.mission.collect_strategy  # until the loop says otherwise
         self._model = model
         clock.scheduler.every(PUBLISH_PERIOD_S, self._publish, "console.publish", clock.now_us)
-        clock.scheduler.every(SAMPLE_PERIOD_S, lambda now_us: model.sample(now_us / 1e6), "console.sample",
+        clock.scheduler.every(SAMPLE_PERIOD_S, lambda now_us: model.sample(us_to_s(now_us)), "console.sample",
                               clock.now_us)
         if not self._wait_for_apad(world):
             return
@@ -289,7 +288,7 @@ class ConsoleRunner:
             return
         self._published = key
         notice = f"error: {self.error}" if self.error else self._notice
-        self.snapshot = model.snapshot(now_us / 1e6, paused=self.control.paused, pending_strategy=pending,
+        self.snapshot = model.snapshot(us_to_s(now_us), paused=self.control.paused, pending_strategy=pending,
                                        notice=notice)
 
 

@@ -13,6 +13,8 @@ from textual.widgets import DataTable, Static
 
 from gcs.console.canvas import BrailleCanvas, scale_to
 from gcs.console.model import MarkerColour, Snapshot
+from missiontime import mm_ss
+from mussel_sim.geo import flat_m
 from mussel_sim.vocabulary import MusselState
 
 # Explicit hex colours: named red and magenta look alike in exports (NOTES.md).
@@ -24,13 +26,7 @@ PALETTE = [AXIS, GREEN, RED, GREY, PURPLE, OUTLINE, APAD, TRACE, BLUE]
 _MARKER_INDEX = {k: PALETTE.index(v) for k, v in MARKER_COLOURS.items()}
 LEGEND = (f"[{GREEN}]●[/] charged  [{RED}]●[/] pool  [{PURPLE}]●[/] docked  [{GREY}]●[/] depleted  "
           f"[{APAD}]◆[/] aPad")
-M_PER_DEG_LAT = 110_574.0
 AXIS_STYLE = Style(color=AXIS)
-
-
-def mm_ss(t_s: float) -> str:
-    t = max(int(t_s), 0)
-    return f"{t // 60:02d}:{t % 60:02d}"
 
 
 class CachedLines(Widget):
@@ -73,10 +69,9 @@ class MapView(CachedLines):
             canvas.text(1, 0, "waiting for positions", 0)
             return canvas.strips()
         lat0, lon0 = float(np.nanmean(lat)), float(np.nanmean(lon))
-        kx = M_PER_DEG_LAT * np.cos(np.radians(lat0))
 
         def local(la: NDArray[np.float64], lo: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
-            return (np.asarray(lo) - lon0) * kx, (np.asarray(la) - lat0) * M_PER_DEG_LAT
+            return flat_m(la, lo, lat0, lon0)
 
         xs, ys = local(lat, lon)
         x_lo, x_hi, y_lo, y_hi = np.nanmin(xs), np.nanmax(xs), np.nanmin(ys), np.nanmax(ys)

@@ -19,9 +19,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mavlink_dialect.transport import UdpTransport
-from missiontime import Clock, Task, seconds_to_us
+from missiontime import US_PER_S, Clock, Task, seconds_to_us, us_to_s
 
-_IDLE_PERIOD_US = 3600 * 1_000_000  # the delivery task sleeps this long when nothing is held
+_IDLE_PERIOD_US = 3600 * US_PER_S  # the delivery task sleeps this long when nothing is held
 
 
 @dataclass(frozen=True)
@@ -104,7 +104,7 @@ class FaultProxy:
         self.gcs_side = _Side(self, UdpTransport(listen_host, listen_port, listen=True), to_vehicle=True)
         self.vehicle_side = _Side(self, UdpTransport(*vehicle_addr, listen=False), to_vehicle=False)
         sched = clock.scheduler
-        self._task: Task = sched.every(_IDLE_PERIOD_US / 1e6, self._deliver_due, "faultproxy.deliver",
+        self._task: Task = sched.every(us_to_s(_IDLE_PERIOD_US), self._deliver_due, "faultproxy.deliver",
                                        clock.now_us + _IDLE_PERIOD_US)
         sched.add_poller(self.gcs_side)
         sched.add_poller(self.vehicle_side)

@@ -16,7 +16,7 @@ import numpy as np
 from apad_sitl.vocabulary import Latch
 from gcs.mission.actions import LoopActions
 from gcs.mission.control import EndReason, LoopControl, LoopSettings, MissionEnded, Phase
-from gcs.mission.planner import CostWeights, PlanInput, plan
+from gcs.mission.planner import CollectStrategy, CostWeights, PlanInput, plan
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
 __all__ = ["EndReason", "EnergySharingLoop", "LoopControl", "LoopSettings", "MissionEnded", "Phase"]
@@ -81,7 +81,7 @@ class EnergySharingLoop(LoopActions):
         mission = self.settings.mission
 
         def pool_full() -> bool:
-            if self.status.strategy == "none" or self._too_late_to_call_up():
+            if self.status.strategy == CollectStrategy.NONE or self._too_late_to_call_up():
                 return False
             need = min(mission.min_pool, len(self._free_slots()))
             return need > 0 and len(self._candidates()) >= need

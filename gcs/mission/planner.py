@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from enum import StrEnum
 
 import numpy as np
 from numpy.typing import NDArray
@@ -52,8 +53,23 @@ def energy_cost(weights: CostWeights, inp: PlanInput) -> NDArray[np.float64]:
 
 Strategy = Callable[[PlanInput, CostWeights], Plan]
 STRATEGIES: dict[str, Strategy] = {}
-COLLECT = ("greedy", "cautious", "weighted", "none")
-REDEPLOY = ("greedy",)
+
+
+class CollectStrategy(StrEnum):
+    """Which aMussels to collect, in which order (the paper's Greedy and Cautious, and ours)."""
+
+    GREEDY = "greedy"
+    CAUTIOUS = "cautious"
+    WEIGHTED = "weighted"
+    NONE = "none"  # the baseline: never collect
+
+
+class RedeployStrategy(StrEnum):
+    GREEDY = "greedy"  # nearest original position next
+
+
+COLLECT = tuple(CollectStrategy)
+REDEPLOY = tuple(RedeployStrategy)
 
 
 def strategy(name: str) -> Callable[[Strategy], Strategy]:
@@ -89,7 +105,7 @@ def _sequence(inp: PlanInput, step_cost: Callable[[float, float, NDArray[np.bool
     return plan
 
 
-@strategy("greedy")
+@strategy(CollectStrategy.GREEDY)
 def greedy(inp: PlanInput, weights: CostWeights) -> Plan:
     """Nearest next: the closest remaining aMussel from where the aPad will be.
 
@@ -98,13 +114,13 @@ def greedy(inp: PlanInput, weights: CostWeights) -> Plan:
     return _sequence(inp, lambda lat, lon, taken: distance_cost(CostWeights(1.0), lat, lon, inp))
 
 
-@strategy("cautious")
+@strategy(CollectStrategy.CAUTIOUS)
 def cautious(inp: PlanInput, weights: CostWeights) -> Plan:
     """Lowest battery next, regardless of movement: protect the aMussels most in need."""
     return _sequence(inp, lambda lat, lon, taken: -energy_cost(CostWeights(energy_per_frac=1.0), inp))
 
 
-@strategy("weighted")
+@strategy(CollectStrategy.WEIGHTED)
 def weighted(inp: PlanInput, weights: CostWeights) -> Plan:
     """Distance and energy costs with the scenario's scale factors (more energy weight = more cautious)."""
     return _sequence(
@@ -113,7 +129,7 @@ def weighted(inp: PlanInput, weights: CostWeights) -> Plan:
     )
 
 
-@strategy("none")
+@strategy(CollectStrategy.NONE)
 def no_charging(inp: PlanInput, weights: CostWeights) -> Plan:
     """The baseline: never collect."""
     return {apad_id: [] for apad_id in inp.apads}

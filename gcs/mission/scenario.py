@@ -13,6 +13,9 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from gcs.mission.planner import COLLECT, REDEPLOY, CollectStrategy, RedeployStrategy
+from mussel_sim.battery import CHARGE_PROFILES, DISCHARGE_PROFILES
+
 MISSIONS_DIR = Path(__file__).resolve().parents[2] / "missions"
 _DURATION = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*(s|m|min|h)?\s*$")
 _UNIT_S = {None: 1.0, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0}
@@ -76,8 +79,8 @@ class MissionConfig:
     pool_threshold: float  # below this battery an aMussel is a charging candidate
     charged_threshold: float  # docked aMussels are released above this
     min_pool: int  # idle until this many candidates
-    collect_strategy: str
-    redeploy_strategy: str
+    collect_strategy: str  # a CollectStrategy (a str: files, flags and results name it so)
+    redeploy_strategy: str  # a RedeployStrategy
     distance_scale: float  # planner cost scale factors
     energy_scale: float
 
@@ -107,7 +110,7 @@ class Scenario:
     ) -> Scenario:
         mission = self.mission
         if strategy is not None:
-            mission = replace(mission, collect_strategy=strategy)
+            mission = replace(mission, collect_strategy=CollectStrategy(strategy))
         if duration_s is not None:
             mission = replace(mission, duration_s=duration_s)
         if theta is not None:
@@ -210,9 +213,6 @@ def load_scenario(path: str | Path) -> Scenario:
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
 
-    from gcs.mission.planner import COLLECT, REDEPLOY
-    from mussel_sim.battery import CHARGE_PROFILES, DISCHARGE_PROFILES
-
     root = _Table(path, data, "")
     top = root.sub("scenario")
     name = top.text("name", path.stem)
@@ -226,8 +226,8 @@ def load_scenario(path: str | Path) -> Scenario:
         pool_threshold=m.number("pool_threshold", 0.8, lo=0.0, hi=1.0),
         charged_threshold=m.number("charged_threshold", 0.99, lo=0.0, hi=1.0),
         min_pool=m.integer("min_pool", 4, lo=1, hi=4),
-        collect_strategy=m.text("collect_strategy", "cautious", COLLECT),
-        redeploy_strategy=m.text("redeploy_strategy", "greedy", REDEPLOY),
+        collect_strategy=CollectStrategy(m.text("collect_strategy", "cautious", COLLECT)),
+        redeploy_strategy=RedeployStrategy(m.text("redeploy_strategy", "greedy", REDEPLOY)),
         distance_scale=m.number("distance_scale", 1.0, lo=0.0),
         energy_scale=m.number("energy_scale", 0.0, lo=0.0),
     )

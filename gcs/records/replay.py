@@ -25,6 +25,7 @@ from gcs.link.router import GCS_SYSTEM_ID
 from gcs.mission.scenario import MISSIONS_DIR, Scenario, ScenarioError, load_scenario
 from gcs.records.events import Event
 from mavlink_dialect import Codec, mavlink, tlog
+from missiontime import us_to_s
 from mussel_sim.placement import load_area
 
 REPO_MISSIONS = MISSIONS_DIR
@@ -135,7 +136,7 @@ def load_replay(path: str | Path, scenario: str | Path | None = None) -> Replay:
         model = ConsoleModel(registry, found.apad.system_id, found.mission.pool_threshold,
                              found.mission.duration_s, str(files.folder), ids, outline)
     else:
-        model = ConsoleModel(registry, apad_id, 0.8, (stream[-1][0] - t0_us) / 1e6, str(files.folder), ids)
+        model = ConsoleModel(registry, apad_id, 0.8, us_to_s(stream[-1][0] - t0_us), str(files.folder), ids)
     events = read_events(files.events)
     frames: list[Snapshot] = []
     next_sample_s = 0.0
@@ -152,17 +153,17 @@ def load_replay(path: str | Path, scenario: str | Path | None = None) -> Replay:
             next_sample_s += 1.0
 
     for stamp, msg in stream:
-        t_s = (stamp - t0_us) / 1e6
+        t_s = us_to_s(stamp - t0_us)
         if t_s >= next_sample_s:
             sample_until(t_s - 1e-9)
         record = telemetry.read(msg)  # what the live link read from the same message
         if record is not None and not isinstance(record, telemetry.Rejected | telemetry.CommandAck):
             registry.apply(msg.get_srcSystem(), record, stamp - t0_us)
     end_s = stream[-1][0] - t0_us
-    sample_until(end_s / 1e6)
+    sample_until(us_to_s(end_s))
     for ev in events[e:]:
         model.event(ev)
-    frames.append(model.snapshot(end_s / 1e6))
+    frames.append(model.snapshot(us_to_s(end_s)))
     return Replay(frames, str(files.folder))
 
 

@@ -26,9 +26,9 @@ from gcs.console.model import Snapshot
 from gcs.mission.results import PAPER_TABLE_II
 from gcs.mission.scenario import ScenarioError
 from gcs.records.replay import ReplayError, load_replay, run_files
+from mussel_sim.geo import flat_m
 from mussel_sim.vocabulary import MusselState
 
-M_PER_DEG_LAT = 110_574.0
 GREEN, RED, PURPLE, GREY, BLUE, ORANGE = "#16a34a", "#dc2626", "#a21caf", "#6b7280", "#2563eb", "#ea580c"
 
 
@@ -148,10 +148,6 @@ def _uptime_png(snap: Snapshot, path: Path, title: str) -> Path:
     return _save(fig, path)
 
 
-def _local(lat: np.ndarray, lon: np.ndarray, lat0: float, lon0: float) -> tuple[np.ndarray, np.ndarray]:
-    return (lon - lon0) * M_PER_DEG_LAT * np.cos(np.radians(lat0)), (lat - lat0) * M_PER_DEG_LAT
-
-
 def _track(frames: list[Snapshot]) -> tuple[np.ndarray, np.ndarray]:
     lat = np.array([f.apad_lat_deg if f.apad_lat_deg is not None else np.nan for f in frames])
     lon = np.array([f.apad_lon_deg if f.apad_lon_deg is not None else np.nan for f in frames])
@@ -178,14 +174,14 @@ def _track_png(frames: list[Snapshot], path: Path, title: str) -> Path:
     lat0, lon0 = float(np.nanmean(every[0])), float(np.nanmean(every[1]))
     fig, ax = _figure(8.0, 5.0)
     if last.outline_lat_deg.size:
-        ox, oy = _local(last.outline_lat_deg, last.outline_lon_deg, lat0, lon0)
+        ox, oy = flat_m(last.outline_lat_deg, last.outline_lon_deg, lat0, lon0)
         ax.plot(ox, oy, color=GREY, lw=1.5, label="area")
-    mx, my = _local(m_lat, m_lon, lat0, lon0)
+    mx, my = flat_m(m_lat, m_lon, lat0, lon0)
     ax.scatter(mx, my, s=30, color=GREEN, edgecolor="black", lw=0.5, zorder=3, label="aMussel start")
     for i, mussel in enumerate(last.mussel_ids):
         if np.isfinite(mx[i]):
             ax.annotate(str(mussel), (mx[i], my[i]), textcoords="offset points", xytext=(4, 4), fontsize=7)
-    tx, ty = _local(lat, lon, lat0, lon0)
+    tx, ty = flat_m(lat, lon, lat0, lon0)
     ax.plot(tx, ty, color=BLUE, lw=1.2, label="aPad track")
     if tx.size:
         ax.plot(tx[:1], ty[:1], "o", color=BLUE, label="aPad start")
