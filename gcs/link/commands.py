@@ -9,14 +9,13 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from gcs.link.telemetry import CommandAck
 from mavlink_dialect import mavlink
 from missiontime import Clock, seconds_to_us
 
-if TYPE_CHECKING:
-    from gcs.link.router import Link
+Send = Callable[[Any], None]  # encode a message as the GCS and send it to the vehicles
 
 BACKOFF = 1.5  # each retransmission waits this much longer than the attempt before
 POLL_S = 0.02  # how often a wait looks again (mission time)
@@ -46,8 +45,8 @@ class _Pending:
 
 
 class CommandClient:
-    def __init__(self, link: Link, clock: Clock) -> None:
-        self._link = link
+    def __init__(self, send: Send, clock: Clock) -> None:
+        self._send = send
         self._clock = clock
         self._pending: list[_Pending] = []
 
@@ -91,7 +90,7 @@ class CommandClient:
             wait_s = timeout_s
             for attempt in range(retries + 1):
                 pending.ack = None
-                self._link.send(build(attempt))
+                self._send(build(attempt))
                 deadline = clock.now_us + seconds_to_us(wait_s)
                 clock.sleep(0)
                 while True:

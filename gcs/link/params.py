@@ -2,19 +2,16 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
-from gcs.link.commands import AUTOPILOT, POLL_S
+from gcs.link.commands import AUTOPILOT, POLL_S, Send
+from gcs.link.registry import VehicleRegistry
 from mavlink_dialect import mavlink
 from missiontime import Clock, seconds_to_us
 
-if TYPE_CHECKING:
-    from gcs.link.router import Link
-
 
 class ParamClient:
-    def __init__(self, link: Link, clock: Clock) -> None:
-        self._link = link
+    def __init__(self, send: Send, registry: VehicleRegistry, clock: Clock) -> None:
+        self._send = send
+        self._registry = registry
         self._clock = clock
 
     def set(
@@ -26,7 +23,7 @@ class ParamClient:
         A vehicle that refuses a value answers with the old one: that is a `ValueError` here; no
         answer after `retries + 1` attempts is a `TimeoutError`.
         """
-        view = self._link.registry.vehicles.get(system_id)
+        view = self._registry.vehicles.get(system_id)
         if view is None:
             raise LookupError(f"aPad {system_id} has not been heard")
         msg = mavlink.MAVLink_param_set_message(
@@ -35,7 +32,7 @@ class ParamClient:
         clock = self._clock
         for _ in range(retries + 1):
             view.params.pop(name, None)
-            self._link.send(msg)
+            self._send(msg)
             deadline = clock.now_us + seconds_to_us(timeout_s)
             clock.sleep(0)
             while name not in view.params and clock.now_us < deadline:

@@ -134,6 +134,11 @@ class VehicleRegistry:
                 return
         self.version += 1
 
+    def restore(self, saved: VehicleRegistry) -> None:
+        """Take what a saved registry knew (a mission resumed from its checkpoint); readers keep this object."""
+        self.vehicles, self.mussels = saved.vehicles, saved.mussels
+        self.version += 1
+
     def expect(self, system_id: int, kind: Primitive, a: int = 0, b: int = 0) -> None:
         """We are about to command `kind` on this aPad: its reports count once they are about it."""
         self.vehicles[system_id].expected = Expectation(kind, a, b)

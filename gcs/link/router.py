@@ -124,8 +124,8 @@ class Link:
         self.clock = clock
         self.codec = Codec(system_id, component_id)
         self.registry = VehicleRegistry()
-        self.commands = CommandClient(self, clock)
-        self.params = ParamClient(self, clock)
+        self.commands = CommandClient(self.send, clock)
+        self.params = ParamClient(self.send, self.registry, clock)
         self.dropped: Counter[str] = Counter()  # received messages refused by validation, by reason
         self._pollers: list[_TransportPoller] = []
         self._ports: list[Port] = []
