@@ -7,10 +7,20 @@ would exceed it, every other stored row is dropped and the sampling stride doubl
 are always the steps that are multiples of the current stride, so a trace stays evenly sampled,
 complete for small fleets (12 aMussels x 24 h at 1 Hz is 4 MB) and bounded for large ones.
 `trace_every_steps=0` turns traces off; `trace_ids` restricts them to some aMussels.
+
+For crash-safe checkpoints of long missions the recorder splits in two: `head()` is its fixed-size
+state (counters, stride), `rows_since(k)` the rows that grow with the mission (per-step active count
+and time, battery trace rows) added from step k on, so a checkpoint can append them to a file and
+never rewrite them. `Recorder.restore(head, rows)` rebuilds the recorder from a head and every row
+since step 0. Trace rows that a later decimation dropped may be among those rows: the restore drops
+them again (they are the rows whose step is not a multiple of the head's stride), so an append-only
+file stays correct across decimations, and it holds at most the budget's rows plus half of them per
+decimation.
 """
 
 from __future__ import annotations
 
+from bisect import bisect_left
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,6 +42,28 @@ class UptimeSummary:
     avg_active: float  # mean number of active aMussels per step
 
 
+@dataclass(frozen=True)
+class RecorderHead:
+    """A recorder's fixed-size state: its settings and counters, none of the rows that grow."""
+
+    ids: NDArray[np.int64]
+    trace_ids: NDArray[np.int64] | None  # as given to the constructor (None: every aMussel)
+    max_trace_bytes: int
+    active_steps: NDArray[np.int64]
+    n_steps: int
+    trace_stride: int
+
+
+@dataclass(frozen=True)
+class RecorderRows:
+    """Rows of a recorder from some step on: one per step, and the battery trace rows of those steps."""
+
+    time_us: NDArray[np.int64]  # (m,) mission time at the end of each step
+    active_count: NDArray[np.int32]  # (m,)
+    trace_steps: NDArray[np.int64]  # (j,) step index of each trace row, increasing
+    trace: NDArray[np.float32]  # (j, n_trace)
+
+
 class Recorder:
     """Feed it every state a run produces (`record`, after each step); read results any time."""
 
@@ -43,6 +75,8 @@ class Recorder:
         max_trace_bytes: int = DEFAULT_MAX_TRACE_BYTES,
     ) -> None:
         self.ids = np.asarray(ids, np.int64)
+        self._trace_ids_arg = None if trace_ids is None else np.asarray(trace_ids, np.int64)
+        self._max_trace_bytes = int(max_trace_bytes)
         n = self.ids.size
         self.active_steps = np.zeros(n, np.int64)  # (n,) steps each agent ended ACTIVE
         self.n_steps = 0
@@ -89,6 +123,55 @@ class Recorder:
         keep = [i for i, s in enumerate(self._trace_steps) if s % self.trace_stride == 0]
         self._trace_rows = [self._trace_rows[i] for i in keep]
         self._trace_steps = [self._trace_steps[i] for i in keep]
+
+    def head(self) -> RecorderHead:
+        """The fixed-size state (a copy): what `restore` needs besides the rows."""
+        return RecorderHead(self.ids, self._trace_ids_arg, self._max_trace_bytes, self.active_steps.copy(),
+                            self.n_steps, self.trace_stride)
+
+    def rows_since(self, k: int) -> RecorderRows:
+        """The rows of steps k, k + 1, ... recorded so far (copies; trace rows only as kept now)."""
+        if not 0 <= k <= self.n_steps:
+            raise ValueError(f"step {k} is outside 0..{self.n_steps}")
+        j = bisect_left(self._trace_steps, k)
+        rows = self._trace_rows[j:]
+        trace = np.stack(rows) if rows else np.zeros((0, self.trace_ids.size), np.float32)
+        return RecorderRows(self._time_us[k: self.n_steps].copy(), self._active_count[k: self.n_steps].copy(),
+                            np.asarray(self._trace_steps[j:], np.int64), trace)
+
+    @classmethod
+    def restore(cls, head: RecorderHead, rows: RecorderRows) -> Recorder:
+        """The recorder `head` came from, given its rows since step 0 (ValueError if they do not fit).
+
+        `rows.trace` may hold rows that were decimated since they were taken: they are dropped here.
+        """
+        rec = cls(head.ids, 1, head.trace_ids, head.max_trace_bytes)
+        n = int(head.n_steps)
+        if head.active_steps.shape != rec.ids.shape or n < 0 or int(head.trace_stride) < 0:
+            raise ValueError("recorder head does not fit its ids")
+        if rows.time_us.shape != (n,) or rows.active_count.shape != (n,):
+            raise ValueError(f"{rows.time_us.size} step rows for {n} steps")
+        steps = np.asarray(rows.trace_steps, np.int64)
+        if rows.trace.shape != (steps.size, rec.trace_ids.size):
+            raise ValueError("trace rows do not fit the traced aMussels")
+        if steps.size and (steps[0] < 0 or steps[-1] >= n or (np.diff(steps) <= 0).any()):
+            raise ValueError("trace rows are not in step order")
+        rec.active_steps = np.array(head.active_steps, np.int64)
+        rec.n_steps = n
+        rec.trace_stride = int(head.trace_stride)
+        capacity = max(1024, 1 << max(n - 1, 0).bit_length())
+        rec._active_count = np.zeros(capacity, np.int32)
+        rec._time_us = np.zeros(capacity, np.int64)
+        rec._active_count[:n] = rows.active_count
+        rec._time_us[:n] = rows.time_us
+        if rec.trace_stride > 0:
+            keep = steps % rec.trace_stride == 0
+            kept = np.ascontiguousarray(rows.trace[keep], np.float32)
+            rec._trace_rows = list(kept)
+            rec._trace_steps = steps[keep].tolist()
+        if len(rec._trace_rows) > rec._max_rows:
+            raise ValueError("more trace rows than the recorder's budget")
+        return rec
 
     def uptime_pct(self) -> NDArray[np.float64]:
         """Eq. (3): 100 * active steps / all steps, per agent `(n,)`."""
