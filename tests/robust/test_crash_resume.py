@@ -1,9 +1,15 @@
-"""kill -9 of a real `vil run` process mid-mission, then `vil run --resume`: the same mission completes."""
+"""kill -9 of a real `vil run` process mid-mission, then `vil run --resume`: the same mission completes.
+
+And in process: a resume from the incremental checkpoint files is exactly a resume from the whole
+state the checkpoint was taken of (what pickling everything at once used to save).
+"""
 
 from __future__ import annotations
 
 import json
 import os
+import pickle
+import shutil
 import signal
 import subprocess
 import sys
@@ -13,6 +19,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gcs.mission.headless import run_mission
+from gcs.mission.scenario import load_scenario
+from gcs.records import checkpoint
 from gcs.records.checkpoint import CHECKPOINT_NAME, load
 
 pytestmark = [pytest.mark.sitl, pytest.mark.slow]
@@ -56,6 +65,7 @@ def test_sigkill_mid_mission_then_resume_completes_with_every_mussel_accounted_f
     resume = kinds.index("mission_resume")
     assert events[resume]["t_s"] == pytest.approx(killed_at_s)
     assert not ckpt.exists()  # finished: nothing left to resume
+    assert not any(ckpt.with_suffix(x).exists() for x in (checkpoint.STEPS_SUFFIX, checkpoint.TRACES_SUFFIX))
     # The uptime record spans the whole mission, not only the part after the crash.
     traces = np.load(run_dir / "traces.npz")
     assert traces["step_time_us"][0] <= 1_000_000 and traces["step_time_us"][-1] >= 3_590_000_000
@@ -66,3 +76,40 @@ def test_resume_without_a_checkpoint_is_one_line_and_exit_2(tmp_path: Path) -> N
                           timeout=60)
     assert done.returncode == 2
     assert done.stderr.count("\n") == 1 and "nothing to resume" in done.stderr
+
+
+def test_resuming_from_the_checkpoint_files_is_resuming_from_the_whole_state_they_were_saved_of(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    scenario = load_scenario("pool12").with_overrides(strategy="greedy", duration_s=1800.0)
+    whole, files_run, state_run = tmp_path / "whole", tmp_path / "files", tmp_path / "state"
+    real_save, taken = checkpoint.save, {}
+
+    def save_and_take(files: checkpoint.CheckpointFiles, ckpt: checkpoint.Checkpoint) -> None:
+        real_save(files, ckpt)
+        if ckpt.time_us >= 900_000_000 and not taken:  # mid-mission, after several charging moves
+            taken["state"] = pickle.dumps(ckpt)  # all of it, the recorder's whole history included
+            shutil.copytree(whole, files_run)
+            shutil.copytree(whole, state_run)
+
+    monkeypatch.setattr(checkpoint, "save", save_and_take)
+    run_mission(scenario, whole)  # uninterrupted
+    monkeypatch.setattr(checkpoint, "save", real_save)
+    assert taken
+    run_mission(scenario, files_run, resume=True)
+    monkeypatch.setattr(checkpoint, "load", lambda files: pickle.loads(taken["state"]))
+    run_mission(scenario, state_run, resume=True)
+
+    a = json.loads((files_run / "result.json").read_text())
+    b = json.loads((state_run / "result.json").read_text())
+    for r in (a, b):
+        del r["wall_s"], r["out_dir"]
+    assert a == b and a["end_reason"] == "mission time"
+    t_whole, t_files, t_state = (np.load(d / "traces.npz") for d in (whole, files_run, state_run))
+    for key in t_files.files:
+        np.testing.assert_array_equal(t_files[key], t_state[key])
+    # The resumed record starts with what the uninterrupted run recorded up to the checkpoint.
+    k = 900
+    for key in ("step_time_us", "active_count", "battery_steps"):
+        np.testing.assert_array_equal(t_files[key][:k], t_whole[key][:k])
+    np.testing.assert_array_equal(t_files["battery"][:k], t_whole["battery"][:k])
