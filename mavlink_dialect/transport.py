@@ -98,7 +98,7 @@ class UdpTransport:
                 self.sock.sendto(data, peer)
 
     def receive(self) -> list[bytes]:
-        out = []
+        out: list[bytes] = []
         while True:
             try:
                 data, addr = self.sock.recvfrom(MAX_DATAGRAM)

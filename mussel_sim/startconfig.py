@@ -26,9 +26,12 @@ MAX_CONFIG_ID = 2**32 - 1  # the model's id type; the comms runner refuses ids a
 
 @dataclass(frozen=True, eq=False)
 class StartConfig:
-    """ids `(n,)` uint32 (unique, >= 1; MAVLink needs <= 65535), lat_deg / lon_deg `(n,)` WGS84, battery_frac `(n,)`."""
+    """ids `(n,)` uint32 (unique, >= 1; MAVLink needs <= 65535), lat_deg / lon_deg `(n,)` WGS84, battery_frac `(n,)`.
 
-    ids: NDArray[np.uint32]
+    Any integer ids are accepted (so out-of-range ones are refused, not wrapped) and stored as uint32.
+    """
+
+    ids: NDArray[np.integer[Any]]
     lat_deg: NDArray[np.float64]
     lon_deg: NDArray[np.float64]
     battery_frac: NDArray[np.float64]
@@ -59,13 +62,11 @@ class StartConfig:
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, StartConfig):
             return NotImplemented
-        return all(
-            np.array_equal(a, b)
-            for a, b in zip(
-                (self.ids, self.lat_deg, self.lon_deg, self.battery_frac),
-                (other.ids, other.lat_deg, other.lon_deg, other.battery_frac),
-                strict=True,
-            )
+        return (
+            np.array_equal(self.ids, other.ids)
+            and np.array_equal(self.lat_deg, other.lat_deg)
+            and np.array_equal(self.lon_deg, other.lon_deg)
+            and np.array_equal(self.battery_frac, other.battery_frac)
         )
 
     __hash__ = None  # type: ignore[assignment]  # arrays inside: compare by value, never hash

@@ -1,19 +1,64 @@
-"""The dialect: generated module matches the XML today, ids sit in their private block."""
+"""The dialect: generated module and stub match the XML today, ids sit in their private block."""
 
 from __future__ import annotations
 
+import ast
 import importlib
 from pathlib import Path
 
 from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
-from mavlink_dialect.generate import MODULE_PATH, XML_PATH, generate
+from mavlink_dialect.generate import MODULE_PATH, STUB_PATH, XML_PATH, generate
 
 OUR_MESSAGES = ["AMUSSEL_STATUS", "AMUSSEL_SENSORS", "DOCK_SLOT_STATUS", "PRIMITIVE_STATUS", "AMUSSEL_COMMAND"]
 
 
-def test_committed_module_is_what_mavgen_makes_from_the_xml_now(tmp_path: Path) -> None:
+def test_committed_module_and_stub_are_what_generate_makes_from_the_xml_now(tmp_path: Path) -> None:
     fresh = generate(XML_PATH, tmp_path / "subcultron.py")
     assert fresh.read_bytes() == MODULE_PATH.read_bytes()
+    assert fresh.with_suffix(".pyi").read_bytes() == STUB_PATH.read_bytes()
+
+
+def _stub_top_level() -> dict[str, ast.stmt]:
+    tree = ast.parse(STUB_PATH.read_text(encoding="utf-8"))
+    names: dict[str, ast.stmt] = {}
+    for node in tree.body:
+        if isinstance(node, ast.ClassDef):
+            if not any(isinstance(d, ast.Name) and d.id == "type_check_only" for d in node.decorator_list):
+                names[node.name] = node  # (a type_check_only class exists in the stub only)
+        elif isinstance(node, ast.AnnAssign | ast.Assign):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            names.update((t.id, node) for t in targets if isinstance(t, ast.Name))
+    return names
+
+
+def test_the_stub_declares_what_the_module_defines() -> None:
+    """Names both ways, and every message class with its fields in constructor order."""
+    stub = _stub_top_level()
+    assert [name for name in stub if not hasattr(mavlink, name)] == []
+    constants = [n for n, v in vars(mavlink).items() if isinstance(v, int) and not n.startswith("_")]
+    assert [n for n in constants if n not in stub] == []
+    for cls in mavlink.mavlink_map.values():
+        node = stub[cls.__name__]
+        assert isinstance(node, ast.ClassDef)
+        fields = [s.target.id for s in node.body if isinstance(s, ast.AnnAssign) and isinstance(s.target, ast.Name)]
+        init = next(s for s in node.body if isinstance(s, ast.FunctionDef) and s.name == "__init__")
+        assert fields == cls.fieldnames, cls.__name__
+        assert [a.arg for a in init.args.args[1:]] == cls.fieldnames, cls.__name__
+
+
+def test_the_stub_field_types_are_what_messages_hold() -> None:
+    """char[N] goes in as bytes and is read as str; an array is a list when decoded but keeps what it
+    was built with (here the tuple default of an extension): hence `Sequence` in the stub."""
+    sender = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
+    param = mavlink.MAVLink_param_value_message(b"DEPTH_MAX", 1.5, mavlink.MAV_PARAM_TYPE_REAL32, 1, 0)
+    quat = mavlink.MAVLink_attitude_quaternion_message(0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    assert param.param_id == "DEPTH_MAX" and isinstance(quat.repr_offset_q, tuple)
+    decoded = mavlink.MAVLink(None).parse_buffer(param.pack(sender) + quat.pack(sender)) or []
+    assert [m.get_type() for m in decoded] == ["PARAM_VALUE", "ATTITUDE_QUATERNION"]
+    param_back, quat_back = decoded
+    assert isinstance(param_back, mavlink.MAVLink_param_value_message) and param_back.param_id == "DEPTH_MAX"
+    assert isinstance(quat_back, mavlink.MAVLink_attitude_quaternion_message)
+    assert quat_back.repr_offset_q == [0.0, 0.0, 0.0, 0.0]
 
 
 def test_message_and_command_ids_are_in_the_private_block() -> None:
