@@ -36,7 +36,8 @@ def simulate_mussel(link: Link, clock: WallClock, near: tuple[float, float], dis
     state = state_from_arrays([MUSSEL_ID], [offset], [offset], [0.5], params, clock.now_us)
     port = link.attach(None)
     fleet = FleetRunner(state, params, np.random.default_rng(24), frame, Codec(FLEET_SYSTEM_ID, FLEET_COMPONENT_ID),
-                        port.send_bytes, local=port.send_local)
+                        port.send_bytes, local=port.send_local,
+                        local_batch=port.send_batch)
     port.handler = fleet.handle
     fleet.register(clock.scheduler, clock.now_us)
 

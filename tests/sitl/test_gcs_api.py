@@ -48,7 +48,8 @@ class World:
                                   [0.5] * len(ids), fleet_params, clock.now_us)
         port = self.link.attach(None)
         self.fleet = FleetRunner(state, fleet_params, np.random.default_rng(0), FRAME,
-                                 Codec(FLEET_SYSTEM_ID, FLEET_COMPONENT_ID), port.send_bytes, local=port.send_local)
+                                 Codec(FLEET_SYSTEM_ID, FLEET_COMPONENT_ID), port.send_bytes, local=port.send_local,
+                                 local_batch=port.send_batch)
         port.handler = self.fleet.handle
         self.fleet.register(clock.scheduler, clock.now_us)
         self.api = ApadApi(self.link, clock)
