@@ -15,6 +15,7 @@ class Geofence:
     """The water area in the aPad's local metres; a point on the boundary is inside."""
 
     polygon: Any  # shapely Polygon, prepared
+    frame: LocalFrame  # the metres the polygon is in
 
     @staticmethod
     def of(ring_deg: Sequence[tuple[float, float]], frame: LocalFrame) -> Geofence:
@@ -30,9 +31,13 @@ class Geofence:
         if not polygon.is_valid or polygon.area <= 0:
             raise ValueError("the geofence polygon is not a simple ring with an area")
         shapely.prepare(polygon)
-        return Geofence(polygon)
+        return Geofence(polygon, frame)
 
     def contains(self, x_m: float, y_m: float) -> bool:
         import shapely
 
         return bool(shapely.intersects_xy(self.polygon, x_m, y_m))
+
+    def contains_deg(self, lat_deg: float, lon_deg: float) -> bool:
+        x, y = self.frame.to_local(lat_deg, lon_deg)
+        return self.contains(float(x), float(y))

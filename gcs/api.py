@@ -15,8 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import shapely
-
+from apad_sitl.geofence import Geofence
 from apad_sitl.vocabulary import Primitive, Progress, RoverMode
 from gcs.link.commands import CommandError
 from gcs.link.fleet_table import MusselTable, MusselView
@@ -25,6 +24,7 @@ from gcs.link.router import Link
 from gcs.link.telemetry import Location, SlotView
 from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
 from missiontime import Clock, seconds_to_us
+from mussel_sim.geo import LocalFrame
 from mussel_sim.vocabulary import MusselCommand
 
 __all__ = ["ApadApi", "CommandError", "GeofenceError", "Location", "MusselView", "Progress", "UnknownMussel"]
@@ -52,10 +52,8 @@ class ApadApi:
     ) -> None:
         """`geofence_deg`: a (lat, lon) ring; Go To targets outside it raise `GeofenceError` unsent."""
         self.link = link
-        self._fence = None
-        if geofence_deg:
-            self._fence = shapely.Polygon([(lon, lat) for lat, lon in geofence_deg])
-            shapely.prepare(self._fence)
+        # The same test the aPad applies: a Go To it would refuse is not sent at all.
+        self._fence = Geofence.of(geofence_deg, LocalFrame(*geofence_deg[0])) if geofence_deg else None
         self.clock = clock
         self.default_apad = default_apad
 
@@ -133,7 +131,7 @@ class ApadApi:
     ) -> None:
         """Go To Point: speed in m/s (<= 0: the aPad's default), victory radius in m (0: default)."""
         sysid = self.apad(apad_id).system_id
-        if self._fence is not None and not shapely.intersects_xy(self._fence, latlon[1], latlon[0]):
+        if self._fence is not None and not self._fence.contains_deg(latlon[0], latlon[1]):
             raise GeofenceError(sysid, latlon[0], latlon[1])
         lat_e7, lon_e7 = round(latlon[0] * 1e7), round(latlon[1] * 1e7)
         self.link.registry.expect(sysid, Primitive.GOTO, lat_e7, lon_e7)
