@@ -99,7 +99,7 @@ class ConsoleRunner:
         self._notice = "connecting" if config.connect else "starting the SITL aPad"
         self._model: ConsoleModel | None = None
         self._last_event: Event | None = None
-        self._published = (-1, False, None, "")
+        self._published: tuple[int, bool, str | None, str] = (-1, False, None, "")
 
     # --- the UI's doors (any thread) -------------------------------------------------------------
 

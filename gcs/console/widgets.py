@@ -79,7 +79,7 @@ class MapView(CachedLines):
         m_per_dot = max((x_hi - x_lo) / (canvas.dots_x - 3), (y_hi - y_lo) / (canvas.dots_y - 3), 1e-3) * 1.08
         cx, cy = (x_lo + x_hi) / 2, (y_lo + y_hi) / 2
 
-        def dots(la: NDArray[np.float64], lo: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+        def dots(la: NDArray[np.float64], lo: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
             x, y = local(la, lo)
             return (x - cx) / m_per_dot + canvas.dots_x / 2, (cy - y) / m_per_dot + canvas.dots_y / 2
 

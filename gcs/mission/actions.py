@@ -187,6 +187,9 @@ class LoopActions:
     def _docked(self) -> dict[int, int]:
         return {s.slot: s.mussel_id for s in self.api.slots(self.apad_id) if s.latch == Latch.LATCHED}
 
+    def _floating(self, mussel_id: int) -> bool:
+        return self._state(mussel_id) == MusselState.FLOATING
+
     def _state(self, mussel_id: int) -> MusselState:
         return self.api.mussels[mussel_id].state
 

@@ -11,6 +11,8 @@ battery threshold, or on an operator stop; it never ends mid-dock.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from apad_sitl.vocabulary import Latch
@@ -126,8 +128,8 @@ class EnergySharingLoop(LoopActions):
             if not called and not self._call_up_if_in_range(mussel_id):
                 self._log("skip", mussel=mussel_id, why="no aPad within acoustic range")
                 continue
-            if not self._wait_until(lambda m=mussel_id: self._state(m) == MusselState.FLOATING,
-                                    self.settings.surfacing_timeout_s, interruptible=False):
+            if not self._wait_until(functools.partial(self._floating, mussel_id), self.settings.surfacing_timeout_s,
+                                    interruptible=False):
                 self._log("skip", mussel=mussel_id, why="did not surface", state=self._state(mussel_id).name)
                 self._sink(mussel_id)  # it may surface later: it must not float there forever
                 continue

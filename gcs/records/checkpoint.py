@@ -98,7 +98,7 @@ def capture(world: World, loop: EnergySharingLoop) -> Checkpoint:
         snapshot = VehicleSnapshot(v.state, v.primitive, v.mode, v.armed, v._speed_override_mps)
     fleet = world.fleet
     return Checkpoint(
-        FORMAT_VERSION, run_key(world), world.clock.now_us, fleet.state, fleet.rng.bit_generator.state,
+        FORMAT_VERSION, run_key(world), world.clock.now_us, fleet.state, dict(fleet.rng.bit_generator.state),
         fleet.recorder, loop.status, world.link.registry, snapshot,
     )
 

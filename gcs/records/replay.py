@@ -171,9 +171,8 @@ def _apad_and_mussels(stream: list[tuple[int, mavlink.MAVLink_message]]) -> tupl
     apad_id = 1
     ids: set[int] = set()
     for _, msg in stream:
-        kind = msg.get_type()
-        if kind == "AMUSSEL_STATUS":
+        if isinstance(msg, mavlink.MAVLink_amussel_status_message):
             ids.add(msg.mussel_id)
-        elif kind == "HEARTBEAT" and msg.type == mavlink.MAV_TYPE_SURFACE_BOAT:
+        elif isinstance(msg, mavlink.MAVLink_heartbeat_message) and msg.type == mavlink.MAV_TYPE_SURFACE_BOAT:
             apad_id = msg.get_srcSystem()
     return apad_id, np.array(sorted(ids), np.int64)
