@@ -19,7 +19,8 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from mussel_sim.fleet import FleetInputs, FleetParams, FleetState, state_from_arrays, step
+from mussel_sim.fleet import step
+from mussel_sim.fleet_state import FleetInputs, FleetParams, FleetState, state_from_arrays
 from mussel_sim.vocabulary import MusselState
 
 SIZES = (12, 1_000, 10_000, 100_000)

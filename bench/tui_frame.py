@@ -20,7 +20,8 @@ import numpy as np
 from gcs.console.app import ConsoleApp
 from gcs.console.model import ConsoleModel, Snapshot, area_outline
 from mavlink_dialect import mavlink
-from mussel_sim.fleet import FleetInputs, FleetParams, initial_state, step
+from mussel_sim.fleet import step
+from mussel_sim.fleet_state import FleetInputs, FleetParams, initial_state
 from mussel_sim.placement import load_area
 from mussel_sim.startconfig import generate_start_config
 

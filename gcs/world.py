@@ -25,7 +25,7 @@ from mavlink_dialect import Codec, Transport, mavlink, memory_pair, open_transpo
 from mavlink_dialect.transport import UdpTransport
 from missiontime import Clock, VirtualClock, seconds_to_us
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner
-from mussel_sim.fleet import initial_state
+from mussel_sim.fleet_state import initial_state
 from mussel_sim.geo import LocalFrame
 from mussel_sim.placement import load_area
 from mussel_sim.startconfig import StartConfig

@@ -21,7 +21,7 @@ from gcs.link.router import Link
 from mavlink_dialect import AddressError, Codec, open_transport
 from missiontime import WallClock
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, FleetRunner
-from mussel_sim.fleet import FleetParams, state_from_arrays
+from mussel_sim.fleet_state import FleetParams, state_from_arrays
 from mussel_sim.geo import LocalFrame
 
 MUSSEL_ID = 24

@@ -14,7 +14,8 @@ from mussel_sim.battery import (
 )
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner, MusselIdCollision
 from mussel_sim.drift import GriddedCurrent, NoCurrent, UniformCurrent, random_drift_m
-from mussel_sim.fleet import (
+from mussel_sim.fleet import step
+from mussel_sim.fleet_state import (
     FleetInputs,
     FleetParams,
     FleetState,
@@ -22,7 +23,6 @@ from mussel_sim.fleet import (
     initial_state,
     start_config_of,
     state_from_arrays,
-    step,
 )
 from mussel_sim.geo import LocalFrame, distance_m, planar_distance_m
 from mussel_sim.placement import Area, area_from_geojson, load_area, place_uniform

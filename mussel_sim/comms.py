@@ -29,7 +29,8 @@ from mavlink_dialect import Codec, hot, mavlink
 from mavlink_dialect.transport import Transport
 from missiontime import US_PER_S, Scheduler, Task
 from mussel_sim.battery import to_millivolts
-from mussel_sim.fleet import FleetInputs, FleetParams, FleetState, StepEvents, step
+from mussel_sim.fleet import step
+from mussel_sim.fleet_state import FleetInputs, FleetParams, FleetState, StepEvents
 from mussel_sim.geo import LocalFrame
 from mussel_sim.recorder import Recorder
 from mussel_sim.sensors import DummySensors, SensorField

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mussel_sim.fleet import ACTIVE, FleetState
+from mussel_sim.fleet_state import ACTIVE, FleetState
 
 DEFAULT_MAX_TRACE_BYTES = 64 * 2**20
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from apad_sitl.vocabulary import Latch
 from gcs.link.registry import VehicleView
-from mussel_sim.fleet import FleetState
+from mussel_sim.fleet_state import FleetState
 from mussel_sim.geo import LocalFrame
 from mussel_sim.vocabulary import MusselState
 

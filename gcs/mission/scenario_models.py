@@ -11,7 +11,7 @@ import numpy as np
 from apad_sitl.params import ApadParams
 from gcs.mission.scenario import Scenario, ScenarioError
 from mussel_sim.drift import NO_CURRENT, UniformCurrent
-from mussel_sim.fleet import FleetParams
+from mussel_sim.fleet_state import FleetParams
 from mussel_sim.geo import LocalFrame
 from mussel_sim.placement import Area, load_area
 from mussel_sim.sensors import AnoxicPatch, DummySensors, SensorField

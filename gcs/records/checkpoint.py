@@ -44,7 +44,7 @@ from apad_sitl.primitives import PrimitiveState
 from apad_sitl.vehicle import VehicleState
 from gcs.link.registry import VehicleRegistry
 from gcs.mission.control import LoopStatus
-from mussel_sim.fleet import FleetState
+from mussel_sim.fleet_state import FleetState
 from mussel_sim.recorder import Recorder, RecorderHead, RecorderRows
 
 if TYPE_CHECKING:

@@ -18,7 +18,8 @@ from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
 from gcs.world import lockstep_world
 from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
-from mussel_sim.fleet import FleetInputs, step
+from mussel_sim.fleet import step
+from mussel_sim.fleet_state import FleetInputs
 from mussel_sim.vocabulary import MusselState
 
 pytestmark = pytest.mark.sitl

@@ -22,7 +22,7 @@ from mavlink_dialect import Codec, mavlink, memory_pair, open_transport
 from mavlink_dialect.transport import MemoryTransport, Transport
 from missiontime import Clock, VirtualClock, WallClock
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, FleetRunner
-from mussel_sim.fleet import FleetParams, state_from_arrays
+from mussel_sim.fleet_state import FleetParams, state_from_arrays
 from mussel_sim.geo import LocalFrame, distance_m
 from mussel_sim.vocabulary import MusselState
 

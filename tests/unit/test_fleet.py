@@ -10,7 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from mussel_sim.fleet import FleetInputs, FleetParams, FleetState, state_from_arrays, step
+from mussel_sim.fleet import step
+from mussel_sim.fleet_state import FleetInputs, FleetParams, FleetState, state_from_arrays
 from mussel_sim.recorder import Recorder
 from mussel_sim.vocabulary import MusselState as S
 

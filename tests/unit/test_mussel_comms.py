@@ -10,7 +10,7 @@ from mavlink_dialect import Codec, mavlink, memory_pair
 from missiontime import VirtualClock
 from mussel_sim.battery import to_millivolts
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner, MusselIdCollision
-from mussel_sim.fleet import FleetParams, state_from_arrays
+from mussel_sim.fleet_state import FleetParams, state_from_arrays
 from mussel_sim.geo import LocalFrame
 from mussel_sim.sensors import AnoxicPatch, pressure_hpa
 from mussel_sim.vocabulary import MusselCommand, MusselState

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from mussel_sim.drift import GriddedCurrent, UniformCurrent, random_drift_m
-from mussel_sim.fleet import FleetInputs, FleetParams, state_from_arrays, step
+from mussel_sim.fleet import step
+from mussel_sim.fleet_state import FleetInputs, FleetParams, state_from_arrays
 
 HALF_CM = 0.5
 

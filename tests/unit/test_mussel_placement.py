@@ -10,7 +10,8 @@ import pytest
 import shapely
 from shapely.geometry import box
 
-from mussel_sim.fleet import FleetInputs, FleetParams, initial_state, start_config_of, step
+from mussel_sim.fleet import step
+from mussel_sim.fleet_state import FleetInputs, FleetParams, initial_state, start_config_of
 from mussel_sim.geo import LocalFrame, distance_m, planar_distance_m
 from mussel_sim.placement import area_from_geojson, load_area, place_uniform
 from mussel_sim.startconfig import (

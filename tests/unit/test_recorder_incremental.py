@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from gcs.records.checkpoint import Checkpoint, CheckpointError, CheckpointFiles, load, save
-from mussel_sim.fleet import ACTIVE, SURFACING, FleetParams, FleetState, state_from_arrays
+from mussel_sim.fleet_state import ACTIVE, SURFACING, FleetParams, FleetState, state_from_arrays
 from mussel_sim.recorder import Recorder, RecorderRows
 
 N = 7
