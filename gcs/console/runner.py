@@ -26,8 +26,8 @@ from gcs.api import CommandError
 from gcs.console.model import ConsoleModel, Snapshot, area_outline
 from gcs.mission.loop import EnergySharingLoop, LoopControl
 from gcs.mission.scenario import Scenario
+from gcs.mission.world import MISSION_TELEMETRY_HZ, LinkOptions, World, build_world
 from gcs.records.events import Event
-from gcs.world import MISSION_TELEMETRY_HZ, LinkOptions, World, build_world
 from missiontime import Clock, PacedClock, WallClock, unix_time_us, us_to_s
 from mussel_sim.placement import load_area
 from mussel_sim.vocabulary import MusselCommand, MusselState

@@ -16,8 +16,8 @@ import numpy as np
 from gcs.mission.accounting import account
 from gcs.mission.results import MusselResult, RunResult
 from gcs.mission.scenario import Scenario
+from gcs.mission.world import MISSION_TELEMETRY_HZ, LinkOptions, World, lockstep_world
 from gcs.records import checkpoint
-from gcs.world import MISSION_TELEMETRY_HZ, LinkOptions, World, lockstep_world
 
 ProgressFn = Callable[[float], None]  # receives mission time done, seconds
 

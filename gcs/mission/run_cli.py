@@ -28,8 +28,8 @@ from gcs.mission.planner import COLLECT
 from gcs.mission.results import RunResult, results_table, seed_stats, seed_stats_table, shape_table
 from gcs.mission.scenario import Scenario, ScenarioError, load_scenario, parse_duration_s
 from gcs.mission.scenario_models import check_inputs
+from gcs.mission.world import LinkOptions
 from gcs.records.checkpoint import CHECKPOINT_NAME
-from gcs.world import LinkOptions
 from mavlink_dialect.signing import SigningKeyError, load_key
 
 # The paper's Table II runs: (scenario, collection strategy).

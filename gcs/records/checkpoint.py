@@ -49,7 +49,7 @@ from mussel_sim.recorder import Recorder, RecorderHead, RecorderRows
 
 if TYPE_CHECKING:
     from gcs.mission.loop import EnergySharingLoop
-    from gcs.world import World
+    from gcs.mission.world import World
 
 CHECKPOINT_NAME = "checkpoint.pkl"
 CHECKPOINT_PERIOD_S = 10.0  # mission time between checkpoints

@@ -13,7 +13,7 @@ from apad_sitl.vocabulary import Latch, Primitive
 from gcs.link.faultproxy import LinkFaults
 from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
-from gcs.world import LinkOptions
+from gcs.mission.world import LinkOptions
 from mavlink_dialect import MAV_CMD_APAD_DOCK, mavlink
 
 pytestmark = pytest.mark.sitl

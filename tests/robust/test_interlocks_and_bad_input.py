@@ -16,7 +16,7 @@ from apad_sitl.vocabulary import Latch
 from gcs.api import GeofenceError
 from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
-from gcs.world import lockstep_world
+from gcs.mission.world import lockstep_world
 from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
 from mussel_sim.fleet import step
 from mussel_sim.fleet_state import FleetInputs

@@ -12,7 +12,7 @@ from apad_sitl.primitives import Refusal
 from gcs.link.faultproxy import FaultProxy, LinkFaults
 from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
-from gcs.world import LinkOptions
+from gcs.mission.world import LinkOptions
 from mavlink_dialect import MAV_CMD_APAD_UNDOCK
 from missiontime import VirtualClock
 

@@ -11,7 +11,7 @@ from apad_sitl.vocabulary import Latch
 from gcs.link.faultproxy import LinkFaults
 from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
-from gcs.world import LinkOptions
+from gcs.mission.world import LinkOptions
 from mavlink_dialect import MAV_CMD_APAD_DOCK, Codec, mavlink, signing
 from mavlink_dialect.signing import SigningKeyError, key_from_passphrase, load_key
 

@@ -12,7 +12,7 @@ import pytest
 
 from gcs.mission.loop import LoopControl
 from gcs.mission.scenario import load_scenario
-from gcs.world import MISSION_TELEMETRY_HZ, lockstep_world
+from gcs.mission.world import MISSION_TELEMETRY_HZ, lockstep_world
 
 MISSIONS = Path(__file__).resolve().parents[2] / "missions"
 STOP_AT_S = 240.0
