@@ -17,8 +17,9 @@ from __future__ import annotations
 import numbers
 import operator
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
+from itertools import repeat
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -48,20 +49,11 @@ class HotSpec:
     """What batch packing needs of one message class, read from the generated module."""
 
     cls: type[mavlink.MAVLink_message]
+    name: str
+    msg_id: int
+    crc_extra: int
     fieldnames: tuple[str, ...]  # constructor order, as pymavlink exposes them
     dtype: np.dtype  # wire order, packed, little-endian: one record is one full payload
-
-    @property
-    def name(self) -> str:
-        return str(self.cls.msgname)
-
-    @property
-    def msg_id(self) -> int:
-        return int(self.cls.id)
-
-    @property
-    def crc_extra(self) -> int:
-        return int(self.cls.crc_extra)
 
     @property
     def size(self) -> int:
@@ -78,7 +70,7 @@ def spec_for(cls: type[mavlink.MAVLink_message]) -> HotSpec:
         raise ValueError(f"{cls.msgname}: format {fmt!r} has fields this batch path does not pack")
     dtype = np.dtype([(f, _NUMPY[c]) for f, c in zip(cls.ordered_fieldnames, codes, strict=True)])
     assert dtype.itemsize == cls.unpacker.size  # type: ignore[attr-defined]
-    return HotSpec(cls, tuple(cls.fieldnames), dtype)
+    return HotSpec(cls, cls.msgname, cls.id, cls.crc_extra, tuple(cls.fieldnames), dtype)
 
 
 AMUSSEL_STATUS = spec_for(mavlink.MAVLink_amussel_status_message)
@@ -88,65 +80,81 @@ AMUSSEL_SENSORS = spec_for(mavlink.MAVLink_amussel_sensors_message)
 # ---- encode -------------------------------------------------------------------------------------
 
 
-_NOT_INT = "required argument is not an integer"
+_SAME_VALUE = np.lib.NumpyVersion(np.__version__) >= "2.4.0"  # astype(casting="same_value")
 
 
 def _real(value: object) -> float:
     if not isinstance(value, numbers.Real):
         raise TypeError(value)
-    return float(value)
+    return float(value)  # OverflowError for an int beyond a double, as struct
 
 
 def _column(spec: HotSpec, name: str, values: np.ndarray) -> np.ndarray:
-    """`values` converted to the field's wire type; ValueError where struct.pack would refuse them."""
-    target = spec.dtype[name]
-    where = f"{spec.name}.{name}"
+    """`values` converted to the field's wire type; ValueError where struct.pack would refuse one."""
+    target = spec.dtype.fields[name][0]  # type: ignore[index]
+    where = f"{spec.name}.{name} ({target}, struct.error)"
+    if values.dtype.kind == "O":  # Python numbers beyond 64 bits, or a mix: taken one by one, as struct does
+        try:
+            items = [_real(v) if target.kind == "f" else operator.index(v) for v in values.ravel().tolist()]
+        except (TypeError, OverflowError):
+            raise ValueError(f"{where}: not a number, or too large") from None
+        values = np.array(items, np.float64 if target.kind == "f" or not items else None).reshape(values.shape)
+    kind = values.dtype.kind
     if target.kind == "f":
-        if values.dtype.kind == "O":  # Python ints beyond int64, or a mix: float() each, as struct does
-            try:
-                values = np.array([_real(v) for v in values.tolist()], np.float64)
-            except (TypeError, OverflowError):
-                raise ValueError(f"{where}: values that are not real numbers or too large (struct.error)") from None
-        elif values.dtype.kind not in "fiub":
-            raise ValueError(f"{where}: {values.dtype} values, need real numbers (struct.error)")
-        wide = values.astype(np.float64)  # as struct does: to double first (no double rounding from ints)
+        if kind not in "fiub":
+            raise ValueError(f"{where}: {values.dtype} values are not real numbers")
+        if values.dtype == target:
+            return values
+        wide = values.astype(np.float64, copy=False)  # as struct: to double first (no double rounding of ints)
         with np.errstate(over="ignore", invalid="ignore"):  # overflow checked below; sNaN quietened as C does
             out = wide.astype(target)
-        if target.itemsize == 4 and np.any(np.isinf(out) & np.isfinite(wide)):
-            raise ValueError(f"{where}: finite value too large for a float32 (struct: 'float too large')")
+        if target.itemsize == 4 and np.isinf(out).any() and np.any(np.isinf(out) & np.isfinite(wide)):
+            raise ValueError(f"{where}: finite value too large for a float32")
         return out
+    if kind == "O":  # integers no single 64-bit type holds: some are out of any target's range
+        raise ValueError(f"{where}: value out of range")
+    if kind not in "iub":  # struct refuses floats for integer fields, even 3.0
+        raise ValueError(f"{where}: {values.dtype} values, required argument is not an integer")
+    out = _cast_ints(values, target)
+    if out is None:
+        raise ValueError(f"{where}: value out of range")
+    return out
+
+
+def _cast_ints(values: np.ndarray, target: np.dtype) -> np.ndarray | None:
+    """`values` as `target`, or None if one of them does not fit."""
+    if _SAME_VALUE:
+        try:  # one cast that refuses to change a value: the range check at the price of the cast
+            return values.astype(target, casting="same_value")  # type: ignore[arg-type]
+        except ValueError:
+            return None
     info = np.iinfo(target)
-    if values.dtype.kind == "O":  # Python ints beyond int64/uint64, or a mix: check them one by one
-        try:
-            ints = [operator.index(v) for v in values.tolist()]
-        except TypeError:
-            raise ValueError(f"{where}: non-integer values (struct.error: {_NOT_INT})") from None
-        lo, hi = (min(ints), max(ints)) if ints else (0, 0)
-    elif values.dtype.kind in "iub":
-        lo, hi = (int(values.min()), int(values.max())) if values.size else (0, 0)
-    else:
-        raise ValueError(f"{where}: {values.dtype} values (struct.error: {_NOT_INT})")
-    if lo < info.min or hi > info.max:
-        raise ValueError(f"{where}: value out of range {info.min}..{info.max} for {target} (struct.error)")
+    if values.size and (int(values.min()) < info.min or int(values.max()) > info.max):
+        return None
     return values.astype(target)
 
 
 def pack_records(spec: HotSpec, columns: Mapping[str, ArrayLike]) -> np.ndarray:
     """One record per message: every field of `spec` given as an (n,) array or a scalar for all."""
-    missing, unknown = set(spec.fieldnames) - set(columns), set(columns) - set(spec.fieldnames)
-    if missing or unknown:
+    if columns.keys() != set(spec.fieldnames):
+        missing, unknown = set(spec.fieldnames) - columns.keys(), columns.keys() - set(spec.fieldnames)
         raise ValueError(f"{spec.name}: missing fields {sorted(missing)}, unknown fields {sorted(unknown)}")
-    arrays = np.broadcast_arrays(*(np.asarray(columns[f]) for f in spec.fieldnames))
-    if arrays[0].ndim != 1:
-        raise ValueError(f"{spec.name}: fields must be (n,) arrays (or scalars beside them)")
-    rec = np.empty(arrays[0].shape[0], spec.dtype)
-    for name, values in zip(spec.fieldnames, arrays, strict=True):
+    arrays = {f: np.asarray(columns[f]) for f in spec.fieldnames}
+    shapes = {a.shape for a in arrays.values()} - {()}  # scalars broadcast
+    if len(shapes) != 1 or len(shape := shapes.pop()) != 1:
+        raise ValueError(f"{spec.name}: fields must be (n,) arrays of one length (or scalars beside them)")
+    rec = np.empty(shape, spec.dtype)
+    for name, values in arrays.items():
         rec[name] = _column(spec, name, values)
     return rec
 
 
 def encode_batch(codec: Codec, spec: HotSpec, columns: Mapping[str, ArrayLike]) -> list[bytes]:
-    """n MAVLink 2 frames, byte for byte what `codec.encode` gives one message at a time (same seq run)."""
+    """n MAVLink 2 frames, byte for byte what `codec.encode` gives one message at a time (same seq run).
+
+    `columns`: every field of `spec` by name, as (n,) arrays or scalars for all. ValueError (naming
+    the field) for a value struct.pack would refuse; then no sequence number is used.
+    """
     rec = pack_records(spec, columns)  # validate everything before taking sequence numbers
     n = len(rec)
     if n == 0:
@@ -156,28 +164,30 @@ def encode_batch(codec: Codec, spec: HotSpec, columns: Mapping[str, ArrayLike]) 
         return [codec.encode(spec.cls(*row)) for row in zip(*cols, strict=True)]
     size, width = spec.size, OVERHEAD + spec.size
     payload = rec.view(np.uint8).reshape(n, size)
-    nonzero = payload != 0
-    # MAVLink 2 drops trailing zero bytes of the payload, keeping at least one (MAVLink_message._pack)
-    plen = np.where(nonzero.any(axis=1), size - nonzero[:, ::-1].argmax(axis=1), 1)
+    # MAVLink 2 drops trailing zero bytes of the payload but keeps the first (MAVLink_message._pack)
+    keep = payload != 0
+    keep[:, 0] = True
+    plen = size - keep[:, ::-1].argmax(axis=1)
     first = codec.next_seq(n)
     buf = np.zeros((n, width), np.uint8)
-    buf[:, 0] = MAGIC_V2
+    header = bytes([MAGIC_V2, 0, 0, 0, 0, codec.system_id, codec.component_id]) + spec.msg_id.to_bytes(3, "little")
+    buf[:, :HEADER] = np.frombuffer(header, np.uint8)
     buf[:, 1] = plen
     buf[:, 4] = (first + np.arange(n)) % 256
-    buf[:, 5], buf[:, 6] = codec.system_id, codec.component_id
-    buf[:, 7:10] = np.frombuffer(spec.msg_id.to_bytes(3, "little"), np.uint8)
     buf[:, HEADER : HEADER + size] = payload
     rows, crc_at = np.arange(n), HEADER + plen
     buf[rows, crc_at] = spec.crc_extra  # the CRC covers len..payload plus crc_extra: one call per frame
     starts = rows * width
-    ends = starts + crc_at + 2
-    spans = list(zip(starts.tolist(), ends.tolist(), strict=True))
-    flat = memoryview(buf.reshape(-1))
-    crcs = np.array([_crc(flat[s + 1 : e - 1], 0xFFFF) for s, e in spans])
+    raw = buf.tobytes()
+    crcs = np.fromiter(map(_crc, _slices(raw, starts + 1, starts + crc_at + 1)), np.uint16, n)
     buf[rows, crc_at] = crcs & 0xFF
     buf[rows, crc_at + 1] = crcs >> 8
-    raw = buf.tobytes()
-    return [raw[s:e] for s, e in spans]
+    return list(_slices(buf.tobytes(), starts, starts + crc_at + 2))
+
+
+def _slices(data: bytes, starts: np.ndarray, ends: np.ndarray) -> Iterator[bytes]:
+    """data[s:e] for each pair, iterated in C: no Python bytecode per frame."""
+    return map(data.__getitem__, map(slice, starts.tolist(), ends.tolist()))
 
 
 def pack_datagrams(frames: Iterable[bytes], max_bytes: int = DATAGRAM_BYTES) -> list[bytes]:
@@ -222,60 +232,77 @@ class Split:
 
 
 def decode_datagram(data: bytes, spec: HotSpec = AMUSSEL_STATUS, stats: CodecStats | None = None) -> Split:
-    """Split one datagram of whole MAVLink frames; `spec`'s unsigned frames come back as arrays.
+    """Split one datagram of whole MAVLink frames; `spec`'s valid unsigned frames come back as arrays.
 
     Frames are delimited as pymavlink's robust parser does: the length byte gives the size, a bad
-    CRC drops that frame, bytes that start no frame are skipped to the next magic (one bad each).
+    CRC drops that frame, bytes that start no frame are skipped to the next magic (one bad each);
+    a frame cut short by the datagram's end is bad too (datagrams do not continue each other).
     With `stats`, `bad_data` and `received` (hot frames only) are counted there too.
     """
-    n, i, bad = len(data), 0, 0
-    view = memoryview(data)
-    msgid = spec.msg_id.to_bytes(3, "little")
-    extra = bytes([spec.crc_extra])
-    offsets: list[int] = []
-    lengths: list[int] = []
-    others: list[bytes] = []
-    while i < n:
-        magic = data[i]
-        if magic != MAGIC_V2 and magic != MAGIC_V1:
-            bad += 1  # bytes that start no frame: one bad run, up to the next magic
-            found = _MAGIC.search(data, i + 1)
-            i = found.start() if found else n
-            continue
-        v2 = magic == MAGIC_V2
-        if i + (OVERHEAD if v2 else V1_OVERHEAD) > n:
-            bad += 1  # truncated tail: a datagram never continues in the next one
-            break
-        length = data[i + 1]
-        if not v2:
-            size = V1_OVERHEAD + length
-        else:
-            size = OVERHEAD + length + (SIGNATURE if data[i + 2] & mavlink.MAVLINK_IFLAG_SIGNED else 0)
-        if i + size > n:
-            bad += 1
-            break
-        if v2 and data[i + 2] == 0 and data[i + 7 : i + 10] == msgid:
-            end = i + HEADER + length
-            if _crc(extra, _crc(view[i + 1 : end], 0xFFFF)) == data[end] | data[end + 1] << 8:
-                offsets.append(i)
-                lengths.append(length)
-            else:
-                bad += 1  # like pymavlink: the whole frame goes, parsing resumes after it
-        else:  # signed (the codec checks signatures), other ids, MAVLink 1, unknown flags: normal path
-            others.append(bytes(data[i : i + size]))
-        i += size
-    hot = _gather(spec, np.frombuffer(data, np.uint8), np.array(offsets, np.intp), np.array(lengths, np.intp))
+    return decode_datagrams([data], spec, stats)
+
+
+def decode_datagrams(
+    datagrams: Iterable[bytes], spec: HotSpec = AMUSSEL_STATUS, stats: CodecStats | None = None
+) -> Split:
+    """`decode_datagram` over several datagrams at once (one receive's worth): one set of arrays."""
+    grams = [bytes(g) for g in datagrams]
+    data = grams[0] if len(grams) == 1 else b"".join(grams)
+    starts: list[int] = []
+    ends: list[int] = []
+    bad, base = 0, 0
+    for gram in grams:  # frames never cross a datagram's end
+        bad += _walk(data, base, base + len(gram), starts, ends)
+        base += len(gram)
+    raw = np.frombuffer(data + bytes(spec.size + HEADER), np.uint8)  # spare zeros: fixed-width reads stay in
+    first, last = np.array(starts, np.intp), np.array(ends, np.intp)
+    head = raw[first[:, None] + np.arange(2, 10)]  # flags .. msgid (a MAVLink 1 frame's are masked below)
+    msg_id = head[:, 5:8] @ np.array([1, 1 << 8, 1 << 16])
+    hot = (raw[first] == MAGIC_V2) & (head[:, 0] == 0) & (msg_id == spec.msg_id)  # unsigned, known flags
+    mine, crc_end = first[hot], last[hot] - 2
+    extra = repeat(bytes([spec.crc_extra]))
+    crcs = np.fromiter(map(_crc, extra, map(_crc, _slices(data, mine + 1, crc_end))), np.int64, len(mine))
+    ok = crcs == (raw[crc_end] | raw[crc_end + 1].astype(np.int64) << 8)
+    bad += int(np.count_nonzero(~ok))
+    frames = _gather(spec, raw, mine[ok], crc_end[ok] - mine[ok] - HEADER)
+    others = list(_slices(data, first[~hot], last[~hot]))  # signed, other ids, MAVLink 1: the codec's job
     if stats is not None:
         stats.bad_data += bad
-        stats.received += len(hot)
-    return Split(hot, others, bad)
+        stats.received += len(frames)
+    return Split(frames, others, bad)
+
+
+def _walk(data: bytes, i: int, n: int, starts: list[int], ends: list[int]) -> int:
+    """Frame boundaries in data[i:n] appended to `starts`/`ends`; returns how many bad runs were skipped."""
+    bad = 0
+    while i < n:
+        magic = data[i]
+        if magic == MAGIC_V2 and i + 2 < n:
+            end = i + OVERHEAD + data[i + 1] + (SIGNATURE if data[i + 2] & mavlink.MAVLINK_IFLAG_SIGNED else 0)
+        elif magic == MAGIC_V1 and i + 1 < n:
+            end = i + V1_OVERHEAD + data[i + 1]
+        elif magic in (MAGIC_V1, MAGIC_V2):
+            end = n + 1  # too short to read its length
+        else:
+            bad += 1  # bytes that start no frame: one bad run, up to the next magic
+            found = _MAGIC.search(data, i + 1, n)
+            i = found.start() if found else n
+            continue
+        if end > n:
+            return bad + 1  # truncated tail
+        starts.append(i)
+        ends.append(end)
+        i = end
+    return bad
 
 
 def _gather(spec: HotSpec, raw: np.ndarray, offsets: np.ndarray, lengths: np.ndarray) -> HotFrames:
     """Payloads zero-padded back to full length (pymavlink's rule), longer ones cut: one record each."""
     cols = np.arange(spec.size)
-    at = np.minimum(offsets[:, None] + HEADER + cols, len(raw) - 1)  # past the payload: masked below
-    payload = np.where(cols < lengths[:, None], raw[at], 0).astype(np.uint8)
+    payload = raw[offsets[:, None] + (HEADER + cols)]  # `raw` has spare bytes at its end
+    short = lengths < spec.size  # truncated: bytes past the payload (CRC, next frame) become zeros
+    if short.any():
+        payload[cols >= lengths[:, None]] = 0
     rec = payload.view(spec.dtype).reshape(len(offsets))
     fields = {f: rec[f].copy() for f in spec.fieldnames}
     return HotFrames(fields, raw[offsets + 5], raw[offsets + 6], raw[offsets + 4])

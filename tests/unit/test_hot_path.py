@@ -12,13 +12,14 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from mavlink_dialect import Codec, mavlink
+from mavlink_dialect import Codec, hot, mavlink
 from mavlink_dialect.hot import (
     AMUSSEL_SENSORS,
     AMUSSEL_STATUS,
     HotFrames,
     HotSpec,
     decode_datagram,
+    decode_datagrams,
     encode_batch,
     pack_datagrams,
 )
@@ -164,11 +165,16 @@ def test_float_fields_refuse_exactly_what_struct_refuses(value: float) -> None:
         assert encode_batch(Codec(1, 1), AMUSSEL_STATUS, cols) == [want]
 
 
+@pytest.mark.parametrize("same_value_cast", [True, False], ids=["numpy-2.4-cast", "min-max"])
 @pytest.mark.parametrize(
     ("field", "value"),
-    [("mussel_id", 65536), ("mussel_id", -1), ("lat", 2**31), ("state", 256), ("time_us", 2**64), ("time_us", -1)],
-)
-def test_out_of_range_integers_raise_naming_the_field_and_take_no_sequence_numbers(field: str, value: int) -> None:
+    [("mussel_id", 65536), ("mussel_id", -1), ("lat", 2**31), ("lat", -(2**31) - 1), ("state", 256),
+     ("time_us", 2**64), ("time_us", -1)],
+)  # fmt: skip
+def test_out_of_range_integers_raise_naming_the_field_and_take_no_sequence_numbers(
+    field: str, value: int, same_value_cast: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(hot, "_SAME_VALUE", same_value_cast and hot._SAME_VALUE)
     with pytest.raises(struct.error):  # what pymavlink does with the same value
         mavlink.MAVLink_amussel_status_message(**{**_status(0), field: value}).pack(Codec(1, 1).mav)
     codec = Codec(1, 1)
@@ -177,14 +183,21 @@ def test_out_of_range_integers_raise_naming_the_field_and_take_no_sequence_numbe
     with pytest.raises(ValueError, match=field):
         encode_batch(codec, AMUSSEL_STATUS, cols)
     assert (codec.mav.seq, codec.stats.sent) == (0, 0)
+    edge = value - 1 if value > 0 else value + 1  # the last value that fits packs as pymavlink packs it
+    cols[field] = np.array([1, edge], dtype=np.int64 if abs(edge) < 2**63 else np.uint64)
+    ref = Codec(1, 1)
+    msgs = [mavlink.MAVLink_amussel_status_message(**{**_status(i), field: v}) for i, v in enumerate((1, edge))]
+    want = [ref.encode(m) for m in msgs]
+    assert encode_batch(Codec(1, 1), AMUSSEL_STATUS, cols) == want
 
 
-def test_non_integer_values_for_integer_fields_raise() -> None:
+@pytest.mark.parametrize(("field", "value"), [("mussel_id", 3.0), ("mussel_id", "3"), ("depth", "1.5")])
+def test_values_struct_refuses_raise_naming_the_field(field: str, value: object) -> None:
     with pytest.raises(struct.error):
-        mavlink.MAVLink_amussel_status_message(**{**_status(0), "mussel_id": 3.0}).pack(Codec(1, 1).mav)
+        mavlink.MAVLink_amussel_status_message(**{**_status(0), field: value}).pack(Codec(1, 1).mav)
     cols: dict[str, Any] = _columns(AMUSSEL_STATUS, [_status(0)])
-    cols["mussel_id"] = np.array([3.0])
-    with pytest.raises(ValueError, match="mussel_id"):
+    cols[field] = np.array([value], object if isinstance(value, str) else None)
+    with pytest.raises(ValueError, match=field):
         encode_batch(Codec(1, 1), AMUSSEL_STATUS, cols)
 
 
@@ -257,11 +270,14 @@ def test_batch_decode_equals_pymavlink_on_valid_frames(spec: HotSpec, data: st.D
     tx = Codec(data.draw(st.integers(1, 255)), data.draw(st.integers(0, 255)))
     tx.mav.seq = seq
     sent = [tx.encode(spec.cls(**r)) for r in rows]  # pymavlink's own frames, not the batch encoder's
-    for gram in pack_datagrams(sent):
+    grams = pack_datagrams(sent, data.draw(st.integers(280, 1400)))
+    for gram in grams:
         want = Codec(250, 190).decode(gram)
         split = decode_datagram(gram, spec)
         assert (split.bad, split.others) == (0, [])
         assert _hot_rows(spec, split.hot) == _msg_rows(spec, want)
+    split = decode_datagrams(grams, spec)
+    assert _hot_rows(spec, split.hot) == _msg_rows(spec, Codec(250, 190).decode(b"".join(sent)))
 
 
 @pytest.mark.parametrize("length", [0, 1, 5, 20, 29, 30, 31, 40])
@@ -328,25 +344,43 @@ def test_any_corrupted_byte_or_cut_tail_gives_what_pymavlink_gives(at: int, flip
     assert [m.get_msgbuf() for m in rest] == [m.get_msgbuf() for m in want_rest]
 
 
+@pytest.mark.parametrize("junk", [b"\x00", b"\x00junk"])
 @pytest.mark.parametrize("tail", [1, 5, 11, 12, 39, 41], ids=lambda n: f"{n}-bytes")
-def test_garbage_and_a_truncated_tail_are_counted_not_returned(tail: int) -> None:
+def test_garbage_and_a_truncated_tail_are_counted_not_returned(junk: bytes, tail: int) -> None:
     gram, status, others = _mixed_datagram()
-    split = decode_datagram(b"\x00junk" + gram + status[0][:tail])  # a whole status frame is 42 bytes
+    split = decode_datagram(junk + gram + status[0][:tail])  # a whole status frame is 42 bytes
     assert len(split.hot) == 12 and split.others == others
     assert split.bad == 2
 
 
+@settings(max_examples=100, deadline=None)
+@given(limit=st.integers(280, 700), cuts=st.lists(st.integers(0, 30), min_size=1, max_size=6))
+def test_several_datagrams_at_once_equal_one_at_a_time(limit: int, cuts: list[int]) -> None:
+    """A frame never continues in the next datagram: a cut tail is bad there, not glued to what follows."""
+    gram, _, _ = _mixed_datagram()
+    grams = pack_datagrams([gram[i : i + 42] for i in range(0, len(gram), 42)], limit)  # not frame-aligned
+    grams = [g[: len(g) - cuts[k % len(cuts)]] for k, g in enumerate(grams)]
+    one = [decode_datagram(g) for g in grams]
+    many = decode_datagrams(grams)
+    assert _hot_rows(AMUSSEL_STATUS, many.hot) == [r for s in one for r in _hot_rows(AMUSSEL_STATUS, s.hot)]
+    assert (many.others, many.bad) == ([f for s in one for f in s.others], sum(s.bad for s in one))
+
+
 def test_mavlink1_frames_pass_through_whole() -> None:
-    v1 = HEARTBEAT.pack(mavlink.MAVLink(None, 9, 1), force_mavlink1=True)
+    # custom_mode 0x00D2F001 puts AMUSSEL_STATUS's id where a MAVLink 2 header keeps it, seq 0 its flags
+    beat = mavlink.MAVLink_heartbeat_message(11, 3, 0, 0x00D2F001, 4, 3)
+    v1 = beat.pack(mavlink.MAVLink(None, 9, 1), force_mavlink1=True)
+    assert v1[7:10] == AMUSSEL_STATUS.msg_id.to_bytes(3, "little") and v1[2] == 0
     status = encode_batch(Codec(1, 1), AMUSSEL_STATUS, _columns(AMUSSEL_STATUS, [_status(i) for i in range(3)]))
     split = decode_datagram(status[0] + v1 + v1 + b"".join(status[1:]))
     assert (split.hot.fields["mussel_id"].tolist(), split.others, split.bad) == ([1, 2, 3], [v1, v1], 0)
     assert [m.get_type() for m in Codec(2, 2).decode(b"".join(split.others))] == ["HEARTBEAT"] * 2
 
 
-def test_unknown_message_ids_go_to_the_normal_path() -> None:
+@pytest.mark.parametrize("msg_id", [54099, 54000 + (1 << 16), 54000 + (1 << 20)])
+def test_unknown_message_ids_go_to_the_normal_path(msg_id: int) -> None:
     frame = bytearray(Codec(1, 1).encode(mavlink.MAVLink_amussel_status_message(**_status(0))))
-    frame[7:10] = (54099).to_bytes(3, "little")
+    frame[7:10] = msg_id.to_bytes(3, "little")
     split = decode_datagram(bytes(frame))
     assert (len(split.hot), split.others, split.bad) == (0, [bytes(frame)], 0)
     rx = Codec(2, 2)
