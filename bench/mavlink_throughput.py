@@ -4,6 +4,13 @@ Two messages: the dialect's AMUSSEL_STATUS (the fleet's bulk traffic) and common
 GLOBAL_POSITION_INT (the aPad's). Over UDP every message is its own datagram, sent in bursts
 small enough for the loopback socket buffer, so the figure is the whole send/recv/parse path.
 
+A second table compares the batch path (`mavlink_dialect.hot`) with the per-message one for a
+fleet's AMUSSEL_STATUS tick at 12, 240 and 10,000 aMussels: per message is building the pymavlink
+object and `Codec.encode`; batch is `encode_batch` from numpy arrays plus `pack_datagrams`. Both
+decoders read the same 1400-byte datagrams: `Codec.decode` (pymavlink objects) against
+`decode_datagram` per datagram and `decode_datagrams` over the tick's datagrams (numpy arrays).
+Each figure is the best of three runs (shared machines are noisy).
+
     .venv/bin/python bench/mavlink_throughput.py [--count N]
 """
 
@@ -14,10 +21,12 @@ import socket
 import time
 from collections.abc import Callable
 
+import numpy as np
 from rich.console import Console
 from rich.table import Table
 
 from mavlink_dialect import Codec, mavlink, memory_pair, open_transport
+from mavlink_dialect.hot import AMUSSEL_STATUS, decode_datagram, decode_datagrams, encode_batch, pack_datagrams
 from mavlink_dialect.transport import Transport
 from mussel_sim.vocabulary import MusselState
 
@@ -78,6 +87,64 @@ def bench_link(
     return rate(got, time.perf_counter() - start), count - got
 
 
+FLEETS = (12, 240, 10_000)
+
+
+def fleet_columns(n: int) -> dict[str, np.ndarray]:
+    """One AMUSSEL_STATUS tick of `n` aMussels, the values `amussel_status` gives message by message."""
+    i = np.arange(n)
+    return {
+        "time_us": i * 1000, "mussel_id": 1 + i % 500, "lat": 439400000 + i, "lon": 154400000 - i,
+        "depth": np.full(n, 2.5), "battery": np.full(n, 0.75), "battery_voltage": np.full(n, 4050),
+        "state": np.full(n, int(MusselState.ACTIVE)), "simulated": np.ones(n, np.uint8),
+    }  # fmt: skip
+
+
+def timed(ticks: int, tick: Callable[[], object]) -> float:
+    """Seconds per tick, the best of three runs of `ticks` ticks (the machine is shared)."""
+    best = float("inf")
+    for _ in range(3):
+        start = time.perf_counter()
+        for _ in range(ticks):
+            tick()
+        best = min(best, (time.perf_counter() - start) / ticks)
+    return best
+
+
+def bench_batch(n: int, count: int) -> tuple[float, ...]:
+    """msg/s for a fleet of `n`: encode 1 by 1, batch; decode 1 by 1, per datagram, all datagrams at once."""
+    cols = fleet_columns(n)
+    ticks = max(1, count // n)
+    rows = [dict(zip(cols, values, strict=True)) for values in zip(*(c.tolist() for c in cols.values()), strict=True)]
+    tx = Codec(1, 1)
+    enc_one = timed(ticks, lambda: [tx.encode(mavlink.MAVLink_amussel_status_message(**r)) for r in rows])
+    enc_batch = timed(ticks, lambda: pack_datagrams(encode_batch(tx, AMUSSEL_STATUS, cols)))
+    grams = pack_datagrams(encode_batch(tx, AMUSSEL_STATUS, cols))
+    rx = Codec(2, 2)
+    dec_one = timed(ticks, lambda: [rx.decode(g) for g in grams])
+    dec_gram = timed(ticks, lambda: [decode_datagram(g) for g in grams])
+    dec_all = timed(ticks, lambda: decode_datagrams(grams))
+    assert sum(len(decode_datagram(g).hot) for g in grams) == n == len(decode_datagrams(grams).hot)
+    assert rx.stats.bad_data == 0
+    return n / enc_one, n / enc_batch, n / dec_one, n / dec_gram, n / dec_all
+
+
+def batch_table(count: int) -> Table:
+    table = Table(title="AMUSSEL_STATUS per fleet tick: batch path vs per message (msg/s)")
+    cols = ("aMussels", "encode 1 by 1", "encode batch", "ratio", "decode 1 by 1", "per datagram", "ratio",
+            "all at once", "ratio")  # fmt: skip
+    for col in cols:
+        table.add_column(col, justify="right")
+    for n in FLEETS:
+        enc_one, enc_batch, dec_one, dec_gram, dec_all = bench_batch(n, count)
+        table.add_row(
+            f"{n:,}", f"{enc_one:,.0f}", f"{enc_batch:,.0f}", f"{enc_batch / enc_one:.1f}x",
+            f"{dec_one:,.0f}", f"{dec_gram:,.0f}", f"{dec_gram / dec_one:.1f}x",
+            f"{dec_all:,.0f}", f"{dec_all / dec_one:.1f}x",
+        )  # fmt: skip
+    return table
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--count", type=int, default=50_000, help="messages per measurement (default 50000)")
@@ -103,7 +170,9 @@ def main() -> int:
             name, f"{bench_encode(make, count):,.0f}", f"{bench_parse(make, count):,.0f}",
             f"{mem:,.0f}", f"{udp:,.0f}", str(lost),
         )
-    Console(width=120).print(table)
+    console = Console(width=130)
+    console.print(table)
+    console.print(batch_table(count))
     return 0
 
 

@@ -89,35 +89,38 @@ def _real(value: object) -> float:
     return float(value)  # OverflowError for an int beyond a double, as struct
 
 
+def _refused(spec: HotSpec, name: str, why: str) -> ValueError:
+    return ValueError(f"{spec.name}.{name} ({spec.dtype.fields[name][0]}, struct.error): {why}")  # type: ignore[index]
+
+
 def _column(spec: HotSpec, name: str, values: np.ndarray) -> np.ndarray:
     """`values` converted to the field's wire type; ValueError where struct.pack would refuse one."""
     target = spec.dtype.fields[name][0]  # type: ignore[index]
-    where = f"{spec.name}.{name} ({target}, struct.error)"
     if values.dtype.kind == "O":  # Python numbers beyond 64 bits, or a mix: taken one by one, as struct does
         try:
             items = [_real(v) if target.kind == "f" else operator.index(v) for v in values.ravel().tolist()]
         except (TypeError, OverflowError):
-            raise ValueError(f"{where}: not a number, or too large") from None
+            raise _refused(spec, name, "not a number, or too large") from None
         values = np.array(items, np.float64 if target.kind == "f" or not items else None).reshape(values.shape)
     kind = values.dtype.kind
     if target.kind == "f":
         if kind not in "fiub":
-            raise ValueError(f"{where}: {values.dtype} values are not real numbers")
+            raise _refused(spec, name, f"{values.dtype} values are not real numbers")
         if values.dtype == target:
             return values
         wide = values.astype(np.float64, copy=False)  # as struct: to double first (no double rounding of ints)
         with np.errstate(over="ignore", invalid="ignore"):  # overflow checked below; sNaN quietened as C does
             out = wide.astype(target)
         if target.itemsize == 4 and np.isinf(out).any() and np.any(np.isinf(out) & np.isfinite(wide)):
-            raise ValueError(f"{where}: finite value too large for a float32")
+            raise _refused(spec, name, "finite value too large for a float32")
         return out
     if kind == "O":  # integers no single 64-bit type holds: some are out of any target's range
-        raise ValueError(f"{where}: value out of range")
+        raise _refused(spec, name, "value out of range")
     if kind not in "iub":  # struct refuses floats for integer fields, even 3.0
-        raise ValueError(f"{where}: {values.dtype} values, required argument is not an integer")
+        raise _refused(spec, name, f"{values.dtype} values, required argument is not an integer")
     out = _cast_ints(values, target)
     if out is None:
-        raise ValueError(f"{where}: value out of range")
+        raise _refused(spec, name, "value out of range")
     return out
 
 
