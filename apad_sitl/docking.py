@@ -80,24 +80,28 @@ class MusselTable(Mapping[int, MusselFix]):
             if a.shape != (n,) or not np.issubdtype(a.dtype, np.integer):
                 raise ValueError("update_many takes integer arrays of one shape (n,)")
         i, la, lo, st = columns
-        checks = (
-            ("mussel_id", (i >= 1) & (i <= MAX_MUSSEL_ID)),
-            ("lat", (la >= -MAX_LAT_E7) & (la <= MAX_LAT_E7)),
-            ("lon", (lo >= -MAX_LON_E7) & (lo <= MAX_LON_E7)),
-            ("state", np.isin(st, KNOWN_STATES)),
-        )
-        good = np.ones(n, dtype=bool)
-        for field, ok in checks:
-            bad = int(np.count_nonzero(good & ~ok))
-            if bad:
-                self.dropped[f"invalid:{STATUS}:{field}"] += bad
-            good &= ok
-        rows = zip(i[good].tolist(), la[good].tolist(), lo[good].tolist(), st[good].tolist(), strict=True)
-        taken = 0
-        for row in rows:
-            self._store(*row)
-            taken += 1
-        return taken
+        with np.errstate(over="ignore"):
+            fine = (i >= 1) & (i <= MAX_MUSSEL_ID) & (la >= -MAX_LAT_E7) & (la <= MAX_LAT_E7)
+            fine &= (lo >= -MAX_LON_E7) & (lo <= MAX_LON_E7) & (st >= 0) & (st < len(MusselState))  # 0..5
+        if not fine.all():  # the rare case: count each bad row by its first bad field, keep the rest
+            checks = (
+                ("mussel_id", (i >= 1) & (i <= MAX_MUSSEL_ID)),
+                ("lat", (la >= -MAX_LAT_E7) & (la <= MAX_LAT_E7)),
+                ("lon", (lo >= -MAX_LON_E7) & (lo <= MAX_LON_E7)),
+                ("state", np.isin(st, KNOWN_STATES)),
+            )
+            good = np.ones(n, dtype=bool)
+            for field, ok in checks:
+                bad = int(np.count_nonzero(good & ~ok))
+                if bad:
+                    self.dropped[f"invalid:{STATUS}:{field}"] += bad
+                good &= ok
+            i, la, lo, st = i[good], la[good], lo[good], st[good]
+        # A batch is the whole fleet once a second: take it in one dict update, and let every fix be
+        # converted afresh when next asked (only a dock asks, for one aMussel).
+        self._raw.update(zip(i.tolist(), zip(la.tolist(), lo.tolist(), st.tolist(), strict=True), strict=True))
+        self._fixes.clear()
+        return int(i.size)
 
     def _store(self, mussel_id: int, lat_e7: int, lon_e7: int, state: int) -> None:
         raw = (lat_e7, lon_e7, state)

@@ -43,7 +43,7 @@ from apad_sitl.primitives import PrimitiveState
 from apad_sitl.streams import DEFAULT_RATES_HZ, Streams
 from apad_sitl.vehicle import VehicleState
 from apad_sitl.vocabulary import RoverMode
-from mavlink_dialect import Codec, Transport, mavlink, signing
+from mavlink_dialect import Codec, Transport, hot, mavlink, signing
 from missiontime import US_PER_S, Scheduler, Task
 from mussel_sim.geo import LocalFrame
 
@@ -210,7 +210,9 @@ class SitlVehicle:
         if self.closed:
             return False
         datagrams = self.transport.receive()
-        for data in datagrams:
+        if not datagrams:
+            return False
+        for data in self._bulk_statuses(datagrams) if self.transport.datagrams else datagrams:
             try:
                 decoded = self.codec.decode(data)
             except Exception as exc:  # the codec promises not to; a promise is not a proof
@@ -227,6 +229,21 @@ class SitlVehicle:
                 except Exception as exc:  # a bug in a handler drops its message, never the vehicle
                     self._handler_error(msg.get_type(), exc)
         return bool(datagrams)
+
+    def _bulk_statuses(self, datagrams: list[bytes]) -> list[bytes]:
+        """Take the fleet's AMUSSEL_STATUS frames in one batch (`mavlink_dialect.hot`) into the fix
+        table (and the .tlog); return every other frame for the codec."""
+        try:
+            split = hot.decode_datagrams(datagrams, hot.AMUSSEL_STATUS, self.codec.stats, keep_raw=self.log is not None)
+            if len(split.hot):
+                f = split.hot.fields
+                self.mussels.update_many(f["mussel_id"], f["lat"], f["lon"], f["state"])
+                if self.log is not None and split.hot.raw is not None:
+                    self.log.messages(self.now_us, split.hot.raw)
+        except Exception as exc:  # the batch path promises not to raise; a promise is not a proof
+            self._handler_error("AMUSSEL_STATUS batch", exc)
+            return []
+        return split.others
 
     def _handler_error(self, message: str, exc: Exception) -> None:
         self.dropped[f"handler_error:{message}"] += 1

@@ -9,11 +9,11 @@ wall-clock epoch at start so the log carries real dates).
 from __future__ import annotations
 
 import json
-import struct
 from pathlib import Path
 from typing import Any
 
-_STAMP = struct.Struct(">Q")
+from mavlink_dialect.tlog import TlogWriter
+from missiontime import us_to_s
 
 
 class VehicleLog:
@@ -23,14 +23,17 @@ class VehicleLog:
         self.tlog_path = log_dir / f"{stem}.tlog"
         self.events_path = log_dir / f"{stem}.events.jsonl"
         self.epoch_us = epoch_us
-        self._tlog = open(self.tlog_path, "ab" if append else "wb")  # noqa: SIM115 - lives until close()
+        self._tlog = TlogWriter(self.tlog_path, epoch_us, append)
         self._events = open(self.events_path, "a" if append else "w", encoding="utf-8")  # noqa: SIM115
 
     def message(self, time_us: int, frame: bytes | bytearray) -> None:
-        self._tlog.write(_STAMP.pack(self.epoch_us + time_us) + frame)
+        self._tlog.write(time_us, bytes(frame))
+
+    def messages(self, time_us: int, frames: list[bytes]) -> None:
+        self._tlog.write_many(time_us, frames)
 
     def event(self, time_us: int, event: str, **fields: Any) -> None:
-        record = {"t_s": round(time_us / 1e6, 6), "event": event, **fields}
+        record = {"t_s": round(us_to_s(time_us), 6), "event": event, **fields}
         self._events.write(json.dumps(record, separators=(",", ":")) + "\n")
         self._events.flush()  # events are rare and the ones before a crash matter most
 
@@ -38,7 +41,6 @@ class VehicleLog:
         self._tlog.flush()
 
     def close(self) -> None:
-        for f in (self._tlog, self._events):
-            if not f.closed:
-                f.flush()
-                f.close()
+        self._tlog.close()
+        if not self._events.closed:
+            self._events.close()

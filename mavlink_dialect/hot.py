@@ -29,9 +29,9 @@ from numpy.typing import ArrayLike
 from mavlink_dialect import subcultron as mavlink
 from mavlink_dialect.codec import Codec, CodecStats
 
-_crc = mavlink.mcrf4xx  # pymavlink's own choice (fastcrc, a dependency of pymavlink)
-if _crc is None:  # pragma: no cover - pymavlink requires fastcrc
+if mavlink.mcrf4xx is None:  # pragma: no cover - pymavlink requires fastcrc
     raise ImportError("mavlink_dialect.hot needs fastcrc (pymavlink's CRC)")
+_crc = mavlink.mcrf4xx  # pymavlink's own choice (fastcrc, a dependency of pymavlink)
 
 HEADER = mavlink.HEADER_LEN_V2  # magic, len, incompat, compat, seq, sys, comp, msgid24
 OVERHEAD = HEADER + 2  # + CRC16
@@ -64,14 +64,14 @@ class HotSpec:
 
 def spec_for(cls: type[mavlink.MAVLink_message]) -> HotSpec:
     """The batch spec of a message with scalar fields only (arrays and strings stay on pymavlink)."""
-    fmt = cls.unpacker.format  # type: ignore[attr-defined]  # every generated class has one
-    if not fmt.startswith("<") or any(n != 0 for n in cls.array_lengths):  # type: ignore[attr-defined]
+    fmt = cls.unpacker.format  # every generated class has one
+    if not fmt.startswith("<") or any(n != 0 for n in cls.array_lengths):
         raise ValueError(f"{cls.msgname}: only little-endian messages of scalar fields are supported")
     codes = re.findall(r"\d*[a-zA-Z?]", fmt[1:])
     if any(c not in _NUMPY for c in codes) or len(codes) != len(cls.ordered_fieldnames):
         raise ValueError(f"{cls.msgname}: format {fmt!r} has fields this batch path does not pack")
     dtype = np.dtype([(f, _NUMPY[c]) for f, c in zip(cls.ordered_fieldnames, codes, strict=True)])
-    assert dtype.itemsize == cls.unpacker.size  # type: ignore[attr-defined]
+    assert dtype.itemsize == cls.unpacker.size
     return HotSpec(cls, cls.msgname, cls.id, cls.crc_extra, tuple(cls.fieldnames), dtype)
 
 
@@ -120,17 +120,17 @@ def _column(spec: HotSpec, name: str, values: np.ndarray) -> np.ndarray:
         raise _refused(spec, name, "value out of range")
     if kind not in "iub":  # struct refuses floats for integer fields, even 3.0
         raise _refused(spec, name, f"{values.dtype} values, required argument is not an integer")
-    out = _cast_ints(values, target)
-    if out is None:
+    ints = _cast_ints(values, target)
+    if ints is None:
         raise _refused(spec, name, "value out of range")
-    return out
+    return ints
 
 
 def _cast_ints(values: np.ndarray, target: np.dtype) -> np.ndarray | None:
     """`values` as `target`, or None if one of them does not fit."""
     if _SAME_VALUE:
         try:  # one cast that refuses to change a value: the range check at the price of the cast
-            return values.astype(target, casting="same_value")  # type: ignore[arg-type]
+            return values.astype(target, casting="same_value")  # numpy >= 2.4 only (see _SAME_VALUE)
         except ValueError:
             return None
     info = np.iinfo(target)
@@ -234,6 +234,7 @@ class HotFrames:
     src_system: np.ndarray  # uint8
     src_component: np.ndarray  # uint8
     seq: np.ndarray  # uint8
+    raw: list[bytes] | None = None  # the frames themselves, when asked for (a log records them)
 
     def __len__(self) -> int:
         return len(self.seq)
@@ -258,9 +259,11 @@ def decode_datagram(data: bytes, spec: HotSpec = AMUSSEL_STATUS, stats: CodecSta
 
 
 def decode_datagrams(
-    datagrams: Iterable[bytes], spec: HotSpec = AMUSSEL_STATUS, stats: CodecStats | None = None
+    datagrams: Iterable[bytes], spec: HotSpec = AMUSSEL_STATUS, stats: CodecStats | None = None,
+    keep_raw: bool = False,
 ) -> Split:
-    """`decode_datagram` over several datagrams at once (one receive's worth): one set of arrays."""
+    """`decode_datagram` over several datagrams at once (one receive's worth): one set of arrays.
+    `keep_raw` also returns the valid hot frames' bytes (`HotFrames.raw`), for a .tlog."""
     grams = [bytes(g) for g in datagrams]
     data = grams[0] if len(grams) == 1 else b"".join(grams)
     starts: list[int] = []
@@ -280,6 +283,8 @@ def decode_datagrams(
     ok = crcs == (raw[crc_end] | raw[crc_end + 1].astype(np.int64) << 8)
     bad += int(np.count_nonzero(~ok))
     frames = _gather(spec, raw, mine[ok], crc_end[ok] - mine[ok] - HEADER)
+    if keep_raw:
+        frames.raw = list(_slices(data, mine[ok], crc_end[ok] + 2))
     others = list(_slices(data, first[~hot], last[~hot]))  # signed, other ids, MAVLink 1: the codec's job
     if stats is not None:
         stats.bad_data += bad

@@ -27,6 +27,9 @@ class AddressError(ValueError):
 
 class Transport(Protocol):
     label: str
+    # True: each `receive()` item is one whole datagram as sent (UDP, in-memory), so frames never
+    # straddle two items; False: a byte stream (TCP, serial) cut anywhere.
+    datagrams: bool
 
     def send(self, data: bytes) -> None: ...
 
@@ -39,6 +42,8 @@ class Transport(Protocol):
 
 class MemoryTransport:
     """One end of an in-memory pair; `send` appends to the peer's inbox. Used in lockstep."""
+
+    datagrams = True
 
     def __init__(self, label: str) -> None:
         self.label = label
@@ -73,6 +78,8 @@ def memory_pair(label: str = "mem") -> tuple[MemoryTransport, MemoryTransport]:
 class UdpTransport:
     """UDP. Listening: answer every peer heard so far (several GCSs may share a vehicle).
     Connecting: send to the given host:port and accept replies from anywhere."""
+
+    datagrams = True
 
     def __init__(self, host: str, port: int, listen: bool) -> None:
         self.label = f"udp:{host}:{port}"
@@ -119,6 +126,8 @@ class UdpTransport:
 
 class TcpTransport:
     """TCP. Connecting: one stream to host:port. Listening: accept clients, send to all."""
+
+    datagrams = False
 
     def __init__(self, host: str, port: int, listen: bool) -> None:
         self.label = f"tcp:{host}:{port}"
@@ -197,6 +206,8 @@ class TcpTransport:
 
 class SerialTransport:
     """A serial port or pty (telemetry radio); pyserial does the line settings."""
+
+    datagrams = False
 
     def __init__(self, device: str, baud: int) -> None:
         import serial  # pyserial: only needed for this medium

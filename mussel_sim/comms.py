@@ -114,6 +114,8 @@ class FleetRunner:
         self.last_events: StepEvents | None = None
         self._ids = {int(i) for i in state.ids}
         self.apad_positions: dict[int, tuple[float, float]] = {}  # system id -> (lat_deg, lon_deg)
+        self._apads_key: tuple[tuple[int, tuple[float, float]], ...] = ()
+        self._apads_m: dict[int, tuple[float, float]] = {}
         self.real_mussel_ids: set[int] = set()
         # Where we have docked each aMussel, and the reverse: (aPad, slot) -> aMussel id.
         self._docked_at: dict[int, tuple[int, int]] = {}
@@ -243,14 +245,21 @@ class FleetRunner:
             self._slot_holds[key] = held
             self._dock[held] = key
 
+    def _apads_local(self) -> dict[int, tuple[float, float]]:
+        """The aPads' last positions in the fleet's metres (converted again only when they moved)."""
+        key = tuple(sorted(self.apad_positions.items()))
+        if key != self._apads_key:
+            apads = {}
+            if key:
+                lat = np.array([p[0] for _, p in key])
+                lon = np.array([p[1] for _, p in key])
+                x, y = self.frame.to_local(lat, lon)
+                apads = {a: (float(x[k]), float(y[k])) for k, (a, _) in enumerate(key)}
+            self._apads_key, self._apads_m = key, apads
+        return dict(self._apads_m)
+
     def _take_inputs(self) -> FleetInputs:
-        apads = {}
-        if self.apad_positions:
-            sys_ids = sorted(self.apad_positions)
-            lat = np.array([self.apad_positions[a][0] for a in sys_ids])
-            lon = np.array([self.apad_positions[a][1] for a in sys_ids])
-            x, y = self.frame.to_local(lat, lon)
-            apads = {a: (float(x[k]), float(y[k])) for k, a in enumerate(sys_ids)}
+        apads = self._apads_local()
         inputs = FleetInputs.make(
             apads=apads,
             surface=self._surface,

@@ -57,7 +57,8 @@ class MusselBatch:
         n = ids.size
 
         def col(name: str, dtype: Any) -> NDArray[Any]:
-            return np.broadcast_to(np.asarray(fields[name], dtype), (n,))
+            value = np.asarray(fields[name], dtype)
+            return value if value.ndim else np.full(n, value)
 
         return MusselBatch(ids, col("lat", np.int64), col("lon", np.int64), col("depth", np.float64),
                            col("battery", np.float64), col("battery_voltage", np.int64), col("state", np.int64),
@@ -92,10 +93,11 @@ class MusselTable(Mapping[int, MusselView]):
 
     def update_batch(self, b: MusselBatch) -> Counter[str]:
         """Take every valid row of `b`; return the rejected rows counted by reason."""
-        bad = batch_rejections(b)
-        ok = ~np.any(np.stack(list(bad.values())), axis=0) if bad else np.ones(b.mussel_id.size, bool)
-        rejected = Counter({reason: int(mask.sum()) for reason, mask in bad.items() if mask.any()})
-        if not ok.all():
+        rejected: Counter[str] = Counter()
+        if not batch_valid(b).all():  # the rare case: count by reason, keep the good rows
+            bad = batch_rejections(b)
+            rejected.update({reason: int(mask.sum()) for reason, mask in bad.items() if mask.any()})
+            ok = ~np.any(np.stack(list(bad.values())), axis=0)
             b = MusselBatch(*(getattr(b, f)[ok] for f in MusselBatch.__dataclass_fields__))
         rows = self._rows_of(b.mussel_id)
         self.lat_e7[rows], self.lon_e7[rows], self.depth_m[rows] = b.lat_e7, b.lon_e7, b.depth_m
@@ -150,6 +152,15 @@ class MusselTable(Mapping[int, MusselView]):
         return sorted(int(i) for i in self.ids[mask])
 
 
+def batch_valid(b: MusselBatch) -> NDArray[np.bool_]:
+    """Rows that pass every rule of `batch_rejections`, in one pass."""
+    with np.errstate(invalid="ignore"):
+        return ((b.mussel_id > 0) & (np.abs(b.lat_e7) <= 90 * DEG_E7) & (np.abs(b.lon_e7) <= 180 * DEG_E7)
+                & (b.battery_frac >= 0.0) & (b.battery_frac <= 1.0) & (b.depth_m >= 0.0)
+                & np.isfinite(b.depth_m) & (b.state >= 0) & (b.state < _N_STATES)
+                & (b.simulated >= 0) & (b.simulated <= 1))
+
+
 def batch_rejections(b: MusselBatch) -> dict[str, NDArray[np.bool_]]:
     """Per reason, the rows of a batch that fail validation (the rules of `telemetry._mussel`)."""
     lat_lon_bad = (np.abs(b.lat_e7) > 90 * DEG_E7) | (np.abs(b.lon_e7) > 180 * DEG_E7)
@@ -157,9 +168,9 @@ def batch_rejections(b: MusselBatch) -> dict[str, NDArray[np.bool_]]:
         level_bad = ~(np.isfinite(b.depth_m) & np.isfinite(b.battery_frac) & (b.battery_frac >= 0.0)
                       & (b.battery_frac <= 1.0) & (b.depth_m >= 0.0))
     return {
-        "AMUSSEL_STATUS.mussel_id": b.mussel_id == 0,
+        "AMUSSEL_STATUS.mussel_id": b.mussel_id <= 0,
         "AMUSSEL_STATUS.lat_lon": lat_lon_bad,
         "AMUSSEL_STATUS.battery_depth": level_bad,
-        "AMUSSEL_STATUS.state": b.state >= _N_STATES,
-        "AMUSSEL_STATUS.simulated": b.simulated > 1,
+        "AMUSSEL_STATUS.state": (b.state < 0) | (b.state >= _N_STATES),
+        "AMUSSEL_STATUS.simulated": (b.simulated < 0) | (b.simulated > 1),
     }

@@ -103,3 +103,17 @@ def test_runner_serves_operator_commands_between_loop_waits() -> None:
         runner.request_quit()
         thread.join(60)
     assert not thread.is_alive() and runner.error is None
+
+
+def test_a_batch_of_statuses_takes_the_good_rows_and_counts_the_bad_ones_by_reason() -> None:
+    from gcs.link.fleet_table import MusselBatch, MusselTable
+
+    table = MusselTable()
+    n = 6
+    wire = {"mussel_id": np.array([1, 2, 3, 0, 5, 6]), "lat": np.full(n, 439400000), "lon": np.full(n, 154400000),
+            "depth": np.array([3.0, np.nan, 3.0, 3.0, 3.0, 3.0]), "battery": np.array([0.5, 0.5, 1.5, 0.5, 0.5, 0.5]),
+            "battery_voltage": 4000, "state": np.array([0, 0, 0, 0, 9, 2]), "simulated": 1, "time_us": 7}
+    rejected = table.update_batch(MusselBatch.from_wire(wire))
+    assert sorted(table) == [1, 6]  # the only rows with nothing wrong
+    assert rejected == {"AMUSSEL_STATUS.battery_depth": 2, "AMUSSEL_STATUS.mussel_id": 1, "AMUSSEL_STATUS.state": 1}
+    assert table[6].state == MusselState.FLOATING and table[6].time_us == 7

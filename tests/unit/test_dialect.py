@@ -99,3 +99,5 @@ def test_the_models_vocabulary_is_what_the_wire_carries() -> None:
         wire = {e.name.removeprefix(prefix): value for value, e in mavlink.enums[wire_name].items()
                 if not e.name.endswith("_ENUM_END")}
         assert wire == {m.name: m.value for m in model}, wire_name
+    # The batch validators (gcs.link.fleet_table, apad_sitl.docking) test a state by its range.
+    assert [s.value for s in MusselState] == list(range(len(MusselState)))
