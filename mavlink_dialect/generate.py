@@ -6,8 +6,10 @@ and stub are exactly what this produces.
 
 The stub is the one place pymavlink is typed for us. It is derived from the XML through
 pymavlink's own parser (`mavparse`, the same objects mavgen reads), so every message class has its
-fields with their Python types, and the fixed part (`MAVLink`, `MAVLink_message`, ...) declares
-what the generated module defines. Types follow what the module does at run time:
+description and its fields with their Python types. The part of the module that is the same for
+every dialect (`MAVLink_message`, `x25crc`, the state of `MAVLink`, ...) is typed once, by hand, in
+the stub-only module `_pymavlink_base.pyi`, which the stub re-exports. Types follow what the module
+does at run time:
 
 - integer fields are `int`, float and double fields `float`;
 - char arrays are passed to `__init__` as `bytes` and read back as `str` (the constructor cuts at
@@ -19,8 +21,10 @@ what the generated module defines. Types follow what the module does at run time
 
 from __future__ import annotations
 
+import ast
 import os
 import sys
+import textwrap
 from pathlib import Path
 from typing import Any
 
@@ -30,9 +34,10 @@ HERE = Path(__file__).resolve().parent
 XML_PATH = HERE / "subcultron.xml"
 MODULE_PATH = HERE / "subcultron.py"
 STUB_PATH = MODULE_PATH.with_suffix(".pyi")
+BASE_STUB_PATH = HERE / "_pymavlink_base.pyi"  # the fixed part, imported by the stub
 
 WIRE_PROTOCOL = mavparse.PROTOCOL_2_0
-LINE_LENGTH = 120  # the project's ruff line length; the stub is linted like our code
+LINE_LENGTH = 120  # the project's line length, for the docstrings in the stub
 
 _SCALAR = {
     "float": "float",
@@ -90,8 +95,8 @@ def render_stub(xml_path: Path = XML_PATH) -> str:
     docs = parse(xml_path)
     messages = [m for doc in docs for m in doc.message]
     enums = [e for doc in docs for e in doc.enum]
-    names: set[str] = set(_FIXED_NAMES)
-    out = [_HEADER.format(xml=Path(xml_path).name, files=", ".join(d.basename + ".xml" for d in docs)), _PREAMBLE]
+    names = _fixed_names()
+    out = [_HEADER.format(xml=Path(xml_path).name, files=", ".join(d.basename + ".xml" for d in docs))]
 
     out.append("\n# enum entries (all enums, merged across the included files)\n")
     for enum in enums:
@@ -115,6 +120,19 @@ def render_stub(xml_path: Path = XML_PATH) -> str:
     for m in messages:
         out.append(_encode_and_send(m))
     return "".join(out)
+
+
+def _fixed_names(base_stub: Path = BASE_STUB_PATH) -> set[str]:
+    """The names the fixed part defines (an enum entry or message id of the same name is not declared
+    again: the module has it once)."""
+    names: set[str] = set()
+    for node in ast.parse(base_stub.read_text(encoding="utf-8")).body:
+        if isinstance(node, ast.ClassDef):
+            names.add(node.name)
+        elif isinstance(node, ast.AnnAssign | ast.Assign):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            names.update(t.id for t in targets if isinstance(t, ast.Name))
+    return names
 
 
 def _attribute_type(field: Any) -> str:
@@ -145,259 +163,65 @@ def _arguments(m: Any, encode: bool) -> list[str]:
     return args
 
 
+# The stub is compact: a message class is its description, its fields on one line and `__init__` on
+# one line, and each method of `MAVLink` is one line, whatever the length (ruff does not lint the
+# generated stub). One field or argument a line made hundreds of classes of the same shape.
+
+
 def _def(name: str, args: list[str], returns: str) -> str:
-    """A stub method, on one line if it fits, else one argument per line."""
-    line = f"    def {name}(self, {', '.join(args)}) -> {returns}: ..."
-    if len(line) <= LINE_LENGTH:
-        return line + "\n"
-    body = "".join(f"        {a},\n" for a in ["self", *args])
-    return f"    def {name}(\n{body}    ) -> {returns}: ...\n"
+    """A stub method on one line."""
+    return f"    def {name}({', '.join(['self', *args])}) -> {returns}: ...\n"
+
+
+def _docstring(text: str) -> str:
+    """The XML's description as a docstring, wrapped to the project's line length."""
+    text = " ".join(text.split()).replace("\\", "\\\\").replace('"', '\\"') or "(no description)"
+    lines = textwrap.wrap(f'"""{text}"""', LINE_LENGTH - 4, break_long_words=False, break_on_hyphens=False)
+    return "".join(f"    {line}\n" for line in lines)
+
+
+def _units(fields: list[Any]) -> str:
+    """A comment with the fields' units, `  # a, b: m; c: rad/s`, or nothing if none has one."""
+    by_unit: dict[str, list[str]] = {}
+    for f in fields:
+        if f.units:
+            by_unit.setdefault(f.units.strip("[]"), []).append(f.name)
+    return "  # " + "; ".join(f"{', '.join(names)}: {unit}" for unit, names in by_unit.items()) if by_unit else ""
 
 
 def _message_class(m: Any) -> str:
-    lines = [f"\n\nclass MAVLink_{m.name.lower()}_message(MAVLink_message):\n"]
-    for f in m.fields:
-        units = f.units.strip("[]")
-        lines.append(f"    {f.name}: {_attribute_type(f)}" + (f"  # {units}\n" if units else "\n"))
-    lines.append(_def("__init__", _arguments(m, encode=False), "None"))
-    return "".join(lines)
+    fields = "; ".join(f"{f.name}: {_attribute_type(f)}" for f in m.fields)
+    head = f"\n\nclass MAVLink_{m.name.lower()}_message(MAVLink_message):\n" + _docstring(m.description)
+    body = f"    {fields}{_units(m.fields)}\n" if fields else ""
+    return head + body + _def("__init__", _arguments(m, encode=False), "None")
 
 
 def _encode_and_send(m: Any) -> str:
-    name = m.name.lower()
-    args = _arguments(m, encode=True)
-    return _def(f"{name}_encode", args, f"MAVLink_{name}_message") + _def(
-        f"{name}_send", [*args, "force_mavlink1: bool = False"], "None"
-    )
+    name, args = m.name.lower(), _arguments(m, encode=True)
+    send = _def(f"{name}_send", [*args, "force_mavlink1: bool = False"], "None")
+    return _def(f"{name}_encode", args, f"MAVLink_{name}_message") + send
 
 
 _HEADER = '''"""Typed stub for `subcultron.py`, the module mavgen generates from {xml}.
 
 Generated by `python -m mavlink_dialect.generate` through pymavlink's `mavparse` from
-{files}.
+{files}. The part that is the same for every dialect is in `_pymavlink_base.pyi`.
 DO NOT EDIT: change the XML or mavlink_dialect/generate.py and regenerate.
 """
 
+from collections.abc import Sequence
+from typing import Any
+
+from mavlink_dialect._pymavlink_base import *
+from mavlink_dialect._pymavlink_base import _MAVLinkBase
+from mavlink_dialect._pymavlink_base import _x25crc_fast as _x25crc_fast, _x25crc_slow as _x25crc_slow
 '''
-
-# The part of the module mavgen writes the same for every dialect (pymavlink 2.4.50), typed from
-# its source. `Any` where pymavlink's own annotation would be wrong (e.g. `to_dict` values can be
-# lists) or no single type is right.
-_PREAMBLE = '''\
-import logging
-import struct
-from collections.abc import Callable, Iterable, Mapping, Sequence
-from typing import Any, ClassVar, Protocol, TypeAlias, type_check_only
-
-from typing_extensions import Buffer
-
-WIRE_PROTOCOL_VERSION: str
-DIALECT: str
-
-PROTOCOL_MARKER_V1: int
-PROTOCOL_MARKER_V2: int
-HEADER_LEN_V1: int
-HEADER_LEN_V2: int
-MAVLINK_SIGNATURE_BLOCK_LEN: int
-MAVLINK_IFLAG_SIGNED: int
-
-logger: logging.Logger
-MAVLINK_IGNORE_CRC: str | int  # the MAV_IGNORE_CRC environment variable, or 0
-
-MAVLINK_TYPE_CHAR: int
-MAVLINK_TYPE_UINT8_T: int
-MAVLINK_TYPE_INT8_T: int
-MAVLINK_TYPE_UINT16_T: int
-MAVLINK_TYPE_INT16_T: int
-MAVLINK_TYPE_UINT32_T: int
-MAVLINK_TYPE_INT32_T: int
-MAVLINK_TYPE_UINT64_T: int
-MAVLINK_TYPE_INT64_T: int
-MAVLINK_TYPE_FLOAT: int
-MAVLINK_TYPE_DOUBLE: int
-
-@type_check_only
-class _Crc16(Protocol):  # only in the stub: the type of mcrf4xx
-    def __call__(self, data: Buffer, initial: int | None = None) -> int: ...
-
-mcrf4xx: _Crc16 | None  # fastcrc.crc16.mcrf4xx, None if fastcrc does not import
-
-BytesLike: TypeAlias = list[int] | tuple[int, ...] | bytes | bytearray | str
-
-class _x25crc_slow:
-    crc: int
-    def __init__(self, buf: BytesLike | None = None) -> None: ...
-    def accumulate(self, buf: BytesLike) -> None: ...
-
-class _x25crc_fast:
-    crc: int
-    def __init__(self, buf: BytesLike | None = None) -> None: ...
-    def accumulate(self, buf: BytesLike) -> None: ...
-
-x25crc: type[_x25crc_fast] | type[_x25crc_slow]
-
-class MAVLink_header:
-    mlen: int
-    seq: int
-    srcSystem: int
-    srcComponent: int
-    msgId: int
-    incompat_flags: int
-    compat_flags: int
-    def __init__(
-        self,
-        msgId: int,
-        incompat_flags: int = 0,
-        compat_flags: int = 0,
-        mlen: int = 0,
-        seq: int = 0,
-        srcSystem: int = 0,
-        srcComponent: int = 0,
-    ) -> None: ...
-    def pack(self, force_mavlink1: bool = False) -> bytes: ...
-
-class MAVLink_message:
-    """Base of every message class; the generated subclasses set the class attributes."""
-
-    id: int  # the message id (an instance's `id` field, where a message has one, shadows it)
-    msgname: str
-    fieldnames: list[str]
-    ordered_fieldnames: list[str]
-    fieldtypes: list[str]
-    fielddisplays_by_name: dict[str, str]
-    fieldenums_by_name: dict[str, str]
-    fieldunits_by_name: dict[str, str]
-    native_format: bytearray
-    orders: list[int]
-    lengths: list[int]
-    array_lengths: list[int]
-    crc_extra: int
-    unpacker: struct.Struct
-    instance_field: str | None
-    instance_offset: int
-    __hash__: ClassVar[None]  # type: ignore[assignment]  # defines __eq__ only: unhashable at run time
-    def __init__(self, msgId: int, name: str) -> None: ...
-    def format_attr(self, field: str) -> Any: ...
-    def get_msgbuf(self) -> bytearray: ...
-    def get_header(self) -> MAVLink_header: ...
-    def get_payload(self) -> bytes | bytearray | None: ...
-    def get_crc(self) -> int | None: ...
-    def get_fieldnames(self) -> list[str]: ...
-    def get_type(self) -> str: ...
-    def get_msgId(self) -> int: ...
-    def get_srcSystem(self) -> int: ...
-    def get_srcComponent(self) -> int: ...
-    def get_seq(self) -> int: ...
-    def get_signed(self) -> bool: ...
-    def get_link_id(self) -> int | None: ...
-    def __eq__(self, other: object) -> bool: ...
-    def __ne__(self, other: object) -> bool: ...
-    def to_dict(self) -> dict[str, Any]: ...  # str, int, float or a list of them per field
-    def to_json(self) -> str: ...
-    def sign_packet(self, mav: MAVLink) -> None: ...
-    def pack(self, mav: MAVLink, force_mavlink1: bool = False) -> bytes: ...
-    def __getitem__(self, key: str) -> Any: ...
-
-class mavlink_msg_deprecated_name_property:
-    def __get__(self, instance: MAVLink_message | None, owner: type[MAVLink_message]) -> str: ...
-
-class EnumEntry:
-    name: str
-    description: str
-    param: dict[int, str]
-    label: dict[int, str]
-    has_location: bool
-    def __init__(self, name: str, description: str) -> None: ...
-
-class Enum(dict[int, EnumEntry]):
-    bitmask: bool
-    def __init__(self) -> None: ...
-
-enums: dict[str, Enum]
-
-class MAVError(Exception):
-    message: str
-    def __init__(self, msg: str) -> None: ...
-
-class MAVLink_bad_data(MAVLink_message):
-    data: bytes | bytearray
-    reason: str
-    def __init__(self, data: bytes | bytearray, reason: str) -> None: ...
-
-class MAVLink_unknown(MAVLink_message):
-    data: bytes | bytearray
-    def __init__(self, msgid: int, data: bytes | bytearray) -> None: ...
-
-class MAVLinkSigning:
-    secret_key: bytes | None
-    timestamp: int
-    link_id: int
-    sign_outgoing: bool
-    allow_unsigned_callback: Callable[[MAVLink, int], bool] | None
-    stream_timestamps: dict[tuple[int, int, int], int]
-    sig_count: int
-    badsig_count: int
-    goodsig_count: int
-    unsigned_count: int
-    reject_count: int
-    def __init__(self) -> None: ...
-
-MAVLinkV1Header: TypeAlias = tuple[bytes, int, int, int, int, int]
-MAVLinkV2Header: TypeAlias = tuple[bytes, int, int, int, int, int, int, int, int]
-'''
-
-_FIXED_NAMES = frozenset(
-    line.split(":")[0].split("(")[0].removeprefix("class ").strip()
-    for line in _PREAMBLE.splitlines()
-    if line and not line[0].isspace() and not line.startswith(("import ", "from ", "#"))
-)
 
 _MAVLINK_CLASS = '''
 
-class MAVLink:
-    """One MAVLink party's parser and encoder state."""
+class MAVLink(_MAVLinkBase):
+    """One MAVLink party's parser and encoder state, with a `<message>_encode` and `_send` per message."""
 
-    seq: int
-    file: Any  # whatever has the `write(bytes)` that `send` calls; None if unused
-    srcSystem: int
-    srcComponent: int
-    callback: Callable[..., None] | None
-    callback_args: Iterable[Any] | None
-    callback_kwargs: Mapping[str, Any] | None
-    send_callback: Callable[..., None] | None
-    send_callback_args: Iterable[Any] | None
-    send_callback_kwargs: Mapping[str, Any] | None
-    buf: bytearray
-    buf_index: int
-    expected_length: int
-    have_prefix_error: bool
-    robust_parsing: bool
-    protocol_marker: int
-    little_endian: bool
-    crc_extra: bool
-    sort_fields: bool
-    total_packets_sent: int
-    total_bytes_sent: int
-    total_packets_received: int
-    total_bytes_received: int
-    total_receive_errors: int
-    startup_time: float
-    signing: MAVLinkSigning
-    mav20_unpacker: struct.Struct
-    mav10_unpacker: struct.Struct
-    mav20_h3_unpacker: struct.Struct
-    mav_csum_unpacker: struct.Struct
-    mav_sign_unpacker: struct.Struct
-    def __init__(self, file: Any, srcSystem: int = 0, srcComponent: int = 0, use_native: bool = False) -> None: ...
-    def set_callback(self, callback: Callable[..., None], *args: Any, **kwargs: Any) -> None: ...
-    def set_send_callback(self, callback: Callable[..., None], *args: Any, **kwargs: Any) -> None: ...
-    def send(self, mavmsg: MAVLink_message, force_mavlink1: bool = False) -> None: ...
-    def buf_len(self) -> int: ...
-    def bytes_needed(self) -> int: ...
-    def parse_char(self, c: Sequence[int]) -> MAVLink_message | None: ...
-    def parse_buffer(self, s: Sequence[int]) -> list[MAVLink_message] | None: ...
-    def check_signature(self, msgbuf: bytearray, srcSystem: int, srcComponent: int) -> bool: ...
-    def decode(self, msgbuf: bytearray) -> MAVLink_message: ...  # appends to slices of it: bytes fail
 '''
 
 

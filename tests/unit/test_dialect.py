@@ -7,7 +7,7 @@ import importlib
 from pathlib import Path
 
 from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
-from mavlink_dialect.generate import MODULE_PATH, STUB_PATH, XML_PATH, generate
+from mavlink_dialect.generate import BASE_STUB_PATH, MODULE_PATH, STUB_PATH, XML_PATH, generate
 
 OUR_MESSAGES = ["AMUSSEL_STATUS", "AMUSSEL_SENSORS", "DOCK_SLOT_STATUS", "PRIMITIVE_STATUS", "AMUSSEL_COMMAND"]
 
@@ -18,8 +18,9 @@ def test_committed_module_and_stub_are_what_generate_makes_from_the_xml_now(tmp_
     assert fresh.with_suffix(".pyi").read_bytes() == STUB_PATH.read_bytes()
 
 
-def _stub_top_level() -> dict[str, ast.stmt]:
-    tree = ast.parse(STUB_PATH.read_text(encoding="utf-8"))
+def _stub_top_level(stub: Path = STUB_PATH) -> dict[str, ast.stmt]:
+    """The names a stub gives its module, with those it re-exports from the stub-only base module."""
+    tree = ast.parse(stub.read_text(encoding="utf-8"))
     names: dict[str, ast.stmt] = {}
     for node in tree.body:
         if isinstance(node, ast.ClassDef):
@@ -28,6 +29,13 @@ def _stub_top_level() -> dict[str, ast.stmt]:
         elif isinstance(node, ast.AnnAssign | ast.Assign):
             targets = node.targets if isinstance(node, ast.Assign) else [node.target]
             names.update((t.id, node) for t in targets if isinstance(t, ast.Name))
+        elif isinstance(node, ast.ImportFrom) and node.module == f"mavlink_dialect.{BASE_STUB_PATH.stem}":
+            base = _stub_top_level(BASE_STUB_PATH)
+            for alias in node.names:  # in a stub, `*` re-exports the public names, `x as x` the name x
+                if alias.name == "*":
+                    names.update((n, s) for n, s in base.items() if not n.startswith("_"))
+                elif alias.asname == alias.name:
+                    names[alias.name] = base[alias.name]
     return names
 
 
