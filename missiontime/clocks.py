@@ -210,9 +210,12 @@ class WallClock:
         scheduler: Scheduler | None = None,
         start_us: int = 0,
         monotonic: Callable[[], float] = time.monotonic,
+        wait: Callable[[float], None] = time.sleep,
     ) -> None:
+        """`monotonic` is the wall clock; `wait` idles when no poller has a file to wait on (tests
+        pass their own pair)."""
         self.scheduler = scheduler or Scheduler()
-        self._monotonic = monotonic
+        self._monotonic, self._wait = monotonic, wait
         self._origin_s = monotonic() - start_us / US_PER_S
 
     @property
@@ -244,26 +247,31 @@ class WallClock:
             if fds:
                 select.select(fds, [], [], timeout_s)
             else:
-                time.sleep(timeout_s)
+                self._wait(timeout_s)
 
 
 class PacedClock(VirtualClock):
     """Lockstep time that runs at most `speed` times the wall clock: a deterministic world a
     person (or a Pilot test) can watch. `speed` 1 looks like the field; the bits do not depend on it."""
 
-    def __init__(self, speed: float) -> None:
+    def __init__(
+        self, speed: float, monotonic: Callable[[], float] = time.monotonic,
+        wait: Callable[[float], None] = time.sleep,
+    ) -> None:
+        """`monotonic` and `wait` are the wall clock it keeps pace with (tests pass their own)."""
         super().__init__()
         if speed <= 0:
             raise ValueError(f"speed must be positive, got {speed}")
         self.speed = speed
-        self._wall0 = time.monotonic()
+        self._monotonic, self._wait = monotonic, wait
+        self._wall0 = monotonic()
 
     def sleep(self, dt_s: float) -> None:
         target_us = self.now_us + seconds_to_us(max(dt_s, 0.0))
         while True:
             self.advance_to(min(target_us, self.now_us + 100_000))
-            ahead_s = us_to_s(self.now_us) / self.speed - (time.monotonic() - self._wall0)
+            ahead_s = us_to_s(self.now_us) / self.speed - (self._monotonic() - self._wall0)
             if ahead_s > 0:
-                time.sleep(ahead_s)
+                self._wait(ahead_s)
             if self.now_us >= target_us:
                 return

@@ -510,16 +510,6 @@ def test_tlog_and_event_log_are_written_and_readable(world: World, tmp_path: Pat
     assert all(a["t_s"] <= b["t_s"] for a, b in pairwise(events))
 
 
-def test_lockstep_runs_far_faster_than_real_time(world: World) -> None:
-    import time
-
-    world.gcs.reposition(200.0, 100.0)
-    start = time.perf_counter()
-    world.clock.sleep(600.0)
-    elapsed = time.perf_counter() - start
-    assert elapsed < 600.0 / 300.0  # measured ~1000x here; leave room for slow CI
-
-
 # ---------------------------------------------------------------------------- real UDP, wall clock
 
 

@@ -88,7 +88,7 @@ def test_connect_runs_for_the_duration_and_sends_to_the_gcs(capsys: pytest.Captu
         args = parse("--connect", f"udp:127.0.0.1:{port}", "--duration", "0.5", "--home", "45.43,12.33",
                      "--current", "0.1,-0.05", "--param", "speed_max=0.3")
         assert run(args) == 0
-        assert 0.45 <= time.monotonic() - start < 3.0
+        assert time.monotonic() - start >= 0.5  # it ran for the whole duration, not less
         gcs.settimeout(0.5)
         msgs = Codec(250, 190).decode(gcs.recv(65535))
     assert msgs[0].get_type() == "HEARTBEAT"

@@ -74,11 +74,18 @@ def test_canvas_dots_lines_and_glyphs() -> None:
 
 
 def test_paced_clock_keeps_to_its_speed() -> None:
-    clock = PacedClock(speed=20.0)
-    start = time.monotonic()
+    wall = {"now_s": 50.0}
+    waits: list[float] = []
+
+    def wait(dt_s: float) -> None:
+        waits.append(dt_s)
+        wall["now_s"] += dt_s
+
+    clock = PacedClock(speed=20.0, monotonic=lambda: wall["now_s"], wait=wait)
     clock.sleep(2.0)
     assert clock.time() == 2.0
-    assert 0.09 < time.monotonic() - start < 0.5
+    assert wall["now_s"] - 50.0 == pytest.approx(2.0 / 20.0)  # 2 s of mission time took 0.1 s of wall time
+    assert len(waits) == 20  # in steps of 0.1 s of mission time, so a watcher sees it move
 
 
 @pytest.mark.sitl
