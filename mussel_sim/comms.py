@@ -111,6 +111,8 @@ class FleetRunner:
         self.local = local
         self.local_batch = local_batch
         self.end_us: int | None = None  # no steps past this mission time (see `register`)
+        self._scheduler: Scheduler | None = None
+        self._step_task: Task | None = None
         self.last_events: StepEvents | None = None
         self._ids = {int(i) for i in state.ids}
         self.apad_positions: dict[int, tuple[float, float]] = {}  # system id -> (lat_deg, lon_deg)
@@ -135,13 +137,23 @@ class FleetRunner:
         """
         cfg = self.config
         self.end_us = end_us
+        self._scheduler = scheduler
+        self._step_task = scheduler.every(
+            cfg.step_period_s, self.step_task, "mussel-step", start_us + round(cfg.step_period_s * US_PER_S)
+        )
         return [
-            scheduler.every(
-                cfg.step_period_s, self.step_task, "mussel-step", start_us + round(cfg.step_period_s * US_PER_S)
-            ),
+            self._step_task,
             scheduler.every(1.0 / cfg.status_rate_hz, self.publish_status_task, "mussel-status", start_us),
             scheduler.every(1.0 / cfg.sensors_rate_hz, self.publish_sensors_task, "mussel-sensors", start_us),
         ]
+
+    def resume(self, state: FleetState, rng_state: dict[str, Any], recorder: Recorder) -> None:
+        """Continue from a saved state (a resumed mission): the next step falls a whole step period
+        after the saved state's time, not after whenever this runner was started."""
+        self.state, self.recorder = state, recorder
+        self.rng.bit_generator.state = rng_state
+        if self._scheduler is not None and self._step_task is not None:
+            self._scheduler.reschedule(self._step_task, next_us=state.time_us + self._step_task.period_us)
 
     def step_task(self, now_us: int) -> None:
         """Advance the model from its own time to `now_us` with the queued inputs."""

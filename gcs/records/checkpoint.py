@@ -293,12 +293,10 @@ def restore(world: World, ckpt: Checkpoint) -> None:
     if world.clock.now_us != ckpt.time_us:
         raise CheckpointError("the world's clock must start at the checkpoint's mission time")
     fleet = world.fleet
-    fleet.state = ckpt.fleet_state
-    fleet.rng.bit_generator.state = ckpt.fleet_rng_state
     if not (np.array_equal(ckpt.recorder.ids, fleet.recorder.ids)
             and np.array_equal(ckpt.recorder.trace_ids, fleet.recorder.trace_ids)):
         raise CheckpointError("the checkpoint's recorder is of other aMussels than the scenario's")
-    fleet.recorder = ckpt.recorder
+    fleet.resume(ckpt.fleet_state, ckpt.fleet_rng_state, ckpt.recorder)
     world.link.registry.restore(ckpt.registry)
     v, snap = world.vehicle, ckpt.vehicle
     if v is not None and snap is not None:
