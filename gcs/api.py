@@ -18,10 +18,10 @@ from collections.abc import Sequence
 from apad_sitl.geofence import Geofence
 from apad_sitl.vocabulary import Primitive, Progress, RoverMode
 from gcs.link.commands import CommandError
-from gcs.link.fleet_table import MusselTable, MusselView
+from gcs.link.fleet_table import MusselTable
 from gcs.link.registry import VehicleView
 from gcs.link.router import Link
-from gcs.link.telemetry import Location, SlotView
+from gcs.link.telemetry import Location, MusselView, SlotView
 from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
 from missiontime import Clock, seconds_to_us
 from mussel_sim.geo import LocalFrame

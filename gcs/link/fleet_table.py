@@ -16,24 +16,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from gcs.link.telemetry import DEG_E7, Location, MusselReport
+from gcs.link.telemetry import DEG_E7, MusselView
 from mussel_sim.vocabulary import MusselState
 
 _N_STATES = len(MusselState)
-
-
-@dataclass(frozen=True, slots=True)
-class MusselView:
-    """The latest AMUSSEL_STATUS heard for one aMussel."""
-
-    mussel_id: int
-    location: Location
-    depth_m: float
-    battery_frac: float
-    battery_mv: int
-    state: MusselState
-    simulated: bool
-    time_us: int
 
 
 @dataclass(frozen=True)
@@ -82,7 +68,7 @@ class MusselTable(Mapping[int, MusselView]):
 
     # --- updates -----------------------------------------------------------------------------
 
-    def update(self, r: MusselReport) -> None:
+    def update(self, r: MusselView) -> None:
         row = self._row.get(r.mussel_id)
         if row is None:
             row = self._row[r.mussel_id] = len(self._row)
@@ -130,9 +116,8 @@ class MusselTable(Mapping[int, MusselView]):
     def __getitem__(self, mussel_id: int) -> MusselView:
         k = self._row[mussel_id]  # KeyError: never heard
         return MusselView(
-            mussel_id, Location(int(self.lat_e7[k]) / DEG_E7, int(self.lon_e7[k]) / DEG_E7), float(self.depth_m[k]),
-            float(self.battery_frac[k]), int(self.battery_mv[k]), MusselState(int(self.state[k])),
-            bool(self.simulated[k]), int(self.time_us[k]),
+            mussel_id, int(self.lat_e7[k]), int(self.lon_e7[k]), float(self.depth_m[k]), float(self.battery_frac[k]),
+            int(self.battery_mv[k]), MusselState(int(self.state[k])), bool(self.simulated[k]), int(self.time_us[k]),
         )
 
     def __iter__(self) -> Iterator[int]:

@@ -17,7 +17,7 @@ from gcs.link.telemetry import (
     GoToSent,
     Heartbeat,
     Home,
-    MusselReport,
+    MusselView,
     ParamValue,
     Position,
     PrimitiveView,
@@ -89,7 +89,7 @@ class VehicleRegistry:
 
     def apply(self, system_id: int, record: Record, now_us: int) -> None:
         """Fold one record from `system_id` into the state."""
-        if isinstance(record, MusselReport):
+        if isinstance(record, MusselView):
             self.mussels.update(record)
             self.version += 1
             return

@@ -114,8 +114,8 @@ class CommandAck:
 
 
 @dataclass(frozen=True, slots=True)
-class MusselReport:
-    """One AMUSSEL_STATUS (simulated or real)."""
+class MusselView:
+    """One AMUSSEL_STATUS (simulated or real): what the GCS knows of an aMussel."""
 
     mussel_id: int
     lat_e7: int
@@ -126,6 +126,10 @@ class MusselReport:
     state: MusselState
     simulated: bool
     time_us: int
+
+    @property
+    def location(self) -> Location:
+        return Location(self.lat_e7 / DEG_E7, self.lon_e7 / DEG_E7)
 
 
 @dataclass(frozen=True, slots=True)
@@ -138,7 +142,7 @@ class GoToSent:
 
 
 Record = (Heartbeat | Position | PrimitiveView | SlotView | Battery | Home | ParamValue | StatusText
-          | CommandAck | MusselReport | GoToSent)
+          | CommandAck | MusselView | GoToSent)
 
 
 def lat_lon_ok(lat_e7: int, lon_e7: int) -> bool:
@@ -225,7 +229,7 @@ def _ack(m: Any) -> CommandAck | Rejected:
     return CommandAck(int(m.command), int(m.result), int(getattr(m, "result_param2", 0)))
 
 
-def _mussel(m: Any) -> MusselReport | Rejected:
+def _mussel(m: Any) -> MusselView | Rejected:
     if m.mussel_id == 0:
         return Rejected("AMUSSEL_STATUS.mussel_id")
     if not lat_lon_ok(m.lat, m.lon):
@@ -236,7 +240,7 @@ def _mussel(m: Any) -> MusselReport | Rejected:
         return Rejected("AMUSSEL_STATUS.state")
     if m.simulated not in (0, 1):
         return Rejected("AMUSSEL_STATUS.simulated")
-    return MusselReport(m.mussel_id, m.lat, m.lon, m.depth, m.battery, m.battery_voltage, MusselState(m.state),
+    return MusselView(m.mussel_id, m.lat, m.lon, m.depth, m.battery, m.battery_voltage, MusselState(m.state),
                         bool(m.simulated), m.time_us)
 
 

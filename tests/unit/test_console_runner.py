@@ -29,7 +29,7 @@ def _status(registry: VehicleRegistry, mussel_id: int, battery: float, state: Mu
         0, mussel_id, 439400000, 154400000, 3.0, battery, 4000, int(state), 1))
     (decoded,) = Codec(250, 190).decode(msg)
     record = telemetry.read(decoded)
-    assert isinstance(record, telemetry.MusselReport)
+    assert isinstance(record, telemetry.MusselView)
     registry.apply(251, record, 0)
 
 
