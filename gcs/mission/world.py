@@ -53,12 +53,13 @@ class LinkOptions:
 
 # What the mission loop needs from the aPad, requested like any GCS does (SET_MESSAGE_INTERVAL).
 # Slot and primitive changes are also sent the moment they happen, so slow periodic copies do.
-# The battery comes in SYS_STATUS (1 Hz by default): BATTERY_STATUS, which the GCS does not read,
-# is switched off.
+# The battery comes in SYS_STATUS, and a boat's pack drains over hours: 0.2 Hz is plenty for the
+# end-of-mission check. BATTERY_STATUS, which the GCS does not read, is switched off.
 MISSION_TELEMETRY_HZ = {
     mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: 2.0,
     mavlink.MAVLINK_MSG_ID_PRIMITIVE_STATUS: 1.0,
     mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS: 0.2,
+    mavlink.MAVLINK_MSG_ID_SYS_STATUS: 0.2,
     mavlink.MAVLINK_MSG_ID_BATTERY_STATUS: 0.0,
 }
 
