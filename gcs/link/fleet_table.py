@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from gcs.link.telemetry import DEG_E7, MusselView
+from gcs.link.telemetry import DEG_E7, MAX_TIME_US, MusselView
 from mussel_sim.vocabulary import MusselState
 
 _N_STATES = len(MusselState)
@@ -48,7 +48,7 @@ class MusselBatch:
 
         return MusselBatch(ids, col("lat", np.int64), col("lon", np.int64), col("depth", np.float64),
                            col("battery", np.float64), col("battery_voltage", np.int64), col("state", np.int64),
-                           col("simulated", np.int64), col("time_us", np.int64))
+                           col("simulated", np.int64), col("time_us", np.uint64))
 
 
 class MusselTable(Mapping[int, MusselView]):
@@ -143,7 +143,7 @@ def batch_valid(b: MusselBatch) -> NDArray[np.bool_]:
         return ((b.mussel_id > 0) & (np.abs(b.lat_e7) <= 90 * DEG_E7) & (np.abs(b.lon_e7) <= 180 * DEG_E7)
                 & (b.battery_frac >= 0.0) & (b.battery_frac <= 1.0) & (b.depth_m >= 0.0)
                 & np.isfinite(b.depth_m) & (b.state >= 0) & (b.state < _N_STATES)
-                & (b.simulated >= 0) & (b.simulated <= 1))
+                & (b.simulated >= 0) & (b.simulated <= 1) & (b.time_us <= MAX_TIME_US))
 
 
 def batch_rejections(b: MusselBatch) -> dict[str, NDArray[np.bool_]]:
@@ -158,4 +158,5 @@ def batch_rejections(b: MusselBatch) -> dict[str, NDArray[np.bool_]]:
         "AMUSSEL_STATUS.battery_depth": level_bad,
         "AMUSSEL_STATUS.state": (b.state < 0) | (b.state >= _N_STATES),
         "AMUSSEL_STATUS.simulated": (b.simulated < 0) | (b.simulated > 1),
+        "AMUSSEL_STATUS.time_us": b.time_us > MAX_TIME_US,
     }

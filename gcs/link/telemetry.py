@@ -17,6 +17,7 @@ from mavlink_dialect import mavlink
 from mussel_sim.vocabulary import MusselState
 
 DEG_E7 = 10_000_000
+MAX_TIME_US = 2**63 - 1  # a uint64 on the wire; past this it is no time (and no int64 holds it)
 UNKNOWN_U16 = 0xFFFF  # MAVLink's "unknown" for voltages and headings
 _RESULTS = frozenset(mavlink.enums["MAV_RESULT"]) - {max(mavlink.enums["MAV_RESULT"])}  # minus *_ENUM_END
 _STATES = frozenset(int(s) for s in MusselState)
@@ -240,6 +241,8 @@ def _mussel(m: Any) -> MusselView | Rejected:
         return Rejected("AMUSSEL_STATUS.state")
     if m.simulated not in (0, 1):
         return Rejected("AMUSSEL_STATUS.simulated")
+    if not 0 <= m.time_us <= MAX_TIME_US:
+        return Rejected("AMUSSEL_STATUS.time_us")
     return MusselView(m.mussel_id, m.lat, m.lon, m.depth, m.battery, m.battery_voltage, MusselState(m.state),
                         bool(m.simulated), m.time_us)
 

@@ -124,3 +124,14 @@ def test_a_batch_of_statuses_takes_the_good_rows_and_counts_the_bad_ones_by_reas
     assert sorted(table) == [1, 6]  # the only rows with nothing wrong
     assert rejected == {"AMUSSEL_STATUS.battery_depth": 2, "AMUSSEL_STATUS.mussel_id": 1, "AMUSSEL_STATUS.state": 1}
     assert table[6].state == MusselState.FLOATING and table[6].time_us == 7
+
+
+def test_a_status_from_beyond_int64_time_is_refused_not_an_overflow() -> None:
+    from gcs.link.fleet_table import MusselBatch, MusselTable
+
+    table = MusselTable()
+    wire = {"mussel_id": np.array([1, 2], np.uint16), "lat": 439400000, "lon": 154400000, "depth": 3.0,
+            "battery": 0.5, "battery_voltage": 4000, "state": 0, "simulated": 1,
+            "time_us": np.array([7, 2**63], np.uint64)}  # what a hostile uint64 on the wire can hold
+    assert table.update_batch(MusselBatch.from_wire(wire)) == {"AMUSSEL_STATUS.time_us": 1}
+    assert list(table) == [1]
