@@ -138,22 +138,29 @@ class Docking:
     def _on_amussel_status(self, msg: Any) -> None:
         self.mussels.update(msg.mussel_id, msg.lat, msg.lon, msg.state)
 
-    def _cmd_dock(self, cmd: Command) -> Reply:
-        slot, mussel_id = whole(cmd.params[0], 1, N_SLOTS), whole(cmd.params[1], 1, MAX_MUSSEL_ID)
+    def _slot_and_mussel(self, what: str, cmd: Command, lowest_id: int) -> tuple[int, int] | Reply:
+        """param1 a slot 1..N_SLOTS, param2 an aMussel id (from `lowest_id`); a refusal if either is none."""
+        slot, mussel_id = whole(cmd.params[0], 1, N_SLOTS), whole(cmd.params[1], lowest_id, MAX_MUSSEL_ID)
         if slot is None:
-            return self._refuse("Dock", cmd, Refusal.BAD_SLOT, cmd.field(1))
+            return self._refuse(what, cmd, Refusal.BAD_SLOT, cmd.field(1))
         if mussel_id is None:
-            return self._refuse("Dock", cmd, Refusal.BAD_MUSSEL_ID, cmd.field(2))
+            return self._refuse(what, cmd, Refusal.BAD_MUSSEL_ID, cmd.field(2))
+        return slot, mussel_id
+
+    def _cmd_dock(self, cmd: Command) -> Reply:
+        checked = self._slot_and_mussel("Dock", cmd, lowest_id=1)
+        if isinstance(checked, Reply):
+            return checked
+        slot, mussel_id = checked
         v = self._v
         new, refusal = prim.dock(v.primitive, slot, mussel_id, v.state.x_m, v.state.y_m, self.mussels, v.params)
         return self._result("Dock", slot, mussel_id, new, refusal)
 
     def _cmd_undock(self, cmd: Command) -> Reply:
-        slot, mussel_id = whole(cmd.params[0], 1, N_SLOTS), whole(cmd.params[1], 0, MAX_MUSSEL_ID)
-        if slot is None:
-            return self._refuse("Undock", cmd, Refusal.BAD_SLOT, cmd.field(1))
-        if mussel_id is None:
-            return self._refuse("Undock", cmd, Refusal.BAD_MUSSEL_ID, cmd.field(2))
+        checked = self._slot_and_mussel("Undock", cmd, lowest_id=0)  # 0: whatever the slot holds
+        if isinstance(checked, Reply):
+            return checked
+        slot, mussel_id = checked
         v = self._v
         if v.geofence is not None and not v.geofence.contains(v.state.x_m, v.state.y_m):
             v.statustext(mavlink.MAV_SEVERITY_WARNING, f"Undock slot {slot} refused: not over water")
