@@ -8,7 +8,8 @@
 
 Everything is keyed by aPad system id; with a single aPad the id may be omitted. Commands go
 over the MAVLink command protocol (ACK, timeout, retry) and raise `CommandError` on refusal.
-The planner, the scenario loop and the operator console are written on this API.
+The planner, the scenario loop and the console's operator commands are written on this API; the
+state it reads is the link's one registry (`gcs.link.registry`).
 """
 
 from __future__ import annotations
@@ -16,12 +17,12 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from apad_sitl.geofence import Geofence
-from apad_sitl.vocabulary import Primitive, Progress, RoverMode
+from apad_sitl.vocabulary import N_SLOTS, Primitive, Progress, RoverMode
 from gcs.link.commands import CommandError
 from gcs.link.fleet_table import MusselTable
 from gcs.link.registry import VehicleView
 from gcs.link.router import Link
-from gcs.link.telemetry import Location, MusselView, SlotView
+from gcs.link.telemetry import DEG_E7, Location, MusselView, SlotView
 from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
 from missiontime import Clock, seconds_to_us
 from mussel_sim.geo import LocalFrame
@@ -104,7 +105,7 @@ class ApadApi:
         return self.apad(apad_id).battery_v
 
     def slots(self, apad_id: int | None = None) -> list[SlotView]:
-        return [self.apad(apad_id).slots[s] for s in range(1, 5)]
+        return [self.apad(apad_id).slots[s] for s in range(1, N_SLOTS + 1)]
 
     # --- aMussels ---------------------------------------------------------------------------
 
@@ -133,7 +134,7 @@ class ApadApi:
         sysid = self.apad(apad_id).system_id
         if self._fence is not None and not self._fence.contains_deg(latlon[0], latlon[1]):
             raise GeofenceError(sysid, latlon[0], latlon[1])
-        lat_e7, lon_e7 = round(latlon[0] * 1e7), round(latlon[1] * 1e7)
+        lat_e7, lon_e7 = round(latlon[0] * DEG_E7), round(latlon[1] * DEG_E7)
         self.link.registry.expect(sysid, Primitive.GOTO, lat_e7, lon_e7)
         self.link.commands.send_int(
             sysid, mavlink.MAV_CMD_DO_REPOSITION, mavlink.MAV_FRAME_GLOBAL_INT,

@@ -32,10 +32,10 @@ from missiontime import US_PER_S
 from mussel_sim.battery import step_battery
 from mussel_sim.drift import NoCurrent, random_drift_m
 from mussel_sim.fleet_state import (
-    _EMPTY_IDS,
     ACTIVE,
     DEPLETED,
     DOCKED,
+    EMPTY_IDS,
     FLOATING,
     N_STATES,
     SINKING,
@@ -64,7 +64,7 @@ class _Applied:
 
 
 _NONE = np.zeros(0, np.intp)
-_NOTHING = _Applied(_NONE, _NONE, _NONE, _NONE, _NONE, _NONE, _NONE, _EMPTY_IDS)
+_NOTHING = _Applied(_NONE, _NONE, _NONE, _NONE, _NONE, _NONE, _NONE, EMPTY_IDS)
 
 
 def _apply_commands(
@@ -127,7 +127,7 @@ def _apply_commands(
         refused_range=surf[~in_range],
         refused_depleted=asked[depleted],
         ignored=ignored,
-        unknown=np.unique(np.concatenate(unknown)) if unknown else _EMPTY_IDS,
+        unknown=np.unique(np.concatenate(unknown)) if unknown else EMPTY_IDS,
     )
 
 

@@ -43,11 +43,11 @@ MAX_MODEL_ID = 2**32 - 1
 # Timers count down in float seconds; a remainder this small is float noise, not time left.
 TIMER_EPS_S = 1e-9
 
-_EMPTY_IDS: NDArray[np.int64] = np.zeros(0, np.int64)
+EMPTY_IDS: NDArray[np.int64] = np.zeros(0, np.int64)
 
 
 def _ids(values: ArrayLike | None) -> NDArray[np.int64]:
-    return _EMPTY_IDS if values is None else np.asarray(values, dtype=np.int64).reshape(-1)
+    return EMPTY_IDS if values is None else np.asarray(values, dtype=np.int64).reshape(-1)
 
 
 @dataclass(frozen=True)
@@ -205,15 +205,15 @@ class FleetInputs:
     their slot no longer holds.
     """
 
-    apad_ids: NDArray[np.int64] = field(default_factory=lambda: _EMPTY_IDS)
+    apad_ids: NDArray[np.int64] = field(default_factory=lambda: EMPTY_IDS)
     apad_x_m: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     apad_y_m: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
-    surface_ids: NDArray[np.int64] = field(default_factory=lambda: _EMPTY_IDS)
-    sink_ids: NDArray[np.int64] = field(default_factory=lambda: _EMPTY_IDS)
-    dock_ids: NDArray[np.int64] = field(default_factory=lambda: _EMPTY_IDS)
-    dock_apad: NDArray[np.int64] = field(default_factory=lambda: _EMPTY_IDS)
-    dock_slot: NDArray[np.int64] = field(default_factory=lambda: _EMPTY_IDS)
-    release_ids: NDArray[np.int64] = field(default_factory=lambda: _EMPTY_IDS)
+    surface_ids: NDArray[np.int64] = field(default_factory=lambda: EMPTY_IDS)
+    sink_ids: NDArray[np.int64] = field(default_factory=lambda: EMPTY_IDS)
+    dock_ids: NDArray[np.int64] = field(default_factory=lambda: EMPTY_IDS)
+    dock_apad: NDArray[np.int64] = field(default_factory=lambda: EMPTY_IDS)
+    dock_slot: NDArray[np.int64] = field(default_factory=lambda: EMPTY_IDS)
+    release_ids: NDArray[np.int64] = field(default_factory=lambda: EMPTY_IDS)
 
     @classmethod
     def make(

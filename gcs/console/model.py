@@ -154,7 +154,7 @@ class ConsoleModel:
         self.trace_lat = _Growing(0, np.float64, np.nan)
         self.trace_lon = _Growing(0, np.float64, np.nan)
         self._own_version = 0
-        self._fleet: tuple[int, FleetColumns] | None = None  # (registry version, columns) last gathered
+        self._fleet: tuple[int, FleetColumns] | None = None  # (table version, columns) last gathered
 
     @property
     def version(self) -> int:
@@ -165,17 +165,17 @@ class ConsoleModel:
 
     def fleet(self) -> FleetColumns:
         """Every aMussel's latest report, in this model's column order (newcomers join at the end)."""
-        cached = self._fleet
-        if cached is not None and cached[0] == self.registry.version:
-            return cached[1]
         table = self.registry.mussels
+        cached = self._fleet
+        if cached is not None and cached[0] == table.version:
+            return cached[1]
         new = np.setdiff1d(table.ids, self.ids)
         if new.size:  # real aMussels joining: every per-aMussel column grows
             self.ids = np.concatenate([self.ids, new])
             self.active_samples = np.concatenate([self.active_samples, np.zeros(new.size, np.int64)])
             self.hist_battery.widen(self.ids.size)
         cols = FleetColumns.of(table, self.ids)
-        self._fleet = (self.registry.version, cols)
+        self._fleet = (table.version, cols)
         return cols
 
     def event(self, ev: Event) -> None:

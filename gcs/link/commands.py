@@ -1,8 +1,10 @@
 """The MAVLink command protocol, GCS side: send, wait for the COMMAND_ACK, retry with backoff.
 
 Waits run on the clock (`clock.sleep`), so the same client serves lockstep runs and the field.
-Every wait is bounded: `retries + 1` attempts, each `timeout_s` longer by `BACKOFF` than the one
-before; what happens at the bound is a `CommandError` with `result=None`.
+Every wait is bounded: `retries + 1` attempts, the first waiting `timeout_s` and each next one
+`BACKOFF` times the one before (1 + 1.5 + 2.25 + 3.375 s by default); at the bound a
+`CommandError` with `result=None`. A vehicle that answers IN_PROGRESS gets at most
+`IN_PROGRESS_MAX_S` in all before the command fails with that result.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ Send = Callable[[Any], None]  # encode a message as the GCS and send it to the v
 
 BACKOFF = 1.5  # each retransmission waits this much longer than the attempt before
 POLL_S = 0.02  # how often a wait looks again (mission time)
+IN_PROGRESS_MAX_S = 120.0  # a command "in progress" longer than this has failed
 AUTOPILOT = mavlink.MAV_COMP_ID_AUTOPILOT1
 
 
@@ -88,6 +91,7 @@ class CommandClient:
         clock = self._clock
         try:
             wait_s = timeout_s
+            give_up_us = clock.now_us + seconds_to_us(IN_PROGRESS_MAX_S)
             for attempt in range(retries + 1):
                 pending.ack = None
                 self._send(build(attempt))
@@ -96,6 +100,8 @@ class CommandClient:
                 while True:
                     ack = pending.ack
                     if ack is not None and ack.result == mavlink.MAV_RESULT_IN_PROGRESS:
+                        if clock.now_us >= give_up_us:
+                            raise CommandError(system_id, command, ack.result, f"over {IN_PROGRESS_MAX_S:g} s")
                         pending.ack = None  # keep waiting for the final result
                         deadline = clock.now_us + seconds_to_us(wait_s)
                     elif ack is not None:

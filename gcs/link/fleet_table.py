@@ -2,7 +2,7 @@
 
 A fleet of hundreds reports every second, so the table is numpy columns `(n,)` in the order ids
 were first heard, updated one report at a time (a real node) or a whole batch at once (the
-simulated fleet, or a datagram of many reports). Reads by id build a `MusselView` on demand;
+simulated fleet in the same process). Reads by id build a `MusselView` on demand;
 questions over the whole fleet (`select`) are vectorised.
 """
 
@@ -65,17 +65,24 @@ class MusselTable(Mapping[int, MusselView]):
         self._row: dict[int, int] = {}
         self._last_ids: NDArray[np.integer] | None = None  # a batch of the same ids reuses its rows
         self._last_rows = np.zeros(0, np.intp)
+        self.version = 0  # bumped on every update: readers cache what they derive from the table
 
     # --- updates -----------------------------------------------------------------------------
 
-    def update(self, r: MusselView) -> None:
+    def update(self, r: MusselView) -> str | None:
+        """Take one report; or refuse it (the reason) when a real and a simulated aMussel share an id:
+        the two can not be told apart, and neither may overwrite the other."""
         row = self._row.get(r.mussel_id)
+        if row is not None and bool(self.simulated[row]) != r.simulated:
+            return "AMUSSEL_STATUS.id_collision"
         if row is None:
             row = self._row[r.mussel_id] = len(self._row)
             self._grow(np.array([r.mussel_id], np.int64))
         self.lat_e7[row], self.lon_e7[row] = r.lat_e7, r.lon_e7
         self.depth_m[row], self.battery_frac[row], self.battery_mv[row] = r.depth_m, r.battery_frac, r.battery_mv
         self.state[row], self.simulated[row], self.time_us[row] = int(r.state), r.simulated, r.time_us
+        self.version += 1
+        return None
 
     def update_batch(self, b: MusselBatch) -> Counter[str]:
         """Take every valid row of `b`; return the rejected rows counted by reason."""
@@ -85,11 +92,23 @@ class MusselTable(Mapping[int, MusselView]):
             rejected.update({reason: int(mask.sum()) for reason, mask in bad.items() if mask.any()})
             ok = ~np.any(np.stack(list(bad.values())), axis=0)
             b = MusselBatch(*(getattr(b, f)[ok] for f in MusselBatch.__dataclass_fields__))
+        known = len(self._row)
         rows = self._rows_of(b.mussel_id)
+        clash = (rows < known) & (self.simulated[rows] != (b.simulated != 0))  # real vs simulated, one id
+        if clash.any():
+            rejected["AMUSSEL_STATUS.id_collision"] += int(clash.sum())
+            keep = ~clash
+            rows, b = rows[keep], MusselBatch(*(getattr(b, f)[keep] for f in MusselBatch.__dataclass_fields__))
         self.lat_e7[rows], self.lon_e7[rows], self.depth_m[rows] = b.lat_e7, b.lon_e7, b.depth_m
         self.battery_frac[rows], self.battery_mv[rows] = b.battery_frac, b.battery_mv
         self.state[rows], self.simulated[rows], self.time_us[rows] = b.state, b.simulated, b.time_us
+        self.version += 1
         return rejected
+
+    def load(self, saved: MusselTable) -> None:
+        """Take a saved table's contents (a resumed mission); whoever holds this table keeps it."""
+        self.__dict__.update(saved.__dict__)
+        self.version += 1
 
     def _rows_of(self, ids: NDArray[np.integer]) -> NDArray[np.intp]:
         last = self._last_ids

@@ -12,8 +12,8 @@ from apad_sitl.vocabulary import N_SLOTS, Primitive
 from gcs.link.fleet_table import MusselTable
 from gcs.link.telemetry import (
     DEG_E7,
+    GCS_SYSTEM_ID,
     Battery,
-    CommandAck,
     GoToSent,
     Heartbeat,
     Home,
@@ -81,21 +81,23 @@ class VehicleView:
 class VehicleRegistry:
     """One `VehicleView` per aPad system id (created by its first heartbeat) and one `MusselTable`."""
 
-    def __init__(self) -> None:
+    def __init__(self, gcs_system_id: int = GCS_SYSTEM_ID) -> None:
+        """`gcs_system_id`: our own system; only its Go Tos count towards the movement cost."""
+        self.gcs_system_id = gcs_system_id
         self.vehicles: dict[int, VehicleView] = {}
         self.mussels = MusselTable()
-        self.acks: list[tuple[int, CommandAck]] = []  # (system id, ack) not yet taken by the command client
         self.version = 0  # bumped on every change a screen could show
 
-    def apply(self, system_id: int, record: Record, now_us: int) -> None:
-        """Fold one record from `system_id` into the state."""
+    def apply(self, system_id: int, record: Record, now_us: int) -> str | None:
+        """Fold one record from `system_id` into the state; a reason if it was refused."""
         if isinstance(record, MusselView):
-            self.mussels.update(record)
-            self.version += 1
-            return
+            refused = self.mussels.update(record)
+            self.version += refused is None
+            return refused
         if isinstance(record, GoToSent):
-            self._goto_sent(record)
-            return
+            if system_id == self.gcs_system_id:  # another GCS's (or a forged) Go To is not our cost
+                self._goto_sent(record)
+            return None
         if isinstance(record, Heartbeat):
             view = self.vehicles.get(system_id)
             if view is None:
@@ -103,10 +105,10 @@ class VehicleRegistry:
             view.last_heartbeat_us = now_us
             view.custom_mode, view.armed = record.custom_mode, record.armed
             self.version += 1
-            return
+            return None
         view = self.vehicles.get(system_id)
         if view is None:
-            return  # not (yet) a vehicle: its heartbeat makes it one
+            return None  # not (yet) a vehicle: its heartbeat makes it one
         match record:
             case Position():
                 view.lat_deg, view.lon_deg = record.lat_deg, record.lon_deg
@@ -129,14 +131,15 @@ class VehicleRegistry:
             case StatusText():
                 view.statustext.append(record.text)
                 del view.statustext[:-STATUSTEXT_KEPT]
-            case CommandAck():
-                self.acks.append((system_id, record))
-                return
         self.version += 1
+        return None
 
     def restore(self, saved: VehicleRegistry) -> None:
-        """Take what a saved registry knew (a mission resumed from its checkpoint); readers keep this object."""
-        self.vehicles, self.mussels = saved.vehicles, saved.mussels
+        """Take what a saved registry knew (a mission resumed from its checkpoint), in place: whoever
+        holds this registry, its vehicle dict or its aMussel table keeps them."""
+        self.vehicles.clear()
+        self.vehicles.update(saved.vehicles)
+        self.mussels.load(saved.mussels)
         self.version += 1
 
     def expect(self, system_id: int, kind: Primitive, a: int = 0, b: int = 0) -> None:

@@ -17,19 +17,15 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from numpy.typing import NDArray
-
 from gcs.link.commands import CommandClient, CommandError
 from gcs.link.fleet_table import MusselBatch
 from gcs.link.params import ParamClient
 from gcs.link.registry import VehicleRegistry, VehicleView
-from gcs.link.telemetry import CommandAck, Rejected, read
+from gcs.link.telemetry import GCS_COMPONENT_ID, GCS_SYSTEM_ID, CommandAck, Rejected, read
 from mavlink_dialect import Codec, Transport, hot, mavlink
 from mavlink_dialect.tlog import TlogWriter
 from missiontime import Clock, seconds_to_us
 
-GCS_SYSTEM_ID = 250
-GCS_COMPONENT_ID = mavlink.MAV_COMP_ID_MISSIONPLANNER
 HEARTBEAT_PERIOD_S = 1.0
 WAIT_POLL_S = 0.05
 
@@ -68,18 +64,13 @@ class Port:
     def send_local(self, msg: Any) -> None:
         self.link._deliver(self, msg)
 
-    def send_batch(self, msg_id: int, frames: Sequence[bytes], columns: Mapping[str, NDArray[Any]]) -> None:
+    def send_batch(self, msg_id: int, frames: Sequence[bytes], columns: Mapping[str, Any]) -> None:
         """Many messages of one id at once (`mavlink_dialect.hot`): out to the vehicles in datagrams,
-        into the .tlog, and AMUSSEL_STATUS into the registry's aMussel table. Local parties get none."""
-        link = self.link
+        and into the link as a batch (local parties get none)."""
         if self.forward is None or msg_id in self.forward:
             for data in hot.pack_datagrams(frames):
-                link._out(data)
-        if link._tlog is not None:
-            link._tlog.write_many(link.clock.now_us, frames)
-        if msg_id == mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS:
-            link.dropped.update(link.registry.mussels.update_batch(MusselBatch.from_wire(columns)))
-            link.registry.version += 1
+                self.link._out(data)
+        self.link._deliver_batch(msg_id, frames, columns)
 
 
 def frame_msg_id(frame: bytes) -> int:
@@ -123,7 +114,7 @@ class Link:
         """`append` continues an existing .tlog (a resumed mission)."""
         self.clock = clock
         self.codec = Codec(system_id, component_id)
-        self.registry = VehicleRegistry()
+        self.registry = VehicleRegistry(system_id)
         self.commands = CommandClient(self.send, clock)
         self.params = ParamClient(self.send, self.registry, clock)
         self.dropped: Counter[str] = Counter()  # received messages refused by validation, by reason
@@ -201,12 +192,23 @@ class Link:
             self.dropped[record.reason] += 1
             return
         if isinstance(record, CommandAck):
-            self.commands.on_ack(msg.get_srcSystem(), record)
+            if record.target_system in (0, self.codec.system_id):  # not an answer to another GCS
+                self.commands.on_ack(msg.get_srcSystem(), record)
         elif record is not None:
-            self.registry.apply(msg.get_srcSystem(), record, self.clock.now_us)
+            refused = self.registry.apply(msg.get_srcSystem(), record, self.clock.now_us)
+            if refused is not None:
+                self.dropped[refused] += 1
+                return
         for port in self._ports:
             if port is not origin and port.handler is not None:
                 port.handler(msg)
+
+    def _deliver_batch(self, msg_id: int, frames: Sequence[bytes], columns: Mapping[str, Any]) -> None:
+        if self._tlog is not None:
+            self._tlog.write_many(self.clock.now_us, frames)
+        if msg_id == mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS:
+            self.dropped.update(self.registry.mussels.update_batch(MusselBatch.from_wire(columns)))
+            self.registry.version += 1
 
     # --- waiting for vehicles ---------------------------------------------------------------
 

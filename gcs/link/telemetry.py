@@ -1,8 +1,9 @@
 """What the GCS reads from MAVLink, typed and validated once, at the edge.
 
 `read(msg)` turns one decoded message into one typed record, or a `Rejected` naming the field
-that failed (counted by the router, the message dropped). Nothing past this module touches a
-pymavlink message: the registry, the API, the mission loop and the console read records.
+that failed (counted by the router, the message dropped). The registry, the API, the mission loop
+and the console read records, never a pymavlink message (the local parties the router serves, such
+as the simulated fleet, speak MAVLink themselves and get the message).
 Only what the GCS uses is read; other messages give None (not an error, not counted).
 """
 
@@ -16,6 +17,8 @@ from apad_sitl.vocabulary import N_SLOTS, Latch, Primitive, Progress
 from mavlink_dialect import mavlink
 from mussel_sim.vocabulary import MusselState
 
+GCS_SYSTEM_ID = 250  # this GCS's MAVLink system
+GCS_COMPONENT_ID = mavlink.MAV_COMP_ID_MISSIONPLANNER
 DEG_E7 = 10_000_000
 MAX_TIME_US = 2**63 - 1  # a uint64 on the wire; past this it is no time (and no int64 holds it)
 UNKNOWN_U16 = 0xFFFF  # MAVLink's "unknown" for voltages and headings
@@ -112,6 +115,7 @@ class CommandAck:
     command: int
     result: int
     result_param2: int
+    target_system: int  # the GCS it answers (0: any)
 
 
 @dataclass(frozen=True, slots=True)
@@ -161,7 +165,8 @@ def read(msg: Any) -> Record | Rejected | None:
 
 
 def _heartbeat(m: Any) -> Heartbeat | None:
-    if m.type in NOT_VEHICLES:
+    # A vehicle's mode is its autopilot's: a camera's or gimbal's heartbeat of the same system is not.
+    if m.type in NOT_VEHICLES or m.get_srcComponent() != mavlink.MAV_COMP_ID_AUTOPILOT1:
         return None
     return Heartbeat(int(m.custom_mode), bool(m.base_mode & mavlink.MAV_MODE_FLAG_SAFETY_ARMED))
 
@@ -214,7 +219,9 @@ def _home(m: Any) -> Home | Rejected:
 
 def _param_value(m: Any) -> ParamValue | Rejected:
     name = m.param_id if isinstance(m.param_id, str) else bytes(m.param_id).decode("ascii", "replace")
-    if not name or not _finite(m.param_value):
+    if not name:
+        return Rejected("PARAM_VALUE.param_id")
+    if not _finite(m.param_value):
         return Rejected("PARAM_VALUE.value")
     return ParamValue(name, float(m.param_value))
 
@@ -227,7 +234,8 @@ def _statustext(m: Any) -> StatusText:
 def _ack(m: Any) -> CommandAck | Rejected:
     if m.result not in _RESULTS:
         return Rejected("COMMAND_ACK.result")
-    return CommandAck(int(m.command), int(m.result), int(getattr(m, "result_param2", 0)))
+    return CommandAck(int(m.command), int(m.result), int(getattr(m, "result_param2", 0)),
+                      int(getattr(m, "target_system", 0)))
 
 
 def _mussel(m: Any) -> MusselView | Rejected:

@@ -18,6 +18,7 @@ from gcs.mission.results import MusselResult, RunResult
 from gcs.mission.scenario import Scenario
 from gcs.mission.world import MISSION_TELEMETRY_HZ, LinkOptions, World, lockstep_world
 from gcs.records import checkpoint
+from missiontime import seconds_to_us, us_to_s
 
 ProgressFn = Callable[[float], None]  # receives mission time done, seconds
 
@@ -49,7 +50,7 @@ def run_mission(
         if saved is not None:
             checkpoint.restore(world, saved)
         if progress is not None:
-            world.clock.scheduler.every(10.0, lambda now_us: progress(now_us / 1e6), "progress", world.clock.now_us)
+            world.clock.scheduler.every(10.0, lambda now_us: progress(us_to_s(now_us)), "progress", world.clock.now_us)
         world.api.wait_apad(timeout_s=10.0)
         world.api.set_telemetry_rates(MISSION_TELEMETRY_HZ)
         loop = world.mission_loop()
@@ -59,7 +60,7 @@ def run_mission(
             files = ckpt_files
             world.clock.scheduler.every(
                 checkpoint.CHECKPOINT_PERIOD_S, lambda now_us: checkpoint.save(files, checkpoint.capture(world, loop)),
-                "checkpoint", world.clock.now_us + round(checkpoint.CHECKPOINT_PERIOD_S * 1e6),
+                "checkpoint", world.clock.now_us + seconds_to_us(checkpoint.CHECKPOINT_PERIOD_S),
             )
         end = loop.run(resume=saved is not None)
         result = _result(world, loop.status.cost_m, loop.status.cycles, str(end), time.perf_counter() - wall_start,
@@ -96,6 +97,10 @@ def _result(world: World, cost_m: float, cycles: int, end: str, wall_s: float, o
                 "apad_sent": world.vehicle.codec.stats.sent if world.vehicle else 0,
                 "gcs_bad_data": world.link.bad_data,
                 "apad_bad_data": world.vehicle.codec.stats.bad_data if world.vehicle else 0}
+    # What each side refused after decoding, by reason (validation, id clashes, handler errors).
+    messages |= {f"gcs_dropped.{reason}": n for reason, n in sorted(world.link.dropped.items())}
+    if world.vehicle is not None:
+        messages |= {f"apad_dropped.{reason}": n for reason, n in sorted(world.vehicle.dropped.items())}
     if world.proxy is not None:
         for way, st in (("to_apad", world.proxy.stats[True]), ("to_gcs", world.proxy.stats[False])):
             messages |= {f"proxy_{way}_{k}": v for k, v in vars(st).items()}

@@ -97,6 +97,7 @@ def capture(world: World, loop: EnergySharingLoop) -> Checkpoint:
     if v is not None:
         snapshot = VehicleSnapshot(v.state, v.primitive, v.mode, v.armed, v._speed_override_mps)
     fleet = world.fleet
+    # The registry and the loop status go in live, not copied: `save` pickles a capture at once.
     return Checkpoint(
         FORMAT_VERSION, run_key(world), world.clock.now_us, fleet.state, dict(fleet.rng.bit_generator.state),
         fleet.recorder, loop.status, world.link.registry, snapshot,

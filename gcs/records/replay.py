@@ -2,9 +2,10 @@
 
 A run folder (from `vil run`/`run_mission` or the live console's `--out`) holds `gcs.tlog`, in
 which every message the GCS saw is stamped (aMussel statuses, aPad telemetry, the GCS's own
-commands), and `events.jsonl` with the loop's phases. Replaying feeds both, in time order, to
-the same `ConsoleModel` the live console uses and keeps one `Snapshot` per second of mission
-time, so seeking is an index lookup.
+commands), and `events.jsonl` with the loop's phases. Replaying reads the .tlog, in time order,
+through the live link's own readers (`gcs.link.telemetry`) into a `VehicleRegistry`, feeds the
+events to the same `ConsoleModel` the live console uses (it reads that registry), and keeps one
+`Snapshot` per second of mission time, so seeking is an index lookup.
 """
 
 from __future__ import annotations

@@ -135,3 +135,48 @@ def test_a_status_from_beyond_int64_time_is_refused_not_an_overflow() -> None:
             "time_us": np.array([7, 2**63], np.uint64)}  # what a hostile uint64 on the wire can hold
     assert table.update_batch(MusselBatch.from_wire(wire)) == {"AMUSSEL_STATUS.time_us": 1}
     assert list(table) == [1]
+
+
+def test_a_real_aMussel_with_a_simulated_ones_id_is_refused_and_overwrites_nothing() -> None:
+    from gcs.link.fleet_table import MusselBatch
+
+    registry = VehicleRegistry()
+    _status(registry, 3, 0.4, MusselState.ACTIVE)  # simulated (the helper's frames say simulated = 1)
+    real = telemetry.MusselView(3, 0, 0, 1.0, 0.9, 4100, MusselState.FLOATING, False, 9)
+    assert registry.apply(42, real, 0) == "AMUSSEL_STATUS.id_collision"
+    assert registry.mussels[3].battery_frac == pytest.approx(0.4) and registry.mussels[3].simulated  # float32
+    # and the other way round: the simulated fleet's batch does not overwrite a real node
+    registry.apply(42, telemetry.MusselView(7, 0, 0, 1.0, 0.9, 4100, MusselState.ACTIVE, False, 9), 0)
+    wire = {"mussel_id": np.array([7, 8]), "lat": 1, "lon": 1, "depth": 3.0, "battery": 0.5,
+            "battery_voltage": 4000, "state": 0, "simulated": 1, "time_us": 1}
+    assert registry.mussels.update_batch(MusselBatch.from_wire(wire)) == {"AMUSSEL_STATUS.id_collision": 1}
+    assert registry.mussels[7].battery_frac == 0.9 and registry.mussels[8].simulated
+
+
+def test_a_vehicle_that_answers_in_progress_forever_fails_the_command_at_the_bound() -> None:
+    """A real link over real bytes: the far end says IN_PROGRESS every half second, and nothing more."""
+    from gcs.link.commands import IN_PROGRESS_MAX_S, CommandError
+    from gcs.link.router import Link
+    from mavlink_dialect import memory_pair
+    from missiontime import VirtualClock
+
+    clock = VirtualClock()
+    gcs_end, far_end = memory_pair()
+    link = Link(clock)
+    link.add_transport(gcs_end)
+    vehicle = Codec(1, 1)
+
+    working_on: list[int] = []
+
+    def in_progress(now_us: int) -> None:
+        for data in far_end.receive():
+            working_on.extend(m.command for m in vehicle.decode(data) if m.get_type() == "COMMAND_LONG")
+        for command in working_on[-1:]:
+            far_end.send(vehicle.encode(mavlink.MAVLink_command_ack_message(
+                command, mavlink.MAV_RESULT_IN_PROGRESS, 0, 0, 250, 190)))
+
+    clock.scheduler.every(0.5, in_progress, "stubborn vehicle")
+    with pytest.raises(CommandError, match="IN_PROGRESS") as err:
+        link.commands.send_long(1, mavlink.MAV_CMD_DO_SET_MODE, (1, 4))
+    assert err.value.result == mavlink.MAV_RESULT_IN_PROGRESS
+    assert IN_PROGRESS_MAX_S <= clock.time() < IN_PROGRESS_MAX_S + 2.0  # bounded, not forever
