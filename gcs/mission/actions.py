@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from apad_sitl.vocabulary import Latch, Progress
-from gcs.api import ApadApi, CommandError, GeofenceError, Location, MusselView
+from gcs.api import ApadApi, CommandError, GeofenceError, Location
 from gcs.link.telemetry import SlotView
 from gcs.mission.control import EndReason, LoopControl, LoopSettings, LoopStatus, MissionEnded, Phase
 from gcs.records.events import EventLog
@@ -172,11 +172,10 @@ class LoopActions:
 
     # --- fleet knowledge, from what the GCS has heard ---------------------------------------
 
-    def _candidates(self) -> list[MusselView]:
-        """The charging pool: active aMussels below the pool threshold, lowest id first."""
-        mussels = self.api.mussels
-        ids = mussels.select((MusselState.ACTIVE,), battery_below=self.settings.mission.pool_threshold)
-        return [mussels[m] for m in ids if m in self.homes]
+    def _candidates(self) -> list[int]:
+        """The charging pool: ids of active aMussels below the pool threshold, lowest first."""
+        ids = self.api.mussels.select((MusselState.ACTIVE,), battery_below=self.settings.mission.pool_threshold)
+        return [m for m in ids if m in self.homes]
 
     def _free_slots(self) -> list[int]:
         return self.api.apad(self.apad_id).free_slots()

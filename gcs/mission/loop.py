@@ -93,7 +93,7 @@ class EnergySharingLoop(LoopActions):
     def _plan_collection(self) -> list[int]:
         self._set_phase(Phase.PLAN_COLLECT)
         self._take_strategy_switch()
-        candidates = self._candidates()
+        candidates = [self.api.mussels[m] for m in self._candidates()]
         position = self.api.position(self.apad_id)
         inp = PlanInput(
             apads={self.apad_id: (position.lat, position.lon)},
