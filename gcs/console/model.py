@@ -275,12 +275,9 @@ class FleetColumns:
         n = ids.size
         lat, lon, battery = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
         state = np.full(n, MusselState.ACTIVE, np.uint8)
-        if table.ids.size:
-            order = np.argsort(table.ids)
-            pos = np.searchsorted(table.ids, ids, sorter=order)
-            pos = np.minimum(pos, table.ids.size - 1)
-            rows = order[pos]
-            heard = table.ids[rows] == ids
+        rows = table.rows(ids)
+        heard = rows >= 0
+        if heard.any():
             rows = rows[heard]
             lat[heard] = table.lat_e7[rows] / DEG_E7
             lon[heard] = table.lon_e7[rows] / DEG_E7

@@ -36,6 +36,10 @@ class MusselBatch:
     simulated: NDArray[np.integer]
     time_us: NDArray[np.integer]
 
+    def take(self, rows: NDArray[np.bool_]) -> MusselBatch:
+        """The batch of the rows where `rows` is True."""
+        return MusselBatch(*(getattr(self, f)[rows] for f in MusselBatch.__dataclass_fields__))
+
     @staticmethod
     def from_wire(fields: Mapping[str, Any]) -> MusselBatch:
         """From AMUSSEL_STATUS columns by their wire names (a scalar stands for every row)."""
@@ -86,19 +90,16 @@ class MusselTable(Mapping[int, MusselView]):
 
     def update_batch(self, b: MusselBatch) -> Counter[str]:
         """Take every valid row of `b`; return the rejected rows counted by reason."""
-        rejected: Counter[str] = Counter()
-        if not batch_valid(b).all():  # the rare case: count by reason, keep the good rows
-            bad = batch_rejections(b)
-            rejected.update({reason: int(mask.sum()) for reason, mask in bad.items() if mask.any()})
-            ok = ~np.any(np.stack(list(bad.values())), axis=0)
-            b = MusselBatch(*(getattr(b, f)[ok] for f in MusselBatch.__dataclass_fields__))
+        bad = batch_rejections(b)
+        rejected = Counter({reason: int(mask.sum()) for reason, mask in bad.items() if mask.any()})
+        if rejected:  # the rare case: keep the good rows
+            b = b.take(~np.logical_or.reduce(list(bad.values())))
         known = len(self._row)
         rows = self._rows_of(b.mussel_id)
         clash = (rows < known) & (self.simulated[rows] != (b.simulated != 0))  # real vs simulated, one id
         if clash.any():
             rejected["AMUSSEL_STATUS.id_collision"] += int(clash.sum())
-            keep = ~clash
-            rows, b = rows[keep], MusselBatch(*(getattr(b, f)[keep] for f in MusselBatch.__dataclass_fields__))
+            rows, b = rows[~clash], b.take(~clash)
         self.lat_e7[rows], self.lon_e7[rows], self.depth_m[rows] = b.lat_e7, b.lon_e7, b.depth_m
         self.battery_frac[rows], self.battery_mv[rows] = b.battery_frac, b.battery_mv
         self.state[rows], self.simulated[rows], self.time_us[rows] = b.state, b.simulated, b.time_us
@@ -145,6 +146,10 @@ class MusselTable(Mapping[int, MusselView]):
     def __len__(self) -> int:
         return len(self._row)
 
+    def rows(self, ids: NDArray[np.integer]) -> NDArray[np.intp]:
+        """The table row of each id `(n,)`; -1 where the id was never heard."""
+        return np.fromiter((self._row.get(int(i), -1) for i in ids), np.intp, ids.size)
+
     def __contains__(self, mussel_id: object) -> bool:
         return mussel_id in self._row
 
@@ -154,15 +159,6 @@ class MusselTable(Mapping[int, MusselView]):
         if battery_below is not None:
             mask &= self.battery_frac < battery_below
         return sorted(int(i) for i in self.ids[mask])
-
-
-def batch_valid(b: MusselBatch) -> NDArray[np.bool_]:
-    """Rows that pass every rule of `batch_rejections`, in one pass."""
-    with np.errstate(invalid="ignore"):
-        return ((b.mussel_id > 0) & (np.abs(b.lat_e7) <= 90 * DEG_E7) & (np.abs(b.lon_e7) <= 180 * DEG_E7)
-                & (b.battery_frac >= 0.0) & (b.battery_frac <= 1.0) & (b.depth_m >= 0.0)
-                & np.isfinite(b.depth_m) & (b.state >= 0) & (b.state < _N_STATES)
-                & (b.simulated >= 0) & (b.simulated <= 1) & (b.time_us <= MAX_TIME_US))
 
 
 def batch_rejections(b: MusselBatch) -> dict[str, NDArray[np.bool_]]:
