@@ -6,9 +6,12 @@ to the handler a part registered for its MAV_CMD. A handler validates its own pa
 its field (NaN, infinite, not a whole number, out of range, an unknown enum) answers `invalid(field)`:
 DENIED on the wire and one count in `vehicle.dropped` under "invalid:COMMAND_LONG:param2".
 
-Retransmissions (ArduPilot SITL's lockstep rule: a repeat must not step the model twice): a
-command that changes the vehicle's state, identical to the last one accepted from the same source
-within RETRY_WINDOW_US, is the GCS re-sending after a lost ACK. It is ACKed again, not executed again.
+Retransmissions (a repeat must not step the model twice): a command that changes the vehicle's
+state, identical in content to the last one accepted from the same source while what it started is
+still what the vehicle does (the same mode, primitive, target, slot, aMussel and speed: the
+command's `Effect`), is a re-send after a lost ACK or a duplicated datagram. It is answered with
+the first answer and not executed again. No time window: a re-send that comes after the failsafe
+(or anything else) changed the vehicle's course is a command to do it again, and it is executed.
 """
 
 from __future__ import annotations
@@ -19,13 +22,11 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from apad_sitl import messages as msgs
+from apad_sitl.vocabulary import Progress
 from mavlink_dialect import mavlink
-from missiontime import US_PER_S
 
 if TYPE_CHECKING:
     from apad_sitl.endpoint import SitlVehicle
-
-RETRY_WINDOW_US = 5 * US_PER_S
 
 ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 DENIED = mavlink.MAV_RESULT_DENIED
@@ -103,11 +104,29 @@ class _Entry:
 
 
 @dataclass(frozen=True)
+class Effect:
+    """What a stateful command leaves the vehicle doing. Progress and latches may move on under it
+    (IN_PROGRESS to DONE changes nothing a re-send would), but a failed primitive is no longer in force."""
+
+    mode: int
+    armed: bool
+    primitive: tuple[Any, ...]  # kind, slot, aMussel, target, speed and radius of the primitive
+    failed: bool
+
+    @classmethod
+    def of(cls, vehicle: SitlVehicle) -> Effect:
+        p = vehicle.primitive
+        return cls(vehicle.mode, vehicle.armed,
+                   (p.kind, p.slot, p.mussel_id, p.target_x_m, p.target_y_m, p.speed_mps, p.radius_m),
+                   p.progress == Progress.FAILED)
+
+
+@dataclass(frozen=True)
 class _Executed:
     key: tuple[Any, ...]
     result: int
     result_param2: int
-    time_us: int
+    effect: Effect
 
 
 class CommandTable:
@@ -145,7 +164,7 @@ class CommandTable:
         entry = self._entries.get(cmd.command)
         stateful = entry is not None and entry.stateful
         last = self._executed.get(source) if stateful else None
-        if last is not None and last.key == cmd.key and v.now_us - last.time_us <= RETRY_WINDOW_US:
+        if last is not None and last.key == cmd.key and last.effect == Effect.of(v):
             reply = Reply(last.result, last.result_param2)
             v.event("command_retry", command=cmd.command, result=_result_name(reply.result))
         else:
@@ -156,7 +175,7 @@ class CommandTable:
                 reply = entry.handler(cmd)
             if stateful:
                 if reply.result == ACCEPTED:
-                    self._executed[source] = _Executed(cmd.key, reply.result, reply.param2, v.now_us)
+                    self._executed[source] = _Executed(cmd.key, reply.result, reply.param2, Effect.of(v))
                 else:
                     self._executed.pop(source, None)
             extra: dict[str, Any] = {}

@@ -88,12 +88,23 @@ class ApadApi:
             self.clock.sleep(0.05)
         return view.system_id
 
-    def set_telemetry_rates(self, rates_hz: dict[int, float], apad_id: int | None = None) -> None:
-        """Ask the aPad for each message id at a rate (Hz; 0 stops it), as stock GCSs do."""
+    def set_telemetry_rates(
+        self, rates_hz: dict[int, float], apad_id: int | None = None, retries: int = 7
+    ) -> dict[int, CommandError]:
+        """Ask the aPad for each message id at a rate (Hz; 0 stops it), as stock GCSs do.
+
+        A request the aPad refuses or never answers (a lossy link: `retries` + 1 sends) is not
+        fatal: that message keeps the aPad's default rate. Returns those failures by message id."""
         sysid = self.apad(apad_id).system_id
+        failed: dict[int, CommandError] = {}
         for msg_id, hz in rates_hz.items():
             interval_us = seconds_to_us(1.0 / hz) if hz > 0 else -1
-            self.link.commands.send_long(sysid, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, (msg_id, interval_us))
+            try:
+                self.link.commands.send_long(sysid, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, (msg_id, interval_us),
+                                             retries=retries)
+            except CommandError as exc:
+                failed[msg_id] = exc
+        return failed
 
     def position(self, apad_id: int | None = None) -> Location:
         view = self.apad(apad_id)
@@ -123,6 +134,10 @@ class ApadApi:
 
     # --- primitives -------------------------------------------------------------------------
 
+    def inside_geofence(self, latlon: tuple[float, float] | Location) -> bool:
+        """Whether a Go To there would be sent (True when no geofence was given)."""
+        return self._fence is None or self._fence.contains_deg(latlon[0], latlon[1])
+
     def go_to(
         self,
         latlon: tuple[float, float] | Location,
@@ -132,7 +147,7 @@ class ApadApi:
     ) -> None:
         """Go To Point: speed in m/s (<= 0: the aPad's default), victory radius in m (0: default)."""
         sysid = self.apad(apad_id).system_id
-        if self._fence is not None and not self._fence.contains_deg(latlon[0], latlon[1]):
+        if not self.inside_geofence(latlon):
             raise GeofenceError(sysid, latlon[0], latlon[1])
         lat_e7, lon_e7 = round(latlon[0] * DEG_E7), round(latlon[1] * DEG_E7)
         self.link.registry.expect(sysid, Primitive.GOTO, lat_e7, lon_e7)
@@ -196,6 +211,11 @@ class ApadApi:
         if not expected.seen:
             return Progress.IN_PROGRESS
         return view.primitive.progress if expected.matches(view.primitive) else Progress.FAILED
+
+    def primitive_heard(self, apad_id: int | None = None) -> bool:
+        """Whether the aPad has reported on the primitive last commanded through this API (True if none)."""
+        expected = self.apad(apad_id).expected
+        return expected is None or expected.seen
 
     def goto_status(self, apad_id: int | None = None) -> Progress:
         return self.primitive_status(apad_id)

@@ -26,7 +26,7 @@ from gcs.api import CommandError
 from gcs.console.model import ConsoleModel, Snapshot, area_outline
 from gcs.mission.loop import EnergySharingLoop, LoopControl
 from gcs.mission.scenario import Scenario
-from gcs.mission.world import MISSION_TELEMETRY_HZ, LinkOptions, World, build_world
+from gcs.mission.world import LinkOptions, World, build_world
 from gcs.records.events import Event
 from missiontime import Clock, PacedClock, WallClock, unix_time_us, us_to_s
 from mussel_sim.placement import load_area
@@ -164,7 +164,7 @@ class ConsoleRunner:
                               clock.now_us)
         if not self._wait_for_apad(world):
             return
-        world.api.set_telemetry_rates(MISSION_TELEMETRY_HZ)
+        world.request_telemetry()
         self._notice = "loop paused: press p to start" if self.control.paused else ""
         while self.control.paused and not self._quit.is_set():
             self._serve()

@@ -14,9 +14,16 @@ from gcs.api import ApadApi, CommandError, GeofenceError, Location
 from gcs.link.telemetry import SlotView
 from gcs.mission.control import EndReason, LoopControl, LoopSettings, LoopStatus, MissionEnded, Phase
 from gcs.records.events import EventLog
-from missiontime import Clock
+from missiontime import Clock, seconds_to_us, us_to_s
 from mussel_sim.geo import distance_m
 from mussel_sim.vocabulary import MusselCommand, MusselState
+
+# A Go To not reported done by GOTO_SLACK_S + GOTO_SLOWNESS x the trip at the aPad's speed is sent again.
+GOTO_SLACK_S = 60.0
+GOTO_SLOWNESS = 3.0
+# The aPad unheard this long: the loop starts nothing new (no call-up, no trip) until it is heard.
+LINK_LOST_S = 3.0
+GOTO_HEARD_S = 5.0  # the aPad reports its primitive every second; five lost in a row is rare even at 40 % loss
 
 
 class LoopActions:
@@ -38,25 +45,45 @@ class LoopActions:
         self.events = events or EventLog()
         self.control = control or LoopControl()
         self.status = LoopStatus(strategy=settings.mission.collect_strategy)
+        self.unreachable: set[int] = set()  # aMussels found outside the geofence (logged once)
 
     # --- primitives with waiting ------------------------------------------------------------
 
     def _go_to(self, target: Location, interruptible: bool = True) -> bool:
-        """Go To and wait; False if the target is outside the geofence. A Go To preempted on the
-        aPad (its link-loss failsafe switched to Hold) is commanded again once we hear it."""
+        """Go To and wait; False if it cannot be done (outside the geofence, or the bounds below hit).
+
+        A Go To preempted on the aPad (its link-loss failsafe switched to Hold) is commanded again
+        once we hear it; one that takes far longer than the trip should is commanded again too.
+        At most `goto_attempts` commands, then the loop gives up on this target (an event)."""
         here = self.api.position(self.apad_id)
-        self.status.cost_m += float(distance_m(here.lat, here.lon, target.lat, target.lon))
-        while True:
+        distance = float(distance_m(here.lat, here.lon, target.lat, target.lon))
+        self.status.cost_m += distance
+        trip_limit_s = GOTO_SLACK_S + GOTO_SLOWNESS * distance / self.settings.apad_speed_mps
+        for _ in range(self.settings.goto_attempts):
             try:
-                self._command(self.api.go_to, target, apad_id=self.apad_id)
+                self.api.go_to(target, apad_id=self.apad_id)
             except GeofenceError as exc:
                 self._log("geofence", what=str(exc))
                 return False
-            self._wait_until(lambda: self.api.goto_status(self.apad_id) != Progress.IN_PROGRESS,
-                             interruptible=interruptible)
+            except CommandError as exc:
+                self._log("command_failed", what=str(exc))
+                self._sleep(self.settings.poll_s * 4, interruptible)
+                continue
+            # Accepted, but not one report on it (all lost, or the failsafe took over unheard):
+            # send it again; a re-send of a Go To in force is answered, not restarted.
+            if not self._wait_until(lambda: self.api.primitive_heard(self.apad_id), timeout_s=GOTO_HEARD_S,
+                                    interruptible=interruptible):
+                self._log("goto_unconfirmed", lat=target.lat, lon=target.lon, after_s=GOTO_HEARD_S)
+                continue
+            if not self._wait_until(lambda: self.api.goto_status(self.apad_id) != Progress.IN_PROGRESS,
+                                    timeout_s=trip_limit_s, interruptible=interruptible):
+                self._log("goto_timeout", lat=target.lat, lon=target.lon, after_s=round(trip_limit_s, 1))
+                continue
             if self.api.goto_status(self.apad_id) != Progress.FAILED:
                 return True
             self._log("goto_resumed", lat=target.lat, lon=target.lon)
+        self._log("gave_up", what="go to", lat=target.lat, lon=target.lon, attempts=self.settings.goto_attempts)
+        return False
 
     def _dock(self, slot: int, mussel_id: int) -> bool:
         """Dock and wait for the latch. The slot's own report decides, not the ACK or the primitive:
@@ -79,7 +106,7 @@ class LoopActions:
 
         # Never abandon a dock half-way: the waits ignore the end of the mission.
         self._wait_until(settled, self.settings.surfacing_timeout_s, interruptible=False)
-        while True:
+        for _ in range(self.settings.command_attempts * 4):  # a latch closes in seconds: this is minutes
             try:
                 s = self.api.fresh_slot(slot, self.apad_id)
             except CommandError as exc:
@@ -88,6 +115,8 @@ class LoopActions:
             if not (s.mussel_id == mussel_id and s.latch == Latch.CLOSING):
                 return s.mussel_id == mussel_id and s.latch == Latch.LATCHED
             self._wait_until(lambda: not ours(Latch.CLOSING), self.settings.poll_s * 8, interruptible=False)
+        self._log("gave_up", what="dock confirmation", mussel=mussel_id, slot=slot)
+        return ours(Latch.LATCHED)
 
     def _undock(self, slot: int, mussel_id: int) -> bool:
         """Undock until the slot is released. A retransmitted undock is harmless: the aPad re-ACKs it,
@@ -121,15 +150,37 @@ class LoopActions:
                 return
         self._log("lost", mussel=mussel_id, why="does not answer the sink command", state=self._state(mussel_id).name)
 
-    def _command(self, fn: Callable[..., None], *args: object, **kwargs: object) -> None:
-        """Run an API command; a refused one is logged and retried once the operator or time allows."""
-        while True:
+    def _command(self, fn: Callable[..., None], *args: object, **kwargs: object) -> bool:
+        """Run an API command; a refused or unanswered one is logged and tried again, at most
+        `command_attempts` times (each is itself several sends: `gcs.link.commands`). False at the
+        bound, with a `gave_up` event: the caller leaves that step for now and goes on."""
+        for _ in range(self.settings.command_attempts):
             try:
                 fn(*args, **kwargs)
-                return
+                return True
             except CommandError as exc:
                 self._log("command_failed", what=str(exc))
                 self._sleep(self.settings.poll_s * 4)
+        self._log("gave_up", what=getattr(fn, "__name__", str(fn)), attempts=self.settings.command_attempts)
+        return False
+
+    # --- the link -----------------------------------------------------------------------------
+
+    def _link_up(self) -> bool:
+        silent_us = self.clock.now_us - self.api.apad(self.apad_id).last_heartbeat_us
+        return silent_us <= seconds_to_us(LINK_LOST_S)
+
+    def _wait_for_link(self, timeout_s: float | None = None, interruptible: bool = True) -> bool:
+        """Wait until the aPad is heard again (events `link_lost`, `link_back`); False at the bound."""
+        if self._link_up():
+            return True
+        silent_us = self.clock.now_us - self.api.apad(self.apad_id).last_heartbeat_us
+        self._log("link_lost", silent_s=round(us_to_s(silent_us), 1))
+        if self._wait_until(self._link_up, timeout_s, interruptible):
+            self._log("link_back")
+            return True
+        self._log("gave_up", what="waiting for the aPad's link", after_s=timeout_s)
+        return False
 
     # --- waiting, ending, pausing -----------------------------------------------------------
 
@@ -173,9 +224,21 @@ class LoopActions:
     # --- fleet knowledge, from what the GCS has heard ---------------------------------------
 
     def _candidates(self) -> list[int]:
-        """The charging pool: ids of active aMussels below the pool threshold, lowest first."""
+        """The charging pool: ids of active aMussels below the pool threshold, lowest first, that
+        the aPad may go to (one outside the geofence, e.g. carried off by a current while it
+        floated, is left out with one `unreachable` event instead of being tried again and again)."""
         ids = self.api.mussels.select((MusselState.ACTIVE,), battery_below=self.settings.mission.pool_threshold)
-        return [m for m in ids if m in self.homes]
+        out = []
+        for m in ids:
+            if m not in self.homes:
+                continue
+            if self.api.inside_geofence(self.api.get_location(m)):
+                out.append(m)
+            elif m not in self.unreachable:
+                self.unreachable.add(m)
+                where = self.api.get_location(m)
+                self._log("unreachable", mussel=m, lat=where.lat, lon=where.lon, why="outside the geofence")
+        return out
 
     def _free_slots(self) -> list[int]:
         return self.api.apad(self.apad_id).free_slots()

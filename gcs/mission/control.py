@@ -70,3 +70,8 @@ class LoopSettings:
     # (or sent down again) whatever the clock says, so it is never left at the surface.
     call_up_margin_s: float = 300.0
     poll_s: float = 0.5  # how often waits look again (mission time)
+    apad_speed_mps: float = 0.5  # the aPad's cruise speed: how long a Go To may take before it is sent again
+    # Bounds on retrying (lossy links, a refusing aPad): at the bound the loop logs `gave_up`,
+    # leaves that aMussel or step for now, and goes on.
+    goto_attempts: int = 8  # Go To commands per target (after failsafe preemptions or trip timeouts)
+    command_attempts: int = 5  # tries of one API command (each itself 4 sends with backoff)

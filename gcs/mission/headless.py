@@ -16,7 +16,7 @@ import numpy as np
 from gcs.mission.accounting import account
 from gcs.mission.results import MusselResult, RunResult
 from gcs.mission.scenario import Scenario
-from gcs.mission.world import MISSION_TELEMETRY_HZ, LinkOptions, World, lockstep_world
+from gcs.mission.world import LinkOptions, World, lockstep_world
 from gcs.records import checkpoint
 from missiontime import seconds_to_us, us_to_s
 
@@ -52,7 +52,7 @@ def run_mission(
         if progress is not None:
             world.clock.scheduler.every(10.0, lambda now_us: progress(us_to_s(now_us)), "progress", world.clock.now_us)
         world.api.wait_apad(timeout_s=10.0)
-        world.api.set_telemetry_rates(MISSION_TELEMETRY_HZ)
+        world.request_telemetry()
         loop = world.mission_loop()
         if saved is not None:
             loop.status = saved.loop_status

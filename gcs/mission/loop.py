@@ -64,8 +64,11 @@ class EnergySharingLoop(LoopActions):
         """After a crash: finish latches in motion, send down whatever was called up and not docked,
         and complete a charging cycle whose aMussels are still on board."""
         self._sleep(2.0, interruptible=False)  # hear the aPad's slots and the fleet's status afresh
-        self._wait_until(lambda: not any(s.latch in (Latch.CLOSING, Latch.RELEASING)
-                                         for s in self.api.slots(self.apad_id)), interruptible=False)
+        if not self._wait_until(lambda: not any(s.latch in (Latch.CLOSING, Latch.RELEASING)
+                                                for s in self.api.slots(self.apad_id)),
+                                self.settings.surfacing_timeout_s, interruptible=False):
+            self._log("gave_up", what="waiting for latches in motion", slots=[
+                s.slot for s in self.api.slots(self.apad_id) if s.latch in (Latch.CLOSING, Latch.RELEASING)])
         on_board = set(self._docked().values())
         for mussel_id in self.api.mussels.select((MusselState.FLOATING, MusselState.SURFACING)):
             if mussel_id not in on_board:
@@ -86,7 +89,7 @@ class EnergySharingLoop(LoopActions):
             if self.status.strategy == CollectStrategy.NONE or self._too_late_to_call_up():
                 return False
             need = min(mission.min_pool, len(self._free_slots()))
-            return need > 0 and len(self._candidates()) >= need
+            return need > 0 and len(self._candidates()) >= need and self._link_up()
 
         self._wait_until(pool_full)
 
@@ -112,6 +115,7 @@ class EnergySharingLoop(LoopActions):
         self._set_phase(Phase.COLLECT)
         for mussel_id in route:
             self._check_end()  # between aMussels nothing is half done: an operator stop ends here
+            self._wait_for_link()  # and nothing is lost by waiting here as long as the mission lasts
             free = self._free_slots()
             if not free:
                 break
@@ -177,7 +181,10 @@ class EnergySharingLoop(LoopActions):
         self._set_phase(Phase.REDEPLOY)
         for slot, mussel_id in route:
             self.status.target_mussel = mussel_id
-            self._go_to(self.homes[mussel_id])
+            self._wait_for_link()
+            if not self._go_to(self.homes[mussel_id]):
+                self._log("kept_on_board", mussel=mussel_id, slot=slot, why="its position could not be reached")
+                continue
             if self._undock(slot, mussel_id):
                 self._command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
                 self._log("released", mussel=mussel_id, slot=slot)

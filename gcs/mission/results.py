@@ -48,6 +48,25 @@ class RunResult:
     def to_json(self) -> dict[str, Any]:
         return asdict(self)
 
+    @property
+    def misplaced(self) -> list[dict[str, Any]]:
+        """The aMussels that did not end where they should: left at the surface, off their
+        position, or docked where the GCS does not know (gcs.mission.accounting)."""
+        return [w for w in self.whereabouts if w["where"] == "lost"]
+
+
+def misplaced_table(results: list[RunResult]) -> Table | None:
+    """Who is where, for every aMussel of every run that did not end where it should; None if all did."""
+    rows = [(r, w) for r in results for w in r.misplaced]
+    if not rows:
+        return None
+    table = Table(title="[bold red]aMussels not where they should be[/]", box=box.SIMPLE_HEAD, title_justify="left")
+    for name in ("run", "aMussel", "where"):
+        table.add_column(name, style="red")
+    for r, w in rows:
+        table.add_row(f"{r.scenario} {r.strategy} s{r.seed}", str(w["id"]), str(w["detail"]))
+    return table
+
 
 def results_table(results: list[RunResult], title: str = "Results") -> Table:
     """One row per run; where the paper ran the same thing, its figures follow in a dim row."""

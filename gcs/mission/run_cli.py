@@ -7,6 +7,10 @@
     vil run pool12 --loss 0.2 --latency 0.2 --duplicate 0.05   # aPad link over UDP through a fault proxy
     VIL_SIGNING_KEY=secret vil run pool12      # MAVLink 2 signing on the aPad link (or --signing-key FILE)
     vil run pool12 --resume                    # continue the run in its folder after a crash (kill -9)
+
+Exit status: 0 every run finished with every aMussel where it should be; 2 bad input (one line
+on stderr); 3 the runs finished but some aMussel is not where it should be (left at the surface,
+off its position, or on a slot the GCS does not know): a red table says who is where.
 """
 
 from __future__ import annotations
@@ -25,7 +29,14 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from gcs.link.faultproxy import LinkFaults
 from gcs.mission.headless import run_dir, run_mission
 from gcs.mission.planner import COLLECT
-from gcs.mission.results import RunResult, results_table, seed_stats, seed_stats_table, shape_table
+from gcs.mission.results import (
+    RunResult,
+    misplaced_table,
+    results_table,
+    seed_stats,
+    seed_stats_table,
+    shape_table,
+)
 from gcs.mission.scenario import Scenario, ScenarioError, load_scenario, parse_duration_s
 from gcs.mission.scenario_models import check_inputs
 from gcs.mission.world import LinkOptions
@@ -36,6 +47,7 @@ from mavlink_dialect.signing import SigningKeyError, load_key
 TABLE_II = (("pool12", "cautious"), ("pool12", "greedy"), ("pool12", "none"), ("bay24", "greedy"))
 # Over many seeds every scenario runs these, so the shape of Table II can be checked per seed.
 SHAPE_STRATEGIES = ("cautious", "greedy", "none")
+EXIT_MISPLACED = 3  # the runs finished, but some aMussel is not where it should be (the table says who)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -211,6 +223,10 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         payload = [r.to_json() for r in results]
         args.json.write_text(json.dumps(payload[0] if len(payload) == 1 else payload, indent=1) + "\n")
+    misplaced = misplaced_table(results)
+    if misplaced is not None:
+        console.print(misplaced)
+        return EXIT_MISPLACED
     return 0
 
 

@@ -79,6 +79,14 @@ class World:
     proxy: FaultProxy | None = None  # the fault-injection proxy between GCS and aPad, if any
     geofence_deg: list[tuple[float, float]] = field(default_factory=list)  # (lat, lon) ring; empty: none
 
+    def request_telemetry(self, rates_hz: dict[int, float] | None = None) -> None:
+        """Ask the aPad for the mission's telemetry rates; one it never grants (a lossy link) keeps
+        its default rate and is logged as a `telemetry_rate_failed` event, not fatal."""
+        for msg_id, exc in self.api.set_telemetry_rates(rates_hz or MISSION_TELEMETRY_HZ).items():
+            known = mavlink.mavlink_map.get(msg_id)
+            self.events.emit(self.clock.time(), "telemetry_rate_failed", message=known.msgname if known else msg_id,
+                             what=str(exc))
+
     def mission_loop(self, control: LoopControl | None = None) -> EnergySharingLoop:
         s = self.scenario
         settings = LoopSettings(
@@ -86,6 +94,7 @@ class World:
             acoustic_range_m=s.fleet.acoustic_range_m,
             dock_reach_m=s.apad.dock_reach_m,
             battery_end_v=s.apad.battery_end_v,
+            apad_speed_mps=s.apad.speed_mps,
         )
         return EnergySharingLoop(self.api, self.clock, settings, self.homes, s.apad.system_id, self.events, control)
 

@@ -363,15 +363,36 @@ def test_retransmitted_dock_and_undock_are_harmless(world: World) -> None:
     world.clock.sleep(2.0)  # released and empty
     retry = gcs.command_long(MAV_CMD_APAD_UNDOCK, 2, 0)  # a late retry of that undock: re-ACKed
     assert (retry.result, retry.result_param2) == (ACCEPTED, 0)
-    world.clock.sleep(5.0)
-    # Past the retry window the same bytes are a new command, and it finds the slot empty.
+    world.clock.sleep(60.0)
+    # No time window: while the undock is what the aPad last did, the same bytes get the first answer.
     again = gcs.command_long(MAV_CMD_APAD_UNDOCK, 2, 0)
-    assert (again.result, again.result_param2) == (DENIED, Refusal.SLOT_EMPTY)
+    assert (again.result, again.result_param2) == (ACCEPTED, 0)
     world.clock.sleep(2.0)
     assert gcs.slot(1).latch == Latch.LATCHED and gcs.slot(1).mussel_id == 31
     assert gcs.slot(2).latch == Latch.OPEN
+    # Once something else ran, the same bytes are a new command, and it finds the slot empty.
+    assert gcs.command_long(mavlink.MAV_CMD_DO_SET_MODE, 1, 4)  # HOLD.result == ACCEPTED
+    fresh = gcs.command_long(MAV_CMD_APAD_UNDOCK, 2, 0)
+    assert (fresh.result, fresh.result_param2) == (DENIED, Refusal.SLOT_EMPTY)
     events = [json.loads(line) for line in world.vehicle.log.events_path.read_text().splitlines()]  # type: ignore[union-attr]
-    assert [e["command"] for e in events if e["event"] == "command_retry"] == [MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK]
+    retries = [e["command"] for e in events if e["event"] == "command_retry"]
+    assert retries == [MAV_CMD_APAD_DOCK, MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, MAV_CMD_APAD_UNDOCK]
+
+
+def test_a_go_to_resent_after_the_failsafe_took_over_is_executed_again(world: World) -> None:
+    """The seed-6 livelock: the ACK of a Go To is lost, the failsafe switches to Hold, and the GCS's
+    re-send (the same bytes) must start the Go To again, not be answered as a duplicate."""
+    gcs = world.gcs
+    assert gcs.reposition(20.0, 0.0).result == ACCEPTED
+    world.clock.sleep(1.0)
+    world.vehicle.modes.enter_hold()  # what the failsafe does
+    assert world.vehicle.primitive.kind == Primitive.HOLD
+    assert gcs.reposition(20.0, 0.0).result == ACCEPTED
+    assert world.vehicle.primitive.kind == Primitive.GOTO
+    assert gcs.reposition(20.0, 0.0).result == ACCEPTED  # a duplicate of that: nothing restarts
+    events = [json.loads(line) for line in world.vehicle.log.events_path.read_text().splitlines()]  # type: ignore[union-attr]
+    assert [e["event"] for e in events if e["event"] in ("command", "command_retry")][-3:] == [
+        "command", "command", "command_retry"]
 
 
 def test_a_mussel_drifting_away_mid_dock_fails_it(world: World) -> None:
