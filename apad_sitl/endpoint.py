@@ -139,6 +139,7 @@ class SitlVehicle:
         name = f"apad{self.system_id}"
         self._physics_task = scheduler.every(1.0 / self.physics_hz, self._physics, f"{name}.physics", start_us)
         self.streams.attach(scheduler, start_us, name)
+        self.modes.attach(scheduler, start_us, name)
         scheduler.add_poller(self)
 
     def close(self) -> None:

@@ -5,6 +5,13 @@ the legacy SET_MODE message switch between them; COMPONENT_ARM_DISARM arms (the 
 The failsafe: with FS_GCS_ENABLE, a GCS heard once and then silent for FS_GCS_TIMEOUT makes a busy
 aPad hold where it is; a Dock or Undock's latch carries on. Mode and arming are the vehicle's
 state (`vehicle.mode`, `vehicle.armed`); this part changes them.
+
+Timing: each GCS heartbeat moves a one-shot deadline task to FS_GCS_TIMEOUT after it, so HOLD comes
+FS_GCS_TIMEOUT after the last heartbeat with no check period on top (the physics tick at 10 Hz
+used to add up to 0.1 s, and a strict `>` another tick). The physics step still checks too, for a
+timeout changed at run time or a Go To that arrives after the deadline. On a wall clock a
+heartbeat is dated by the vehicle's latest task (at most a physics step before it arrived), so the
+failsafe can come that much early, never late.
 """
 
 from __future__ import annotations
@@ -16,13 +23,15 @@ from apad_sitl import primitives as prim
 from apad_sitl.commands import ACCEPT, DENY, Command, Reply, invalid, whole
 from apad_sitl.vocabulary import Primitive, Progress, RoverMode
 from mavlink_dialect import mavlink
-from missiontime import US_PER_S
+from missiontime import US_PER_S, Scheduler, Task
 
 if TYPE_CHECKING:
     from apad_sitl.endpoint import SitlVehicle
 
 UINT8_MAX = 0xFF
 UINT32_MAX = 0xFFFF_FFFF
+# The deadline task is one-shot: between heartbeats it sleeps this long (a heartbeat moves it).
+_IDLE_US = 3600 * US_PER_S
 
 
 def mode_name(mode: int) -> str:
@@ -39,10 +48,18 @@ class Modes:
         self._v = vehicle
         self.last_gcs_heartbeat_us: int | None = None  # mission time of the last GCS HEARTBEAT
         self.failsafe_active = False
+        self._scheduler: Scheduler | None = None
+        self._deadline: Task | None = None
         vehicle.on(mavlink.MAVLINK_MSG_ID_HEARTBEAT, self._on_heartbeat)
         vehicle.on(mavlink.MAVLINK_MSG_ID_SET_MODE, self._on_set_mode)
         vehicle.commands.register(mavlink.MAV_CMD_DO_SET_MODE, self._cmd_set_mode, stateful=True)
         vehicle.commands.register(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, self._cmd_arm, stateful=True)
+
+    def attach(self, scheduler: Scheduler, start_us: int, name: str) -> None:
+        """The failsafe's deadline task, idle until a GCS heartbeat sets it."""
+        self._scheduler = scheduler
+        self._deadline = scheduler.every(_IDLE_US / US_PER_S, self._on_deadline, f"{name}.failsafe",
+                                         start_us + _IDLE_US)
 
     # ------------------------------------------------------------------ modes
 
@@ -119,16 +136,31 @@ class Modes:
     # ------------------------------------------------------------------ GCS failsafe
 
     def _on_heartbeat(self, msg: Any) -> None:
-        if msg.type == mavlink.MAV_TYPE_GCS:
-            self.last_gcs_heartbeat_us = self._v.now_us
+        if msg.type != mavlink.MAV_TYPE_GCS:
+            return
+        v = self._v
+        self.last_gcs_heartbeat_us = v.now_us
+        if self._scheduler is not None and self._deadline is not None and not v.closed:
+            self._scheduler.reschedule(self._deadline, next_us=v.now_us + self._timeout_us())
+
+    def _timeout_us(self) -> int:
+        return round(self._v.params.fs_gcs_timeout_s * US_PER_S)
+
+    def _on_deadline(self, now_us: int) -> None:
+        v = self._v
+        if v.closed:
+            return
+        v.now_us = max(v.now_us, now_us)
+        if v.params.fs_gcs_enable:
+            self.check_failsafe()
 
     def gcs_link_lost(self) -> bool:
-        """True if a GCS was heard and has been silent for FS_GCS_TIMEOUT."""
-        last, v = self.last_gcs_heartbeat_us, self._v
-        return last is not None and v.now_us - last > v.params.fs_gcs_timeout_s * US_PER_S
+        """True if a GCS was heard and has been silent for FS_GCS_TIMEOUT (or longer)."""
+        last = self.last_gcs_heartbeat_us
+        return last is not None and self._v.now_us - last >= self._timeout_us()
 
     def check_failsafe(self) -> None:
-        """Called every physics step while FS_GCS_ENABLE is set."""
+        """Called at the deadline and every physics step while FS_GCS_ENABLE is set."""
         if not self.gcs_link_lost():
             self.failsafe_active = False
             return
@@ -139,5 +171,6 @@ class Modes:
         if busy and not self.failsafe_active:
             self.failsafe_active = True
             v.statustext(mavlink.MAV_SEVERITY_WARNING, "GCS failsafe: heartbeat lost, holding")
-            v.event("failsafe", reason="gcs heartbeat lost")
+            silent_us = v.now_us - (self.last_gcs_heartbeat_us or 0)
+            v.event("failsafe", reason="gcs heartbeat lost", silent_s=round(silent_us / US_PER_S, 6))
             self.enter_hold()

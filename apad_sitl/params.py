@@ -32,7 +32,8 @@ class ApadParams:
     # 1: hold position when the GCS heartbeat is lost (on by default: a field aPad must not sail on
     # blind; lockstep runs deliver every heartbeat, so they are unaffected)
     fs_gcs_enable: int = 1
-    fs_gcs_timeout_s: float = 5.0  # s without a GCS heartbeat before the failsafe
+    # s without a GCS heartbeat before the failsafe holds; HOLD comes this long after the last one
+    fs_gcs_timeout_s: float = 3.0
     sysid_thismav: int = 1  # MAVLink system id; takes effect at restart
 
     def __post_init__(self) -> None:
