@@ -1,0 +1,79 @@
+"""Several blocking scripts on one clock, one at a time, in a deterministic order."""
+
+from __future__ import annotations
+
+import threading
+
+import pytest
+
+from missiontime import Clock, VirtualClock
+from missiontime.processes import Processes
+
+
+def _script(name: str, period_s: float, n: int, log: list[tuple[str, float]], running: list[str]) -> object:
+    def body(clock: Clock) -> str:
+        for _ in range(n):
+            running.append(name)
+            assert running.count(name) == 1 and len(running) == 1  # nobody else runs meanwhile
+            log.append((name, clock.time()))
+            running.remove(name)
+            clock.sleep(period_s)
+        return f"{name} done at {clock.time():g}"
+
+    return body
+
+
+def test_scripts_interleave_by_wake_time_and_the_world_runs_between_them() -> None:
+    clock = VirtualClock()
+    ticks: list[float] = []
+    clock.scheduler.every(0.25, lambda now_us: ticks.append(now_us / 1e6), "world")
+    log: list[tuple[str, float]] = []
+    running: list[str] = []
+    procs = Processes(clock)
+    a = procs.spawn("a", _script("a", 1.0, 3, log, running))  # type: ignore[arg-type]
+    b = procs.spawn("b", _script("b", 0.5, 4, log, running))  # type: ignore[arg-type]
+    procs.run()
+    assert log == [("a", 0.0), ("b", 0.0), ("b", 0.5), ("a", 1.0), ("b", 1.0), ("b", 1.5), ("a", 2.0)]
+    assert (a.result, b.result) == ("a done at 3", "b done at 2")
+    assert clock.time() == 3.0
+    assert ticks == [0.25 * k for k in range(13)]  # the shared world ran all along, once per tick
+
+
+def test_the_same_scripts_give_the_same_order_every_time() -> None:
+    def once() -> list[tuple[str, float]]:
+        clock = VirtualClock()
+        log: list[tuple[str, float]] = []
+        procs = Processes(clock)
+        for name, period in (("x", 0.3), ("y", 0.2), ("z", 0.3)):
+            procs.spawn(name, _script(name, period, 5, log, []))  # type: ignore[arg-type]
+        procs.run()
+        return log
+
+    first = once()
+    # At 0.6 all three wake: x and z went to sleep at 0.3 (in that order), y at 0.4.
+    assert [n for n, t in first if t == 0.6] == ["x", "z", "y"]
+    assert all(once() == first for _ in range(5))
+
+
+def test_a_failing_script_stops_the_others_and_its_error_reaches_the_caller() -> None:
+    clock = VirtualClock()
+    unwound = threading.Event()
+
+    def failing(c: Clock) -> None:
+        c.sleep(2.0)
+        raise RuntimeError("aPad 3 loop failed")
+
+    def patient(c: Clock) -> None:
+        try:
+            while True:
+                c.sleep(1.0)
+        finally:
+            unwound.set()
+
+    procs = Processes(clock)
+    procs.spawn("failing", failing)
+    procs.spawn("patient", patient)
+    with pytest.raises(RuntimeError, match="aPad 3 loop failed"):
+        procs.run()
+    assert unwound.is_set()  # the endless one was stopped at its next sleep, its finally ran
+    assert clock.time() == 2.0
