@@ -14,6 +14,7 @@ state it reads is the link's one registry (`gcs.link.registry`).
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Sequence
 
 from apad_sitl.geofence import Geofence
@@ -79,14 +80,25 @@ class ApadApi:
             raise LookupError(f"aPad {apad_id} has not been heard") from None
 
     def wait_apad(self, timeout_s: float = 10.0, apad_id: int | None = None) -> int:
-        """Wait for an aPad's heartbeat and first position; return its system id."""
-        view = self.link.wait_vehicle(timeout_s, apad_id if apad_id is not None else self.default_apad)
+        """Wait (on this API's clock) for an aPad's heartbeat and first position; return its system id."""
+        want = apad_id if apad_id is not None else self.default_apad
         deadline = self.clock.time() + timeout_s
-        while view.lat_deg is None:
+        while True:
+            view = next((v for sysid, v in self.link.vehicles.items() if want is None or sysid == want), None)
+            if view is not None and view.lat_deg is not None:
+                return view.system_id
             if self.clock.time() > deadline:
+                if view is None:
+                    who = "an aPad" if want is None else f"aPad {want}"
+                    raise TimeoutError(f"no heartbeat from {who} within {timeout_s:g} s")
                 raise TimeoutError(f"aPad {view.system_id} sent no position within {timeout_s:g} s")
             self.clock.sleep(0.05)
-        return view.system_id
+
+    def on_clock(self, clock: Clock) -> ApadApi:
+        """The same API waiting on another clock (an aPad loop's own, when several share the link)."""
+        twin = copy.copy(self)
+        twin.clock = clock
+        return twin
 
     def set_telemetry_rates(
         self, rates_hz: dict[int, float], apad_id: int | None = None, retries: int = 7
@@ -101,7 +113,7 @@ class ApadApi:
             interval_us = seconds_to_us(1.0 / hz) if hz > 0 else -1
             try:
                 self.link.commands.send_long(sysid, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, (msg_id, interval_us),
-                                             retries=retries)
+                                             retries=retries, clock=self.clock)
             except CommandError as exc:
                 failed[msg_id] = exc
         return failed
@@ -154,7 +166,7 @@ class ApadApi:
         self.link.commands.send_int(
             sysid, mavlink.MAV_CMD_DO_REPOSITION, mavlink.MAV_FRAME_GLOBAL_INT,
             (speed, float(mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE), radius, float("nan")),
-            lat_e7, lon_e7,
+            lat_e7, lon_e7, clock=self.clock,
         )
 
     def hold(self, apad_id: int | None = None) -> None:
@@ -162,7 +174,8 @@ class ApadApi:
         sysid = self.apad(apad_id).system_id
         self.link.registry.expect(sysid, Primitive.HOLD)
         self.link.commands.send_long(
-            sysid, mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, RoverMode.HOLD)
+            sysid, mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, RoverMode.HOLD),
+            clock=self.clock,
         )
 
     def docking(self, dock: bool, slot: int, mussel_id: int = 0, apad_id: int | None = None) -> None:
@@ -170,10 +183,10 @@ class ApadApi:
         sysid = self.apad(apad_id).system_id
         if dock:
             self.link.registry.expect(sysid, Primitive.DOCK, slot, mussel_id)
-            self.link.commands.send_long(sysid, MAV_CMD_APAD_DOCK, (slot, mussel_id))
+            self.link.commands.send_long(sysid, MAV_CMD_APAD_DOCK, (slot, mussel_id), clock=self.clock)
         else:
             self.link.registry.expect(sysid, Primitive.UNDOCK, slot)
-            self.link.commands.send_long(sysid, MAV_CMD_APAD_UNDOCK, (slot, mussel_id))
+            self.link.commands.send_long(sysid, MAV_CMD_APAD_UNDOCK, (slot, mussel_id), clock=self.clock)
 
     def fresh_slot(self, slot: int, apad_id: int | None = None, timeout_s: float = 2.0, attempts: int = 5) -> SlotView:
         """The slot as the aPad reports it in answer to a request now (REQUEST_MESSAGE), not a report
@@ -184,7 +197,7 @@ class ApadApi:
             view.slots[slot] = SlotView(slot, mussel_id=-1)  # unknown until the answer comes
             try:
                 self.link.commands.send_long(view.system_id, mavlink.MAV_CMD_REQUEST_MESSAGE,
-                                       (mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS, slot))
+                                             (mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS, slot), clock=self.clock)
             except CommandError:
                 continue
             deadline = self.clock.time() + timeout_s

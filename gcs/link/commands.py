@@ -61,19 +61,23 @@ class CommandClient:
 
     def send_long(
         self, system_id: int, command: int, params: tuple[float, ...] = (), timeout_s: float = 1.0, retries: int = 3,
-        component_id: int = AUTOPILOT,
+        component_id: int = AUTOPILOT, clock: Clock | None = None,
     ) -> CommandAck:
-        """COMMAND_LONG until ACCEPTED (returns the ACK) or refused / never acknowledged (`CommandError`)."""
+        """COMMAND_LONG until ACCEPTED (returns the ACK) or refused / never acknowledged (`CommandError`).
+
+        `clock`: the clock the caller waits on (its own `ProcessClock` when several aPads' loops
+        share the link); default the link's."""
         p = (tuple(float(x) for x in params) + (0.0,) * 7)[:7]
 
         def build(confirmation: int) -> Any:
             return mavlink.MAVLink_command_long_message(system_id, component_id, command, confirmation, *p)
 
-        return self._run(system_id, command, build, timeout_s, retries)
+        return self._run(system_id, command, build, timeout_s, retries, clock or self._clock)
 
     def send_int(
         self, system_id: int, command: int, frame: int, params: tuple[float, float, float, float], x: int, y: int,
         z: float = 0.0, timeout_s: float = 1.0, retries: int = 3, component_id: int = AUTOPILOT,
+        clock: Clock | None = None,
     ) -> CommandAck:
         """COMMAND_INT (positions as degE7 integers); same protocol as `send_long`."""
 
@@ -81,14 +85,13 @@ class CommandClient:
             # COMMAND_INT has no confirmation field: a retransmission is byte-identical but for its seq.
             return mavlink.MAVLink_command_int_message(system_id, component_id, frame, command, 0, 0, *params, x, y, z)
 
-        return self._run(system_id, command, build, timeout_s, retries)
+        return self._run(system_id, command, build, timeout_s, retries, clock or self._clock)
 
     def _run(
-        self, system_id: int, command: int, build: Callable[[int], Any], timeout_s: float, retries: int
+        self, system_id: int, command: int, build: Callable[[int], Any], timeout_s: float, retries: int, clock: Clock
     ) -> CommandAck:
         pending = _Pending(system_id, command)
         self._pending.append(pending)
-        clock = self._clock
         try:
             wait_s = timeout_s
             give_up_us = clock.now_us + seconds_to_us(IN_PROGRESS_MAX_S)
