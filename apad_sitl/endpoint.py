@@ -75,7 +75,7 @@ class SitlVehicle:
     ) -> None:
         """`rates_hz` overrides DEFAULT_RATES_HZ per message id; `log_epoch_us` offsets .tlog stamps and
         is the Unix time of t = 0 for signing timestamps. With `signing_key` every frame we send is
-        signed and commands must be too (the swarm's own telemetry may come unsigned). `geofence_deg`
+        signed and so must be everything received, the swarm's AMUSSEL_STATUS too. `geofence_deg`
         is the water area as a (lat, lon) ring: Go To targets outside it and undocking outside it are refused.
         """
         self.transport = transport
@@ -84,10 +84,8 @@ class SitlVehicle:
         self.component_id = component_id
         self.codec = Codec(system_id, component_id)
         if signing_key is not None:
-            self.codec.enable_signing(
-                signing_key, link_id=0, ticks=lambda: signing.timestamp_ticks(log_epoch_us, self.now_us),
-                allow_unsigned_ids=(mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS, mavlink.MAVLINK_MSG_ID_AMUSSEL_SENSORS),
-            )
+            self.codec.enable_signing(  # everything signed, the swarm's AMUSSEL_STATUS too (issue 10)
+                signing_key, link_id=0, ticks=lambda: signing.timestamp_ticks(log_epoch_us, self.now_us))
         self.frame = LocalFrame(home_lat_deg, home_lon_deg)
         self.geofence = Geofence.of(geofence_deg, self.frame) if geofence_deg else None
         self.home_lat_deg, self.home_lon_deg = home_lat_deg, home_lon_deg
@@ -213,7 +211,9 @@ class SitlVehicle:
         datagrams = self.transport.receive()
         if not datagrams:
             return False
-        for data in self._bulk_statuses(datagrams) if self.transport.datagrams else datagrams:
+        # The batch path takes unsigned frames: with signing on, everything goes through the codec's check.
+        bulk = self.transport.datagrams and not self.codec.signing
+        for data in self._bulk_statuses(datagrams) if bulk else datagrams:
             try:
                 decoded = self.codec.decode(data)
             except Exception as exc:  # the codec promises not to; a promise is not a proof

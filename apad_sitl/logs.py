@@ -3,7 +3,8 @@
 The .tlog is pymavlink's format, readable by `mavlogdump.py` and `mavutil.mavlink_connection`:
 per message an 8-byte big-endian timestamp in microseconds, then the raw MAVLink frame.
 Timestamps are mission time plus `epoch_us` (0 in lockstep; the real-time server passes the
-wall-clock epoch at start so the log carries real dates).
+wall-clock epoch at start so the log carries real dates). With signing on, `vil sitl` keeps the
+signing timestamps beside them (`signing_path`, see `mavlink_dialect.signing_state`).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ class VehicleLog:
         log_dir.mkdir(parents=True, exist_ok=True)
         self.tlog_path = log_dir / f"{stem}.tlog"
         self.events_path = log_dir / f"{stem}.events.jsonl"
+        self.signing_path = log_dir / f"{stem}.signing.json"
         self.epoch_us = epoch_us
         self._tlog = TlogWriter(self.tlog_path, epoch_us, append)
         self._events = open(self.events_path, "a" if append else "w", encoding="utf-8")  # noqa: SIM115

@@ -5,7 +5,9 @@
     vil sitl --listen tcp:0.0.0.0:5760 --home 45.43,12.33 --current 0.1,0 --log-dir runs/sitl
 
 This is the edge: it opens the transport, reads the wall clock and handles Ctrl-C; the vehicle
-itself stays clock-free.
+itself stays clock-free. With signing on and a log folder, it also keeps the signing timestamps
+there across restarts (`mavlink_dialect.signing_state`), so frames recorded before a restart are
+refused after it; a damaged file is reported in one line and the aPad starts refusing the past.
 """
 
 from __future__ import annotations
@@ -20,8 +22,9 @@ from typing import Any
 
 from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.params import ApadParams, ParamError, with_param
-from mavlink_dialect import AddressError, mavlink, open_transport
+from mavlink_dialect import AddressError, mavlink, open_transport, signing
 from mavlink_dialect.signing import SigningKeyError, load_key
+from mavlink_dialect.signing_state import SAVE_PERIOD_S, SigningKeeper
 from missiontime import Scheduler, WallClock
 
 DEFAULT_LISTEN = "udp:127.0.0.1:14550"
@@ -139,6 +142,7 @@ def run(args: argparse.Namespace) -> int:
         return 2
     lat, lon = args.home
     clock = WallClock(Scheduler())
+    epoch_us = int(time.time() * 1e6)
     try:
         key = load_key(args.signing_key)
         fence = _fence(args.geofence) if args.geofence else None
@@ -149,7 +153,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         vehicle = SitlVehicle(
             transport, params, lat, lon, system_id=args.sysid, current_mps=args.current,
-            log_dir=args.log_dir, rates_hz=REALTIME_RATES_HZ, log_epoch_us=int(time.time() * 1e6),
+            log_dir=args.log_dir, rates_hz=REALTIME_RATES_HZ, log_epoch_us=epoch_us,
             signing_key=key, geofence_deg=fence,
         )
     except OSError as exc:
@@ -163,6 +167,7 @@ def run(args: argparse.Namespace) -> int:
         previous[signal.SIGINT] = signal.signal(signal.SIGINT, signal.default_int_handler)
     except ValueError:
         pass  # not the main thread: the embedder handles signals
+    keeper = _keep_signing_state(vehicle, clock, epoch_us) if key is not None else None
     vehicle.attach(clock.scheduler, clock.now_us)
     verb = "listening on" if listen else "connecting to"
     east, north = args.current
@@ -177,7 +182,33 @@ def run(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         pass
     finally:
+        if keeper is not None:
+            keeper.save()
+        c = vehicle.codec
+        vehicle.event("link", received=c.stats.received, bad_data=c.stats.bad_data, unknown=c.stats.unknown,
+                      signing_refused=c.signing_refusals, transport_dropped=dict(getattr(transport, "dropped", {})),
+                      signing_save_errors=keeper.save_errors if keeper is not None else 0)
         vehicle.close()
         for signum, handler in previous.items():
             signal.signal(signum, handler)
     return 0
+
+
+def _keep_signing_state(vehicle: SitlVehicle, clock: WallClock, epoch_us: int) -> SigningKeeper | None:
+    """Restore the signing timestamps saved beside the logs and save them every SAVE_PERIOD_S."""
+    if vehicle.log is None:
+        print("vil sitl: signing timestamps are not kept without --log-dir: frames recorded in the minute "
+              "before a restart would be accepted after it", file=sys.stderr)
+        return None
+    keeper = SigningKeeper(vehicle.log.signing_path, vehicle.codec.mav,
+                           lambda: signing.timestamp_ticks(epoch_us, clock.now_us))
+    notice = keeper.start()
+    if notice is not None:
+        print(f"vil sitl: {notice}", file=sys.stderr)
+        vehicle.event("signing_state_damaged", notice=notice)
+
+    def save(now_us: int) -> None:
+        keeper.save()  # a refusal of the disk is counted in keeper.save_errors; the aPad sails on
+
+    clock.scheduler.every(SAVE_PERIOD_S, save, "signing_state.save", clock.now_us)
+    return keeper

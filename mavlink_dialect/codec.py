@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Collection
 from dataclasses import dataclass
+from typing import Any
 
 from mavlink_dialect import signing
 from mavlink_dialect import subcultron as mavlink
@@ -70,9 +71,24 @@ class Codec:
         return Codec.encode(self, msg)
 
     @property
+    def signing(self) -> bool:
+        """True once `enable_signing` was called: unsigned frames are refused (but allowed ids)."""
+        return self.mav.signing.secret_key is not None
+
+    @property
     def signing_rejects(self) -> int:
         """Frames refused for a missing, wrong or replayed signature (also counted in bad_data)."""
         return int(self.mav.signing.reject_count)
+
+    @property
+    def signing_refusals(self) -> dict[str, int]:
+        """`signing_rejects` by reason: unsigned, replay, stale_stream, bad_signature."""
+        s: Any = self.mav.signing  # `signing.configure` added the counter pymavlink lacks
+        if s.secret_key is None:
+            return {}
+        refused = dict(s.refused)
+        unsigned = max(int(s.reject_count) - sum(refused.values()), 0)
+        return {"unsigned": unsigned, **refused} if unsigned else refused
 
     def decode(self, data: bytes) -> list[mavlink.MAVLink_message]:
         """Every complete, valid message in `data` (plus what earlier calls left buffered)."""

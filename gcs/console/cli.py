@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 from gcs.mission.scenario import MISSIONS_DIR, ScenarioError, load_scenario
+from mavlink_dialect.signing import SigningKeyError, load_key
 
 DEFAULT_SCENARIO = MISSIONS_DIR / "pool12.toml"
 
@@ -32,6 +33,9 @@ def add_gcs_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", metavar="DIR",
                         help="write gcs.tlog and events.jsonl here (default runs/console-NAME-TIME)")
     parser.add_argument("--paused", action="store_true", help="start with the scenario loop paused")
+    parser.add_argument("--signing-key", type=Path, metavar="FILE",
+                        help="MAVLink 2 signing with the passphrase in FILE (default: $VIL_SIGNING_KEY if set); "
+                             "the aPad's unsigned frames are then refused")
 
 
 def run_gcs(args: argparse.Namespace) -> int:
@@ -41,7 +45,8 @@ def run_gcs(args: argparse.Namespace) -> int:
     path = Path(args.scenario) if args.scenario else DEFAULT_SCENARIO
     try:
         scenario = load_scenario(path)
-    except (ScenarioError, OSError) as exc:
+        key = load_key(args.signing_key)
+    except (ScenarioError, OSError, SigningKeyError) as exc:
         print(f"vil gcs: {exc}", file=sys.stderr)
         return 2
     if args.speed is not None and not args.sitl:
@@ -52,7 +57,7 @@ def run_gcs(args: argparse.Namespace) -> int:
     (out / "console.json").write_text(json.dumps({"scenario": scenario.name, "scenario_path": str(path.resolve())}))
     config = ConsoleConfig(
         scenario, connect=args.connect, sitl=args.sitl_link if args.sitl else None, speed=args.speed,
-        out_dir=out, start_paused=args.paused,
+        out_dir=out, start_paused=args.paused, signing_key=key,
     )
     runner = ConsoleRunner(config)
     LiveConsole(runner).run()

@@ -73,6 +73,7 @@ class ConsoleConfig:
     out_dir: Path | None = None  # gcs.tlog and events.jsonl, replayable with `vil replay`
     start_paused: bool = False  # connect and show, but start the loop only on resume
     connect_timeout_s: float = 5.0
+    signing_key: bytes | None = None  # MAVLink 2 signing on the aPad link (`vil gcs --signing-key`)
 
 
 def open_world(config: ConsoleConfig) -> World:
@@ -80,7 +81,7 @@ def open_world(config: ConsoleConfig) -> World:
     if (config.connect is None) == (config.sitl is None):
         raise ValueError("give exactly one of connect or sitl")
     clock: Clock = WallClock() if config.speed is None else PacedClock(config.speed)
-    options = LinkOptions(connect=config.connect, sitl_medium=config.sitl or "memory")
+    options = LinkOptions(connect=config.connect, sitl_medium=config.sitl or "memory", signing_key=config.signing_key)
     return build_world(config.scenario, clock, config.out_dir, options, epoch_us=unix_time_us())
 
 

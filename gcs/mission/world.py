@@ -159,6 +159,9 @@ def build_world(
     if options.signing_key is not None:
         link.enable_signing(options.signing_key, GCS_SIGNING_LINK_ID,
                             lambda: signing.timestamp_ticks(epoch_us, clock.now_us))
+        # The aPad takes nothing unsigned, the swarm's AMUSSEL_STATUS included (its own stream: the fleet's ids).
+        fleet.codec.enable_signing(options.signing_key, GCS_SIGNING_LINK_ID,
+                                   lambda: signing.timestamp_ticks(epoch_us, clock.now_us))
     return world
 
 

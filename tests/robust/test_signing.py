@@ -4,16 +4,18 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
-from robust_helpers import SYSID, sitl_pair
+from robust_helpers import SYSID, latlon_e7, sitl_pair
 
 from apad_sitl.vocabulary import Latch
 from gcs.link.faultproxy import LinkFaults
 from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
 from gcs.mission.world import LinkOptions
-from mavlink_dialect import MAV_CMD_APAD_DOCK, Codec, mavlink, signing
+from mavlink_dialect import MAV_CMD_APAD_DOCK, Codec, hot, mavlink, signing
 from mavlink_dialect.signing import SigningKeyError, key_from_passphrase, load_key
+from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID
 
 pytestmark = pytest.mark.sitl
 
@@ -31,9 +33,46 @@ def signed_gcs_codec(key: bytes = KEY, ticks: int = 0) -> Codec:
     return codec
 
 
+def signed_fleet_codec(now_us: int) -> Codec:
+    codec = Codec(FLEET_SYSTEM_ID, FLEET_COMPONENT_ID)
+    codec.enable_signing(KEY, link_id=1, ticks=lambda: signing.timestamp_ticks(EPOCH_US, now_us))
+    return codec
+
+
+def mussel_status(codec: Codec, mussel_id: int, x_m: float, y_m: float) -> bytes:
+    lat, lon = latlon_e7(x_m, y_m)
+    return codec.encode(mavlink.MAVLink_amussel_status_message(0, mussel_id, lat, lon, 0.0, 0.8, 4080, 0, 1))
+
+
+def fleet_batch(codec: Codec, ids: list[int]) -> list[bytes]:
+    """AMUSSEL_STATUS of several aMussels as the fleet sends them: the batch path, packed in datagrams."""
+    lat, lon = latlon_e7(0.5, 0.0)
+    n = len(ids)
+    frames = hot.encode_batch(codec, hot.AMUSSEL_STATUS, {
+        "time_us": 0, "mussel_id": np.array(ids), "lat": np.full(n, lat), "lon": np.full(n, lon), "depth": 0.0,
+        "battery": 0.8, "battery_voltage": 4080, "state": 0, "simulated": 1})
+    return hot.pack_datagrams(frames)
+
+
+def test_unsigned_amussel_status_is_refused_while_signing_is_on_and_signed_is_taken() -> None:
+    clock, vehicle, gcs = sitl_pair(signing_key=KEY, log_epoch_us=EPOCH_US)
+    gcs.mussel(24, 0.5, 0.0)  # one unsigned frame
+    for datagram in fleet_batch(Codec(FLEET_SYSTEM_ID, FLEET_COMPONENT_ID), [25, 26, 27]):  # the batch path
+        gcs.send_raw(datagram)
+    clock.sleep(0.5)
+    assert not {24, 25, 26, 27} & set(vehicle.mussels)
+    assert vehicle.codec.signing_refusals == {"unsigned": 4}
+    for datagram in fleet_batch(signed_fleet_codec(clock.now_us), [25, 26, 27]):
+        gcs.send_raw(datagram)
+    clock.sleep(0.5)
+    assert {25, 26, 27} <= set(vehicle.mussels)
+    assert vehicle.codec.signing_refusals == {"unsigned": 4}
+    vehicle.close()
+
+
 def test_forged_unsigned_dock_is_refused_and_a_signed_one_docks() -> None:
     clock, vehicle, gcs = sitl_pair(signing_key=KEY, log_epoch_us=EPOCH_US)
-    gcs.mussel(24, 0.5, 0.0)  # swarm telemetry may come unsigned: the aPad learns where 24 floats
+    gcs.send_raw(mussel_status(signed_fleet_codec(clock.now_us), 24, 0.5, 0.0))  # the fleet signs too
     assert 24 in vehicle.mussels
 
     gcs.command_long(MAV_CMD_APAD_DOCK, 1, 24)  # the stray, unsigned dock
@@ -98,7 +137,7 @@ def test_a_signed_mission_over_the_proxy_completes() -> None:
 
 def test_a_forged_frame_stamped_in_the_future_does_not_block_the_genuine_stream() -> None:
     clock, vehicle, gcs = sitl_pair(signing_key=KEY, log_epoch_us=EPOCH_US)
-    gcs.mussel(24, 0.5, 0.0)
+    gcs.send_raw(mussel_status(signed_fleet_codec(clock.now_us), 24, 0.5, 0.0))
     forger = Codec(250, 190)
     forger.enable_signing(key_from_passphrase("guess"), link_id=1, ticks=lambda: 2**47)  # far future, same stream
     gcs.send_raw(forger.encode(dock_msg(2, 24)))
