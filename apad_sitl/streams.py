@@ -5,6 +5,10 @@ vehicle and at run time by SET_MESSAGE_INTERVAL). REQUEST_MESSAGE (and the older
 REQUEST_AUTOPILOT_CAPABILITIES, GET_HOME_POSITION) sends one message after the ACK.
 PRIMITIVE_STATUS and DOCK_SLOT_STATUS also go out the moment they change (`announce`), so a
 script never waits a stream period to see its command take effect.
+
+A requested interval shorter than MIN_INTERVAL_US (20 ms, 50 Hz) is clamped to it and ACCEPTED, as
+ArduPilot does with rates above its limit: a stock GCS asking for "as fast as you can" gets a rate,
+and nobody gets a stream flood on request (1 µs used to be granted).
 """
 
 from __future__ import annotations
@@ -40,6 +44,7 @@ DEFAULT_RATES_HZ: dict[int, float] = {
 }
 MAX_MSG_ID = 2**24 - 1  # MAVLink 2 message ids are 24 bits
 MAX_INTERVAL_US = 2**31 - 1  # an int32 of microseconds (~36 min); longer is a typo, not a rate
+MIN_INTERVAL_US = 20_000  # 50 Hz per stream at most, whatever is asked
 
 
 class DegE7:
@@ -165,7 +170,7 @@ class Streams:
         elif interval == 0:  # MAVLink: back to the default rate
             interval_us = hz_to_us(self._rates_hz[msg_id])
         elif math.isfinite(interval) and 1 <= interval <= MAX_INTERVAL_US:
-            interval_us = int(interval)
+            interval_us = max(int(interval), MIN_INTERVAL_US)
         else:
             return invalid(cmd.field(2))
         self._interval_us[msg_id] = interval_us

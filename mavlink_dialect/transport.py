@@ -9,16 +9,34 @@ Address strings name the medium; whether we listen or connect is the caller's ch
     udp:HOST:PORT        udpin:/udpout: are accepted too (pymavlink's spelling)
     tcp:HOST:PORT        tcpin: listens
     serial:DEVICE[:BAUD] e.g. serial:/dev/ttyUSB0:57600
+
+Exposure (issue 10): a listener binds only the HOST it is given (the defaults are 127.0.0.1); a
+connecting UDP socket binds the one interface that routes to its peer (loopback for a local
+peer), never 0.0.0.0. Everything that grows with received traffic has a documented bound, and
+what a bound turns away is counted by reason in the transport's `dropped`:
+
+    MAX_RECEIVE_BATCH  datagrams (or stream reads) per `receive()`; the rest waits in the kernel
+    MAX_PEERS          UDP peers a listener answers; a peer silent for PEER_TIMEOUT_S is forgotten
+    MAX_CLIENTS        TCP clients a listener keeps
+    MAX_INBOX          datagrams queued in an in-memory end
 """
 
 from __future__ import annotations
 
 import contextlib
+import ipaddress
 import socket
-from collections import deque
+import time
+from collections import Counter, deque
+from collections.abc import Callable
 from typing import Protocol
 
 MAX_DATAGRAM = 65535
+MAX_RECEIVE_BATCH = 1024  # a flood cannot keep one `receive()` going forever; pollers come back
+MAX_PEERS = 8  # a vehicle serves a GCS or two and a few tools, not a crowd
+PEER_TIMEOUT_S = 30.0  # a UDP peer silent this long stops getting our frames
+MAX_CLIENTS = 8
+MAX_INBOX = 65_536  # in-memory datagrams not yet received; a lockstep instant queues a few hundred
 
 
 class AddressError(ValueError):
@@ -45,15 +63,21 @@ class MemoryTransport:
 
     datagrams = True
 
-    def __init__(self, label: str) -> None:
+    def __init__(self, label: str, max_inbox: int = MAX_INBOX) -> None:
         self.label = label
         self.inbox: deque[bytes] = deque()
+        self.max_inbox = max_inbox
         self.peer: MemoryTransport | None = None
         self.closed = False
+        self.dropped: Counter[str] = Counter()  # datagrams this end never received, by reason
 
     def send(self, data: bytes) -> None:
-        if self.peer is not None and not self.peer.closed and not self.closed:
-            self.peer.inbox.append(bytes(data))
+        peer = self.peer
+        if peer is not None and not peer.closed and not self.closed:
+            if len(peer.inbox) >= peer.max_inbox:
+                peer.dropped["inbox_full"] += 1
+                return
+            peer.inbox.append(bytes(data))
 
     def receive(self) -> list[bytes]:
         if not self.inbox:  # the common case in a lockstep drain: return without copying
@@ -76,27 +100,53 @@ def memory_pair(label: str = "mem") -> tuple[MemoryTransport, MemoryTransport]:
 
 
 class UdpTransport:
-    """UDP. Listening: answer every peer heard so far (several GCSs may share a vehicle).
-    Connecting: send to the given host:port and accept replies from anywhere."""
+    """UDP. Listening: answer every peer heard in the last PEER_TIMEOUT_S (several GCSs may share a
+    vehicle), at most MAX_PEERS. Connecting: send to the given host:port only, and accept replies
+    from anywhere on the interface bound.
+
+    `now_s` is the clock peers age by (monotonic seconds; a lockstep owner passes mission time).
+    """
 
     datagrams = True
 
-    def __init__(self, host: str, port: int, listen: bool) -> None:
+    def __init__(self, host: str, port: int, listen: bool, now_s: Callable[[], float] = time.monotonic,
+                 max_peers: int = MAX_PEERS, peer_timeout_s: float = PEER_TIMEOUT_S) -> None:
         self.label = f"udp:{host}:{port}"
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.peers: list[tuple[str, int]] = []
+        self._now_s, self.max_peers, self.peer_timeout_s = now_s, max_peers, peer_timeout_s
+        self.heard: dict[tuple[str, int], float] = {}  # learnt peers (listening) -> when last heard
+        self.fixed: tuple[str, int] | None = None if listen else (host, port)  # the peer we connect to
+        self.dropped: Counter[str] = Counter()  # datagrams refused by a bound, by reason
+        self.pruned = 0  # peers forgotten after PEER_TIMEOUT_S of silence
+        self.max_batch = MAX_RECEIVE_BATCH
         try:
-            self.sock.bind((host, port) if listen else ("0.0.0.0", 0))
+            self.sock.bind((host, port) if listen else (local_address_towards(host, port), 0))
         except OSError:
             self.sock.close()
             raise
-        if not listen:
-            self.peers.append((host, port))
         self.sock.setblocking(False)
 
     @property
     def local_port(self) -> int:
         return int(self.sock.getsockname()[1])
+
+    @property
+    def local_host(self) -> str:
+        return str(self.sock.getsockname()[0])
+
+    @property
+    def peers(self) -> list[tuple[str, int]]:
+        """Who `send` reaches: the fixed peer, or the peers heard lately (silent ones pruned)."""
+        if self.fixed is not None:
+            return [self.fixed]
+        self._prune(self._now_s())
+        return list(self.heard)
+
+    def _prune(self, now: float) -> None:
+        stale = [addr for addr, t in self.heard.items() if now - t > self.peer_timeout_s]
+        for addr in stale:
+            del self.heard[addr]
+        self.pruned += len(stale)
 
     def send(self, data: bytes) -> None:
         for peer in self.peers:
@@ -106,22 +156,41 @@ class UdpTransport:
 
     def receive(self) -> list[bytes]:
         out: list[bytes] = []
-        while True:
+        now = self._now_s()
+        self._prune(now)
+        while len(out) < self.max_batch:
             try:
                 data, addr = self.sock.recvfrom(MAX_DATAGRAM)
             except (BlockingIOError, InterruptedError):
                 return out
             except OSError:  # ECONNREFUSED surfaced from an earlier send
                 continue
-            if addr not in self.peers:
-                self.peers.append(addr)
+            if self.fixed is None:
+                if addr not in self.heard and len(self.heard) >= self.max_peers:
+                    self.dropped["peer_limit"] += 1  # the peers we serve keep their place
+                    continue
+                self.heard[addr] = now
             out.append(data)
+        return out
 
     def fileno(self) -> int | None:
         return self.sock.fileno()
 
     def close(self) -> None:
         self.sock.close()
+
+
+def local_address_towards(host: str, port: int) -> str:
+    """The local address a datagram to host:port leaves from: 127.0.0.1 for a loopback peer, else
+    the one interface the route uses (a UDP `connect` sends nothing; it only asks the kernel)."""
+    try:
+        if ipaddress.ip_address(host).is_loopback:
+            return "127.0.0.1"
+    except ValueError:
+        pass  # a name: ask the kernel
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        probe.connect((host, port))
+        return str(probe.getsockname()[0])
 
 
 class TcpTransport:
@@ -133,6 +202,7 @@ class TcpTransport:
         self.label = f"tcp:{host}:{port}"
         self.server: socket.socket | None = None
         self.clients: list[socket.socket] = []
+        self.dropped: Counter[str] = Counter()  # connections refused by a bound, by reason
         if listen:
             server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
             try:
@@ -156,6 +226,10 @@ class TcpTransport:
                 conn, _ = self.server.accept()
             except (BlockingIOError, InterruptedError):
                 return
+            if len(self.clients) >= MAX_CLIENTS:
+                conn.close()
+                self.dropped["client_limit"] += 1
+                continue
             conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
             conn.setblocking(False)
             self.clients.append(conn)
@@ -173,7 +247,7 @@ class TcpTransport:
         self._accept()
         out = []
         for conn in list(self.clients):
-            while True:
+            for _ in range(MAX_RECEIVE_BATCH // MAX_CLIENTS):  # the rest waits in the kernel
                 try:
                     data = conn.recv(MAX_DATAGRAM)
                 except (BlockingIOError, InterruptedError):

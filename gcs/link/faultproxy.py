@@ -9,6 +9,9 @@ same seed and faults give the same drops and delays whatever the CPU does, and a
 costs 200 ms of mission time, not of wall time. On a wall clock the same code is a field proxy.
 
 Reordering is what jitter does: each datagram draws its own delay, so a later one may overtake.
+At most `MAX_HELD` datagrams wait in the proxy; past that one is dropped and counted (`overflow`),
+after its draws, so a bound that bites does not reshuffle the faults that follow. Both sockets
+bind loopback unless given an address; the GCS side forgets a GCS silent for 30 s of mission time.
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ from mavlink_dialect.transport import UdpTransport
 from missiontime import US_PER_S, Clock, Task, seconds_to_us, us_to_s
 
 _IDLE_PERIOD_US = 3600 * US_PER_S  # the delivery task sleeps this long when nothing is held
+MAX_HELD = 65_536  # datagrams in flight; 200 ms of a pool12 mission holds a few dozen
 
 
 @dataclass(frozen=True)
@@ -61,6 +65,8 @@ class ProxyStats:
     dropped: int = 0
     duplicated: int = 0
     reordered: int = 0  # delivered before a datagram that entered the proxy earlier (same way)
+    overflow: int = 0  # dropped because MAX_HELD datagrams were already waiting
+    no_peer: int = 0  # due, but nobody to send it to (no GCS heard in the last 30 s)
 
 
 @dataclass(order=True)
@@ -98,10 +104,12 @@ class FaultProxy:
         self.stats = {True: ProxyStats(), False: ProxyStats()}  # to vehicle / to GCS
         self._rng = np.random.default_rng(faults.seed)
         self._held: list[_Held] = []
+        self.max_held = MAX_HELD
         self._seq = 0
         self._last_seq = {True: -1, False: -1}
         # The GCS side listens and answers whoever spoke; the vehicle side sends to the vehicle.
-        self.gcs_side = _Side(self, UdpTransport(listen_host, listen_port, listen=True), to_vehicle=True)
+        gcs_udp = UdpTransport(listen_host, listen_port, listen=True, now_s=clock.time)  # mission time: repeatable
+        self.gcs_side = _Side(self, gcs_udp, to_vehicle=True)
         self.vehicle_side = _Side(self, UdpTransport(*vehicle_addr, listen=False), to_vehicle=False)
         sched = clock.scheduler
         self._task: Task = sched.every(us_to_s(_IDLE_PERIOD_US), self._deliver_due, "faultproxy.deliver",
@@ -127,9 +135,14 @@ class FaultProxy:
             stats.duplicated += 1
         now_us = self.clock.now_us
         for jitter in copies:
+            if len(self._held) >= self.max_held:
+                stats.overflow += 1
+                continue
             due_us = now_us + seconds_to_us(f.latency_s + f.jitter_s * float(jitter))
             heapq.heappush(self._held, _Held(due_us, self._seq, data, to_vehicle))
             self._seq += 1
+        if not self._held:
+            return
         head = self._held[0].due_us
         if head < self._task.next_us:
             self.clock.scheduler.reschedule(self._task, next_us=head)
@@ -148,6 +161,8 @@ class FaultProxy:
             if out.peers:  # the GCS side has nobody to answer until the GCS has spoken
                 out.send(item.data)
                 stats.forwarded += 1
+            else:
+                stats.no_peer += 1
         next_us = held[0].due_us if held else now_us + _IDLE_PERIOD_US
         self.clock.scheduler.reschedule(self._task, next_us=max(next_us, now_us))
 

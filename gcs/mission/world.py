@@ -172,11 +172,11 @@ def _embed_sitl(world: World, options: LinkOptions, out_dir: Path | None, epoch_
     gcs_end: Transport
     apad_end: Transport
     if options.faults is not None:
-        apad_udp = UdpTransport("127.0.0.1", 0, listen=True)
+        apad_udp = UdpTransport("127.0.0.1", 0, listen=True, now_s=clock.time)  # peers age in mission time
         world.proxy = FaultProxy(clock, ("127.0.0.1", apad_udp.local_port), options.faults)
         gcs_end, apad_end = UdpTransport("127.0.0.1", world.proxy.listen_port, listen=False), apad_udp
     elif options.sitl_medium == "udp":
-        apad_udp = UdpTransport("127.0.0.1", 0, listen=True)
+        apad_udp = UdpTransport("127.0.0.1", 0, listen=True, now_s=clock.time)  # peers age in mission time
         gcs_end, apad_end = UdpTransport("127.0.0.1", apad_udp.local_port, listen=False), apad_udp
     else:
         gcs_end, apad_end = memory_pair("apad")
