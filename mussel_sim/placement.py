@@ -30,6 +30,14 @@ class Area:
     def __post_init__(self) -> None:
         if not isinstance(self.geometry, Polygon | MultiPolygon) or self.geometry.is_empty:
             raise ValueError(f"area {self.name!r} must be a non-empty Polygon or MultiPolygon")
+        for lon, lat in shapely.get_coordinates(self.geometry):
+            if not (np.isfinite(lon) and np.isfinite(lat)):
+                raise ValueError(f"area {self.name!r}: vertex [{lon}, {lat}] is not a finite [lon, lat]")
+            if not (-90 <= lat <= 90 and -180 <= lon <= 180):
+                raise ValueError(f"area {self.name!r}: vertex [{lon}, {lat}] is not WGS84 degrees [lon, lat] "
+                                 "(GeoJSON order)")
+        if not self.geometry.is_valid:
+            raise ValueError(f"area {self.name!r}: the polygon is not valid (self-intersecting or degenerate)")
 
     @property
     def centroid_lat_lon_deg(self) -> tuple[float, float]:

@@ -48,11 +48,19 @@ class StartConfig:
         if (counts > 1).any():
             raise ValueError(f"start config: duplicate aMussel ids {uniq[counts > 1].tolist()}")
         battery = np.asarray(self.battery_frac, float)
-        if ((battery < 0) | (battery > 1)).any():
-            raise ValueError("start config: batteries must be in [0, 1]")
+        lat, lon = np.asarray(self.lat_deg, float), np.asarray(self.lon_deg, float)
+        # Written as "not inside" so NaN is refused too.
+        bad = ~((battery >= 0) & (battery <= 1))
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise ValueError(f"start config: batteries must be in [0, 1], aMussel {ids[k]} has {battery[k]}")
+        bad = ~((np.abs(lat) <= 90) & (np.abs(lon) <= 180))
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise ValueError(f"start config: aMussel {ids[k]} at [{lon[k]}, {lat[k]}]: not WGS84 degrees [lon, lat]")
         object.__setattr__(self, "ids", ids.astype(np.uint32))
-        object.__setattr__(self, "lat_deg", np.asarray(self.lat_deg, float))
-        object.__setattr__(self, "lon_deg", np.asarray(self.lon_deg, float))
+        object.__setattr__(self, "lat_deg", lat)
+        object.__setattr__(self, "lon_deg", lon)
         object.__setattr__(self, "battery_frac", battery)
 
     @property

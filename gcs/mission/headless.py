@@ -16,15 +16,16 @@ import numpy as np
 from gcs.mission.accounting import account
 from gcs.mission.results import MusselResult, RunResult
 from gcs.mission.scenario import Scenario
-from gcs.mission.world import LinkOptions, World, lockstep_world
+from gcs.mission.world import LOCKSTEP_EPOCH_US, LinkOptions, World, lockstep_world
 from gcs.records import checkpoint
 from missiontime import seconds_to_us, us_to_s
 
 ProgressFn = Callable[[float], None]  # receives mission time done, seconds
 
 
-def run_dir(root: Path, scenario: Scenario) -> Path:
-    return root / f"{scenario.name}-{scenario.mission.collect_strategy}-seed{scenario.seed}"
+def run_stem(scenario: Scenario) -> str:
+    """What a run's folder is named after; `gcs.records.rundirs` adds -runK so runs never share one."""
+    return f"{scenario.name}-{scenario.mission.collect_strategy}-seed{scenario.seed}"
 
 
 def run_mission(
@@ -44,6 +45,8 @@ def run_mission(
         if ckpt_files is None:
             raise checkpoint.CheckpointError("resuming needs the run's output folder")
         saved = checkpoint.load(ckpt_files)
+        assert out_dir is not None
+        checkpoint.cut_logs(out_dir, saved, LOCKSTEP_EPOCH_US)  # the stretch after it is simulated again
     world = lockstep_world(scenario, out_dir, options, start_us=saved.time_us if saved else 0,
                            append_logs=saved is not None)
     try:

@@ -8,6 +8,10 @@
     VIL_SIGNING_KEY=secret vil run pool12      # MAVLink 2 signing on the aPad link (or --signing-key FILE)
     vil run pool12 --resume                    # continue the run in its folder after a crash (kill -9)
 
+Every run gets a new folder, OUT/SCENARIO-STRATEGY-seedN-runK (K one past the highest there), and
+OUT/latest points at the last one started; `--resume` continues the newest folder of the same
+scenario, strategy and seed that holds a checkpoint, and writes each event once.
+
 Exit status: 0 every run finished with every aMussel where it should be; 2 bad input (one line
 on stderr); 3 the runs finished but some aMussel is not where it should be (left at the surface,
 off its position, or on a slot the GCS does not know): a red table says who is where.
@@ -27,7 +31,8 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from gcs.link.faultproxy import LinkFaults
-from gcs.mission.headless import run_dir, run_mission
+from gcs.mission import flags
+from gcs.mission.headless import run_mission, run_stem
 from gcs.mission.planner import COLLECT
 from gcs.mission.results import (
     RunResult,
@@ -37,10 +42,11 @@ from gcs.mission.results import (
     seed_stats_table,
     shape_table,
 )
-from gcs.mission.scenario import Scenario, ScenarioError, load_scenario, parse_duration_s
+from gcs.mission.scenario import SEED_MAX, THETA_RANGE, Scenario, ScenarioError, load_scenario
 from gcs.mission.scenario_models import check_inputs
 from gcs.mission.world import LinkOptions
-from gcs.records.checkpoint import CHECKPOINT_NAME
+from gcs.records import checkpoint, rundirs
+from gcs.records.checkpoint import CHECKPOINT_NAME, CheckpointError
 from mavlink_dialect.signing import SigningKeyError, load_key
 
 # The paper's Table II runs: (scenario, collection strategy).
@@ -48,6 +54,11 @@ TABLE_II = (("pool12", "cautious"), ("pool12", "greedy"), ("pool12", "none"), ("
 # Over many seeds every scenario runs these, so the shape of Table II can be checked per seed.
 SHAPE_STRATEGIES = ("cautious", "greedy", "none")
 EXIT_MISPLACED = 3  # the runs finished, but some aMussel is not where it should be (the table says who)
+MAX_SEEDS = 1000
+MAX_JOBS = 256
+# One-way delay bound: slower than this the GCS never hears the aPad's first heartbeat in time (10 s
+# round trips) and the aPad's failsafe (3 s without the GCS) holds it at every gap.
+MAX_DELAY_S = 5.0
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -58,32 +69,41 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--strategy", type=_strategies, metavar="NAME[,NAME...]",
                         help=f"collection strategy or a comma list of them ({', '.join(COLLECT)}); "
                              "default: the scenario's")
-    parser.add_argument("--seed", type=int, help="seed of the run's random draws (default: the scenario's)")
-    parser.add_argument("--seeds", type=int, metavar="N",
-                        help="run seeds 1..N, each on a fleet drawn from its seed; print mean and spread")
+    parser.add_argument("--seed", type=flags.integer_in(0, SEED_MAX),
+                        help="seed of the run's random draws (default: the scenario's)")
+    parser.add_argument("--seeds", type=flags.integer_in(1, MAX_SEEDS), metavar="N",
+                        help=f"run seeds 1..N (N <= {MAX_SEEDS}), each on a fleet drawn from its seed; "
+                             "print mean and spread")
     parser.add_argument("--draw-fleet", action="store_true",
                         help="draw the fleet from the seed instead of the scenario's saved start configuration")
-    parser.add_argument("--duration", type=_duration, help='mission time, e.g. 2400, "40m", "1h" (default: 40m)')
-    parser.add_argument("--theta", type=_positive, help="aMussel time scale (default: the scenario's, 30)")
-    parser.add_argument("--json", type=Path, metavar="FILE", help="write the result(s) as JSON")
-    parser.add_argument("--out", type=Path, default=Path("runs"), metavar="DIR",
-                        help="output folder; each run leaves DIR/SCENARIO-STRATEGY-seedN/ (default: runs)")
+    parser.add_argument("--duration", type=flags.duration,
+                        help='mission time up to a week, e.g. 2400, "40m", "1h" (default: 40m)')
+    parser.add_argument("--theta", type=flags.number_in(*THETA_RANGE),
+                        help=f"aMussel time scale in [{THETA_RANGE[0]:g}, {THETA_RANGE[1]:g}] "
+                             "(default: the scenario's, 30)")
+    parser.add_argument("--json", type=flags.writable_file, metavar="FILE", help="write the result(s) as JSON")
+    parser.add_argument("--out", type=flags.writable_dir, default="runs", metavar="DIR",
+                        help="output folder; each run leaves a new DIR/SCENARIO-STRATEGY-seedN-runK/ and "
+                             "DIR/latest points at the last one (default: runs)")
     faults = parser.add_argument_group("link faults and security (the aPad link over real UDP through a seeded proxy)")
-    faults.add_argument("--loss", type=_fraction, default=0.0, metavar="FRAC", help="drop this fraction of datagrams")
-    faults.add_argument("--latency", type=_non_negative, default=0.0, metavar="S",
-                        help="one-way delay, mission seconds")
-    faults.add_argument("--jitter", type=_non_negative, default=0.0, metavar="S",
+    faults.add_argument("--loss", type=flags.fraction, default=0.0, metavar="FRAC",
+                        help="drop this fraction of datagrams")
+    faults.add_argument("--latency", type=flags.number_in(0.0, MAX_DELAY_S), default=0.0, metavar="S",
+                        help=f"one-way delay, mission seconds (at most {MAX_DELAY_S:g})")
+    faults.add_argument("--jitter", type=flags.number_in(0.0, MAX_DELAY_S), default=0.0, metavar="S",
                         help="extra delay uniform in [0, S]; reorders datagrams")
-    faults.add_argument("--duplicate", type=_fraction, default=0.0, metavar="FRAC",
+    faults.add_argument("--duplicate", type=flags.fraction, default=0.0, metavar="FRAC",
                         help="send this fraction of datagrams twice")
-    faults.add_argument("--outage", type=_outage, action="append", default=[], metavar="START:END",
+    faults.add_argument("--outage", type=flags.window, action="append", default=[], metavar="START:END",
                         help="total link loss between these mission times (s); repeatable")
     faults.add_argument("--proxy", action="store_true", help="route through the proxy even with no faults")
     faults.add_argument("--signing-key", type=Path, metavar="FILE",
                         help="MAVLink 2 signing with the passphrase in FILE (default: $VIL_SIGNING_KEY if set)")
     parser.add_argument("--resume", action="store_true",
-                        help="continue the mission from the checkpoint in its output folder (after a crash)")
-    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="parallel runs (default: CPU count)")
+                        help="after a crash: continue the newest DIR/SCENARIO-STRATEGY-seedN-runK/ holding a "
+                             "checkpoint, in that folder, each event written once")
+    parser.add_argument("--jobs", type=flags.integer_in(1, MAX_JOBS), default=os.cpu_count() or 1,
+                        help="parallel runs (default: CPU count)")
 
 
 def _strategies(text: str) -> list[str]:
@@ -91,58 +111,13 @@ def _strategies(text: str) -> list[str]:
     unknown = [n for n in names if n not in COLLECT]
     if unknown or not names:
         raise argparse.ArgumentTypeError(f"invalid choice: {text!r} (choose from {', '.join(COLLECT)})")
-    return names
-
-
-def _duration(text: str) -> float:
-    try:
-        return parse_duration_s(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-
-
-def _outage(text: str) -> tuple[float, float]:
-    start, sep, end = text.partition(":")
-    try:
-        window = (float(start), float(end))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected START:END in mission seconds, got {text!r}") from None
-    if not sep or not 0 <= window[0] < window[1]:
-        raise argparse.ArgumentTypeError(f"expected START:END with 0 <= START < END, got {text!r}")
-    return window
-
-
-def _fraction(text: str) -> float:
-    value = _non_negative(text)
-    if value >= 1.0:
-        raise argparse.ArgumentTypeError(f"must be a fraction below 1, got {text}")
-    return value
-
-
-def _number(text: str, allow_zero: bool) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if allow_zero and not value >= 0:
-        raise argparse.ArgumentTypeError(f"must not be negative, got {text}")
-    if not allow_zero and not value > 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
-    return value
-
-
-def _non_negative(text: str) -> float:
-    return _number(text, allow_zero=True)
-
-
-def _positive(text: str) -> float:
-    return _number(text, allow_zero=False)
+    return list(dict.fromkeys(names))  # a name twice would run (or resume) the same folder twice
 
 
 @dataclass(frozen=True)
 class Job:
     scenario: Scenario
-    out_dir: Path
+    out_dir: Path  # the run's own folder (claimed by `_place`)
     options: LinkOptions | None = None
     resume: bool = False
 
@@ -181,8 +156,27 @@ def _jobs(args: argparse.Namespace) -> list[Job]:
             s = base.with_overrides(strategy=strategy, seed=seed, duration_s=args.duration, theta=args.theta)
             if args.seeds or args.draw_fleet:
                 s = replace(s, fleet=replace(s.fleet, start_config=None))
-            jobs.append(Job(s, run_dir(args.out, s), options, args.resume))
+            jobs.append(Job(s, args.out, options, args.resume))
     return jobs
+
+
+def _place(jobs: list[Job]) -> list[Job]:
+    """Each job's folder: a new one, or (resuming) the newest of its run with a usable checkpoint of it."""
+    placed = []
+    for job in jobs:
+        stem = run_stem(job.scenario)
+        if not job.resume:
+            placed.append(replace(job, out_dir=rundirs.new_run_dir(job.out_dir, stem)))
+            continue
+        folder = rundirs.newest_run_dir(job.out_dir, stem, holding=CHECKPOINT_NAME)
+        if folder is None:
+            raise CheckpointError(f"nothing to resume: no {CHECKPOINT_NAME} in any {job.out_dir / stem}-runK/")
+        saved = checkpoint.load(folder / CHECKPOINT_NAME)  # a corrupt one is refused here, not mid-run
+        key = (job.scenario.name, job.scenario.mission.collect_strategy, job.scenario.seed)
+        if saved.run_key != key:
+            raise CheckpointError(f"{folder / CHECKPOINT_NAME} is of run {saved.run_key}, not {key}")
+        placed.append(replace(job, out_dir=folder))
+    return placed
 
 
 def _run_job(job: Job) -> RunResult:
@@ -192,19 +186,19 @@ def _run_job(job: Job) -> RunResult:
 def run(args: argparse.Namespace) -> int:
     console = Console()
     try:
-        jobs = _jobs(args)
-    except (ScenarioError, SigningKeyError) as exc:
+        jobs = _place(_jobs(args))
+    except (ScenarioError, SigningKeyError, CheckpointError) as exc:
         print(f"vil run: {exc}", file=sys.stderr)
         return 2
-    if args.resume:
-        missing = [j.out_dir for j in jobs if not (j.out_dir / CHECKPOINT_NAME).exists()]
-        if missing:
-            print(f"vil run: nothing to resume: no {CHECKPOINT_NAME} in {missing[0]}", file=sys.stderr)
-            return 2
-    if args.seeds is not None and args.seeds < 1:
-        print("vil run: --seeds must be at least 1", file=sys.stderr)
+    except OSError as exc:  # the output folder went away or filled up since the flag was checked
+        print(f"vil run: --out {args.out}: {exc.strerror or exc}", file=sys.stderr)
         return 2
-    results = _run_all(jobs, max(1, args.jobs), console)
+    rundirs.point_latest(jobs[-1].out_dir)
+    try:
+        results = _run_all(jobs, args.jobs, console)
+    except TimeoutError as exc:  # e.g. an --outage over the start: the aPad was never heard
+        print(f"vil run: {exc}", file=sys.stderr)
+        return 1
     results.sort(key=lambda r: ([(j.scenario.name, j.scenario.mission.collect_strategy) for j in jobs]
                                 .index((r.scenario, r.strategy)), r.seed))
     if args.seeds:

@@ -7,6 +7,7 @@ or strings with a unit: "90s", "40m", "1.5h".
 
 from __future__ import annotations
 
+import math
 import re
 import tomllib
 from dataclasses import dataclass, replace
@@ -19,14 +20,31 @@ from mussel_sim.battery import CHARGE_PROFILES, DISCHARGE_PROFILES
 MISSIONS_DIR = Path(__file__).resolve().parents[2] / "missions"
 _DURATION = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*(s|m|min|h)?\s*$")
 _UNIT_S = {None: 1.0, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0}
+MAX_DURATION_S = 7 * 86400.0  # a week at sea; longer is a typo that would run for hours of CPU
+THETA_RANGE = (1e-3, 1e4)  # aMussel time scale, for the file and `--theta`
+SEED_MAX = 2**63 - 1  # seeds are int64 in results and folder names
+MAX_CURRENT_MPS = 5.0  # per component: more is not a sea we work in (as `vil sitl --current`)
 
 
 class ScenarioError(ValueError):
     """One line for the user: file, field, what is wrong."""
 
 
+def out_of_range(value: float, lo: float | None = None, hi: float | None = None) -> str | None:
+    """Why `value` is not a finite number in [lo, hi], or None: the one range check for files and flags."""
+    if not math.isfinite(value):
+        return f"{value} is not a finite number"
+    if lo is not None and hi is not None and not lo <= value <= hi:
+        return f"{value} is outside [{lo}, {hi}]"
+    if lo is not None and value < lo:
+        return f"{value} is below {lo}"
+    if hi is not None and value > hi:
+        return f"{value} is above {hi}"
+    return None
+
+
 def parse_duration_s(text: str | float | int) -> float:
-    """Seconds from 2400, "2400s", "40m", "40min" or "0.5h"; ValueError otherwise."""
+    """Seconds from 2400, "2400s", "40m", "40min" or "0.5h", up to a week; ValueError otherwise."""
     if isinstance(text, bool):
         raise ValueError("expected a duration")
     if isinstance(text, int | float):
@@ -36,8 +54,10 @@ def parse_duration_s(text: str | float | int) -> float:
         if not match:
             raise ValueError(f"{text!r} is not a duration (use e.g. 2400, \"40m\", \"90s\", \"1h\")")
         seconds = float(match.group(1)) * _UNIT_S[match.group(2)]
-    if seconds <= 0:
-        raise ValueError("duration must be positive")
+    if not math.isfinite(seconds) or seconds <= 0:
+        raise ValueError(f"duration must be a positive number of seconds, got {text!r}")
+    if seconds > MAX_DURATION_S:
+        raise ValueError(f"{text!r} is more than a week ({MAX_DURATION_S:.0f} s)")
     return seconds
 
 
@@ -138,16 +158,18 @@ class _Table:
         value = self._take(key, default)
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.fail(key, f"expected a number, got {value!r}")
-        if (lo is not None and value < lo) or (hi is not None and value > hi):
-            raise self.fail(key, f"{value} is outside [{lo}, {hi}]")
+        problem = out_of_range(value, lo, hi)
+        if problem:
+            raise self.fail(key, problem)
         return float(value)
 
     def integer(self, key: str, default: Any = None, lo: int | None = None, hi: int | None = None) -> int:
         value = self._take(key, default)
         if isinstance(value, bool) or not isinstance(value, int):
             raise self.fail(key, f"expected an integer, got {value!r}")
-        if (lo is not None and value < lo) or (hi is not None and value > hi):
-            raise self.fail(key, f"{value} is outside [{lo}, {hi}]")
+        problem = out_of_range(value, lo, hi)
+        if problem:
+            raise self.fail(key, problem)
         return value
 
     def text(self, key: str, default: Any = None, choices: tuple[str, ...] | None = None) -> str:
@@ -176,13 +198,18 @@ class _Table:
             raise self.fail(key, f"no such file: {resolved}")
         return resolved
 
-    def pair(self, key: str, default: Any = None) -> tuple[float, float]:
+    def pair(self, key: str, default: Any = None, lo: float | None = None, hi: float | None = None
+             ) -> tuple[float, float]:
         value = self._take(key, default)
         if (
             not isinstance(value, list | tuple) or len(value) != 2
             or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
         ):
             raise self.fail(key, f"expected two numbers [a, b], got {value!r}")
+        for v in value:
+            problem = out_of_range(v, lo, hi)
+            if problem:
+                raise self.fail(key, problem)
         return float(value[0]), float(value[1])
 
     def sub(self, key: str) -> _Table:
@@ -216,13 +243,13 @@ def load_scenario(path: str | Path) -> Scenario:
     root = _Table(path, data, "")
     top = root.sub("scenario")
     name = top.text("name", path.stem)
-    seed = top.integer("seed", 1, lo=0)
+    seed = top.integer("seed", 1, lo=0, hi=SEED_MAX)
     top.done()
 
     m = root.sub("mission")
     mission = MissionConfig(
         duration_s=m.duration("duration", "40m"),
-        theta=m.number("theta", 30.0, lo=1e-3, hi=1e4),
+        theta=m.number("theta", 30.0, *THETA_RANGE),
         pool_threshold=m.number("pool_threshold", 0.8, lo=0.0, hi=1.0),
         charged_threshold=m.number("charged_threshold", 0.99, lo=0.0, hi=1.0),
         min_pool=m.integer("min_pool", 4, lo=1, hi=4),
@@ -234,12 +261,12 @@ def load_scenario(path: str | Path) -> Scenario:
     m.done()
 
     e = root.sub("environment")
-    current = e.pair("current_mps", [0.0, 0.0])
+    current = e.pair("current_mps", [0.0, 0.0], -MAX_CURRENT_MPS, MAX_CURRENT_MPS)
     environment = EnvironmentConfig(current[0], current[1])
     e.done()
 
     f = root.sub("fleet")
-    battery = f.pair("start_battery", [0.6, 1.0])
+    battery = f.pair("start_battery", [0.6, 1.0], 0.0, 1.0)
     fleet = FleetConfig(
         count=f.integer("count", _REQUIRED, lo=1, hi=65535),
         area=f.file("area", _REQUIRED),  # type: ignore[arg-type]
@@ -249,9 +276,9 @@ def load_scenario(path: str | Path) -> Scenario:
         discharge=f.text("discharge", "active", tuple(DISCHARGE_PROFILES)),
         charge=f.text("charge", "secondary", tuple(CHARGE_PROFILES)),
         drift_cm=f.number("drift_cm", 0.5, lo=0.0, hi=100.0),
-        acoustic_range_m=f.number("acoustic_range_m", 100.0, lo=0.0),
-        surfacing_time_s=f.number("surfacing_time_s", 20.0, lo=0.0),
-        sinking_time_s=f.number("sinking_time_s", 20.0, lo=0.0),
+        acoustic_range_m=f.number("acoustic_range_m", 100.0, lo=0.0, hi=100_000.0),
+        surfacing_time_s=f.number("surfacing_time_s", 20.0, lo=0.0, hi=3600.0),
+        sinking_time_s=f.number("sinking_time_s", 20.0, lo=0.0, hi=3600.0),
         status_rate_hz=f.number("status_rate_hz", 1.0, lo=0.01, hi=50.0),
         sensors_rate_hz=f.number("sensors_rate_hz", 0.2, lo=0.01, hi=50.0),
         sensor_field=f.text("sensor_field", "anoxic_patch", ("anoxic_patch", "dummy")),
@@ -261,7 +288,7 @@ def load_scenario(path: str | Path) -> Scenario:
     f.done()
 
     a = root.sub("apad")
-    home = a.pair("home", _REQUIRED)
+    home = a.pair("home", _REQUIRED, -180.0, 180.0)
     if not (-90 <= home[0] <= 90 and -180 <= home[1] <= 180):
         raise a.fail("home", f"{list(home)} is not [lat, lon] in degrees")
     apad = ApadConfig(

@@ -7,6 +7,7 @@ import json
 from dataclasses import replace
 
 import numpy as np
+import shapely
 
 from apad_sitl.params import ApadParams
 from gcs.mission.scenario import Scenario, ScenarioError
@@ -17,33 +18,41 @@ from mussel_sim.placement import Area, load_area
 from mussel_sim.sensors import AnoxicPatch, DummySensors, SensorField
 from mussel_sim.startconfig import StartConfig, generate_start_config, load_start_config
 
+# A start point farther than this outside the area is a wrong file (another site, lat/lon swapped), not drift.
+START_OUTSIDE_LIMIT_M = 100.0
+
 
 def check_inputs(scenario: Scenario) -> None:
     """Read the scenario's area and start configuration now, so a bad file is one `ScenarioError` line
     (file: what is wrong) before any mission starts, never a traceback from the middle of one."""
-    files = [("area", scenario.fleet.area)]
-    if scenario.fleet.start_config is not None:
-        files.append(("start configuration", scenario.fleet.start_config))
-    for what, path in files:
-        try:
-            if what == "area":
-                area = load_area(path)
-                if not area.geometry.is_valid:
-                    raise ValueError("the polygon is not valid (self-intersecting or degenerate)")
-                lon_min, lat_min, lon_max, lat_max = area.geometry.bounds
-                if not (-90 <= lat_min <= lat_max <= 90 and -180 <= lon_min <= lon_max <= 180):
-                    raise ValueError("coordinates are not WGS84 degrees [lon, lat] (GeoJSON order)")
-            else:
-                config = load_start_config(path)
-                if config.n != scenario.fleet.count:
-                    raise ValueError(f"holds {config.n} aMussels, the scenario says {scenario.fleet.count}")
-        except OSError as exc:
-            raise ScenarioError(f"{path}: cannot read the {what}: {exc.strerror or exc}") from None
-        except json.JSONDecodeError as exc:
-            raise ScenarioError(f"{path}: the {what} is not JSON: {exc.msg} (line {exc.lineno})") from None
-        except (ValueError, KeyError, TypeError, IndexError, AttributeError) as exc:
-            detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            raise ScenarioError(f"{path}: bad {what}: {detail}") from None
+    path, what = scenario.fleet.area, "area"
+    try:
+        area = load_area(path)  # checks its vertices: finite WGS84 degrees, a valid polygon
+        if scenario.fleet.start_config is not None:
+            path, what = scenario.fleet.start_config, "start configuration"
+            config = load_start_config(path)  # checks ids, positions, batteries
+            if config.n != scenario.fleet.count:
+                raise ValueError(f"holds {config.n} aMussels, the scenario says {scenario.fleet.count}")
+            _check_inside(config, area)
+    except OSError as exc:
+        raise ScenarioError(f"{path}: cannot read the {what}: {exc.strerror or exc}") from None
+    except json.JSONDecodeError as exc:
+        raise ScenarioError(f"{path}: the {what} is not JSON: {exc.msg} (line {exc.lineno})") from None
+    except (ValueError, KeyError, TypeError, IndexError, AttributeError) as exc:
+        detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ScenarioError(f"{path}: bad {what}: {detail}") from None
+
+
+def _check_inside(config: StartConfig, area: Area) -> None:
+    frame = area.frame()
+    local = area.to_local(frame)
+    x, y = frame.to_local(config.lat_deg, config.lon_deg)
+    outside = shapely.distance(local, shapely.points(x, y))
+    far = outside > START_OUTSIDE_LIMIT_M
+    if far.any():
+        k = int(np.argmax(far))
+        raise ValueError(f"aMussel {config.ids[k]} starts {outside[k]:.0f} m outside the area "
+                         f"(more than {START_OUTSIDE_LIMIT_M:.0f} m)")
 
 
 def start_config(scenario: Scenario, area: Area, rng: np.random.Generator) -> tuple[StartConfig, LocalFrame]:

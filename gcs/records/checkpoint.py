@@ -20,7 +20,11 @@ a killed process; an fsync per checkpoint cost more than the mission (power loss
 Pickle is fine here: the files are our own, written and read by the same version (checked), in the
 run's folder; a missing, short or garbled side file is a `CheckpointError`.
 
-For the console (`vil gcs --resume`): `files = CheckpointFiles(path)`, `load(files)` then
+The run's logs go on past the last checkpoint until the crash; the resumed run simulates that
+stretch again, so `cut_logs` first cuts them back to the checkpoint (events.jsonl to its length
+then, each .tlog before its mission time): every event and message is in the logs once.
+
+For the console (`vil gcs --resume`): `files = CheckpointFiles(path)`, `load(files)`, `cut_logs`, then
 `restore(world, ckpt)` on a world built with `mission_start_us=0`, `start_us=ckpt.time_us` and
 `append_logs=True`, and `loop.run(resume=True)`; `save(files, capture(world, loop))` while it runs
 (the same `files`, which know where the side files' valid rows end); `files.close()` at the end, or
@@ -44,6 +48,8 @@ from apad_sitl.primitives import PrimitiveState
 from apad_sitl.vehicle import VehicleState
 from gcs.link.registry import VehicleRegistry
 from gcs.mission.control import LoopStatus
+from gcs.records.events import EVENTS_NAME
+from mavlink_dialect import mavlink, tlog
 from mussel_sim.fleet_state import FleetState
 from mussel_sim.recorder import Recorder, RecorderHead, RecorderRows
 
@@ -53,7 +59,7 @@ if TYPE_CHECKING:
 
 CHECKPOINT_NAME = "checkpoint.pkl"
 CHECKPOINT_PERIOD_S = 10.0  # mission time between checkpoints
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 STEPS_SUFFIX = ".steps"  # side files beside CHECKPOINT_NAME
 TRACES_SUFFIX = ".traces"
 
@@ -84,6 +90,7 @@ class Checkpoint:
     loop_status: LoopStatus
     registry: VehicleRegistry  # what the GCS had heard: the aPads' views and the aMussel table
     vehicle: VehicleSnapshot | None
+    events_bytes: int = 0  # how long events.jsonl was
 
 
 def run_key(world: World) -> tuple[str, str, int]:
@@ -100,7 +107,7 @@ def capture(world: World, loop: EnergySharingLoop) -> Checkpoint:
     # The registry and the loop status go in live, not copied: `save` pickles a capture at once.
     return Checkpoint(
         FORMAT_VERSION, run_key(world), world.clock.now_us, fleet.state, dict(fleet.rng.bit_generator.state),
-        fleet.recorder, loop.status, world.link.registry, snapshot,
+        fleet.recorder, loop.status, world.link.registry, snapshot, world.events.bytes,
     )
 
 
@@ -285,6 +292,39 @@ class CheckpointFiles:
 
 def _one_line(exc: BaseException) -> str:
     return " ".join(str(exc).split()) or type(exc).__name__
+
+
+def cut_logs(out_dir: Path, ckpt: Checkpoint, epoch_us: int) -> None:
+    """Cut the run's logs back to the checkpoint: events.jsonl to its length then, each .tlog (the GCS's
+    and the aPad's, stamped `epoch_us` + mission time) before the checkpoint's mission time."""
+    try:
+        events = out_dir / EVENTS_NAME
+        if events.exists() and events.stat().st_size > ckpt.events_bytes:
+            os.truncate(events, ckpt.events_bytes)
+        for path in sorted(out_dir.glob("*.tlog")):
+            _cut_tlog(path, epoch_us + ckpt.time_us)
+    except (OSError, tlog.TlogError) as exc:
+        raise CheckpointError(f"cannot cut the logs in {out_dir} back to the checkpoint: {_one_line(exc)}") from None
+
+
+def _cut_tlog(path: Path, stamp_us: int) -> None:
+    size, offset = path.stat().st_size, 0
+    for stamp, frame in tlog.frames(path):
+        if stamp >= stamp_us or not _whole(frame):  # simulated again after the resume, or cut by the crash
+            break
+        offset += 8 + len(frame)
+    if offset < size:
+        os.truncate(path, offset)
+
+
+def _whole(frame: bytes) -> bool:
+    """Whether a .tlog frame is all there (a crash can cut the last one short)."""
+    if len(frame) < 3:
+        return False
+    if frame[0] == mavlink.PROTOCOL_MARKER_V2:
+        signature = mavlink.MAVLINK_SIGNATURE_BLOCK_LEN if frame[2] & mavlink.MAVLINK_IFLAG_SIGNED else 0
+        return len(frame) == 12 + frame[1] + signature
+    return len(frame) == 8 + frame[1]
 
 
 def restore(world: World, ckpt: Checkpoint) -> None:

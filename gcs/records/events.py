@@ -7,6 +7,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TextIO
 
+EVENTS_NAME = "events.jsonl"  # in a run folder
+
 
 @dataclass
 class Event:
@@ -26,6 +28,8 @@ class EventLog:
         self.events: list[Event] = []
         self.keep = keep
         self._file: TextIO | None = path.open("a" if append else "w", encoding="utf-8") if path else None
+        # The file's length: a checkpoint keeps it, so a resumed run cuts what the crashed one logged later.
+        self.bytes = path.stat().st_size if path is not None and append else 0
 
     def emit(self, t_s: float, kind: str, **fields: Any) -> Event:
         event = Event(t_s, kind, fields)
@@ -33,8 +37,10 @@ class EventLog:
         if len(self.events) > self.keep:
             del self.events[: len(self.events) - self.keep]
         if self._file is not None:
-            self._file.write(event.line() + "\n")
+            line = event.line() + "\n"
+            self._file.write(line)
             self._file.flush()
+            self.bytes += len(line.encode("utf-8"))
         return event
 
     def close(self) -> None:

@@ -1,7 +1,9 @@
-"""kill -9 of a real `vil run` process mid-mission, then `vil run --resume`: the same mission completes.
+"""kill -9 of a real `vil run` process mid-mission, then `vil run --resume`: the same mission completes,
+in the same folder, with every event and message logged once.
 
 And in process: a resume from the incremental checkpoint files is exactly a resume from the whole
-state the checkpoint was taken of (what pickling everything at once used to save).
+state the checkpoint was taken of (what pickling everything at once used to save); a resume cuts
+what the crashed run logged after its last checkpoint; a corrupt checkpoint is one line, exit 2.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
 from gcs.records import checkpoint
 from gcs.records.checkpoint import CHECKPOINT_NAME, load
+from mavlink_dialect import tlog
 
 pytestmark = [pytest.mark.sitl, pytest.mark.slow]
 
@@ -32,7 +35,7 @@ ARGS = ["run", "pool12", "--strategy", "greedy", "--duration", "1h", "--jobs", "
 
 def test_sigkill_mid_mission_then_resume_completes_with_every_mussel_accounted_for(tmp_path: Path) -> None:
     out = tmp_path / "runs"
-    run_dir = out / "pool12-greedy-seed1"
+    run_dir = out / "pool12-greedy-seed1-run1"
     ckpt = run_dir / CHECKPOINT_NAME
     env = {**os.environ, "COLUMNS": "100"}
     err = tmp_path / "stderr.txt"
@@ -64,6 +67,14 @@ def test_sigkill_mid_mission_then_resume_completes_with_every_mussel_accounted_f
     assert kinds[0] == "mission_start" and "mission_resume" in kinds and kinds[-1] == "mission_end"
     resume = kinds.index("mission_resume")
     assert events[resume]["t_s"] == pytest.approx(killed_at_s)
+    # Each event once: what the killed run logged after its last checkpoint was cut, not repeated.
+    assert all(e["t_s"] <= killed_at_s for e in events[:resume])
+    times = [e["t_s"] for e in events]
+    assert times == sorted(times)
+    for log in ("gcs.tlog", "apad1.tlog"):
+        stamps = [stamp for stamp, _ in tlog.frames(run_dir / log)]
+        assert stamps == sorted(stamps), log
+    assert sorted(p.name for p in out.iterdir()) == ["latest", "pool12-greedy-seed1-run1"]
     assert not ckpt.exists()  # finished: nothing left to resume
     assert not any(ckpt.with_suffix(x).exists() for x in (checkpoint.STEPS_SUFFIX, checkpoint.TRACES_SUFFIX))
     # The uptime record spans the whole mission, one step a second: the steps after the resume keep
@@ -73,10 +84,75 @@ def test_sigkill_mid_mission_then_resume_completes_with_every_mussel_accounted_f
 
 
 def test_resume_without_a_checkpoint_is_one_line_and_exit_2(tmp_path: Path) -> None:
+    (tmp_path / "pool12-greedy-seed1-run1").mkdir()  # a run that finished: no checkpoint left
     done = subprocess.run([*VIL, *ARGS, "--out", str(tmp_path), "--resume"], capture_output=True, text=True,
                           timeout=60)
     assert done.returncode == 2
     assert done.stderr.count("\n") == 1 and "nothing to resume" in done.stderr
+
+
+@pytest.mark.parametrize("damage", ["garbage", "truncated", "side file cut", "other run"])
+def test_a_corrupt_checkpoint_is_one_line_and_exit_2_before_anything_runs(tmp_path: Path, damage: str) -> None:
+    folder = tmp_path / "pool12-greedy-seed1-run1"
+    strategy = "cautious" if damage == "other run" else "greedy"
+    scenario = load_scenario("pool12").with_overrides(strategy=strategy, duration_s=60.0)
+    files = checkpoint.CheckpointFiles(folder / CHECKPOINT_NAME)
+    real_remove = checkpoint.CheckpointFiles.remove
+    checkpoint.CheckpointFiles.remove = checkpoint.CheckpointFiles.close  # type: ignore[method-assign]
+    try:
+        run_mission(scenario, folder)  # leaves its last checkpoint behind, as a crash would
+    finally:
+        checkpoint.CheckpointFiles.remove = real_remove  # type: ignore[method-assign]
+    ckpt = folder / CHECKPOINT_NAME
+    assert load(files).time_us > 0
+    (folder / "result.json").unlink()
+    if damage == "garbage":
+        ckpt.write_bytes(b"\x80\x05garbage")
+    elif damage == "truncated":
+        ckpt.write_bytes(ckpt.read_bytes()[:200])
+    elif damage == "side file cut":
+        steps = ckpt.with_suffix(checkpoint.STEPS_SUFFIX)
+        steps.write_bytes(steps.read_bytes()[:40])
+    done = subprocess.run([*VIL, *ARGS, "--out", str(tmp_path), "--resume"], capture_output=True, text=True,
+                          timeout=60)
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert done.stderr.count("\n") == 1 and str(folder / "checkpoint") in done.stderr, done.stderr
+    assert not (folder / "result.json").exists()  # nothing ran
+
+
+def test_a_resume_cuts_what_the_crashed_run_logged_after_its_last_checkpoint(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    scenario = load_scenario("pool12").with_overrides(strategy="greedy", duration_s=900.0)
+    whole, crashed = tmp_path / "whole", tmp_path / "crashed"
+    real_save, at = checkpoint.save, {}
+
+    def save_and_crash(files: checkpoint.CheckpointFiles, ckpt: checkpoint.Checkpoint) -> None:
+        real_save(files, ckpt)
+        if ckpt.time_us >= 400_000_000 and not at:  # the last checkpoint the crashed run took
+            at["t_s"], at["events_bytes"] = ckpt.time_us / 1e6, ckpt.events_bytes
+            shutil.copytree(whole, crashed)
+        elif at and "logs" not in at and ckpt.time_us >= at["t_s"] * 1e6 + 60e6:
+            # The crash: a minute of logs past that checkpoint, its next checkpoints lost.
+            at["logs"] = True
+            for name in ("events.jsonl", "gcs.tlog", "apad1.tlog"):
+                shutil.copy(whole / name, crashed / name)
+
+    monkeypatch.setattr(checkpoint, "save", save_and_crash)
+    run_mission(scenario, whole)
+    monkeypatch.setattr(checkpoint, "save", real_save)
+    before = (crashed / "events.jsonl").read_bytes()
+    assert "logs" in at and len(before) > at["events_bytes"]  # events after the checkpoint were logged
+    run_mission(scenario, crashed, resume=True)
+    after = (crashed / "events.jsonl").read_bytes()
+    assert after[: at["events_bytes"]] == before[: at["events_bytes"]]
+    events = [json.loads(x) for x in after[at["events_bytes"]:].decode().splitlines()]
+    assert events[0]["event"] == "mission_resume" and events[0]["t_s"] == pytest.approx(at["t_s"])
+    times = [e["t_s"] for e in events]
+    assert times == sorted(times) and events[-1]["event"] == "mission_end"
+    for name in ("gcs.tlog", "apad1.tlog"):
+        stamps = [stamp for stamp, _ in tlog.frames(crashed / name)]
+        assert stamps == sorted(stamps), name
 
 
 def test_resuming_from_the_checkpoint_files_is_resuming_from_the_whole_state_they_were_saved_of(

@@ -86,22 +86,28 @@ def vil(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
                           timeout=120)
 
 
-def test_the_same_command_twice_gives_identical_json(tmp_path: Path) -> None:
-    outputs = []
+def test_the_same_command_twice_gives_identical_json_in_two_folders(tmp_path: Path) -> None:
+    outputs, folders = [], []
     for k in range(2):
         out = tmp_path / f"r{k}.json"
         done = vil("run", "pool12", "--strategy", "greedy", "--seed", "3", "--duration", "15m",
                    "--json", str(out), "--out", str(tmp_path / "runs"), cwd=tmp_path)
         assert done.returncode == 0, done.stderr
         result = json.loads(out.read_text())
-        outputs.append({k: v for k, v in result.items() if k != "wall_s"})
+        outputs.append({k: v for k, v in result.items() if k not in ("wall_s", "out_dir")})
+        folders.append(Path(result["out_dir"]))
     assert outputs[0] == outputs[1]
+    # The second run has its own folder: the first one's logs are still there, `latest` is the second.
+    runs = tmp_path / "runs"
+    assert folders == [runs / "pool12-greedy-seed3-run1", runs / "pool12-greedy-seed3-run2"]
+    assert (runs / "latest").resolve() == folders[1].resolve()
+    assert all((f / "result.json").exists() for f in folders)
     keys = {"scenario", "strategy", "seed", "theta", "duration_s", "uptime", "cost_m", "active_avg", "wall_s",
             "mussels"}
     assert keys <= set(result)
     assert result["duration_s"] == 900.0 and result["seed"] == 3 and len(result["mussels"]) == 12
     assert set(result["mussels"][0]) >= {"id", "start_battery", "uptime_pct"}
-    run_dir = tmp_path / "runs" / "pool12-greedy-seed3"
+    run_dir = folders[1]
     assert (run_dir / "gcs.tlog").stat().st_size > 0 and (run_dir / "events.jsonl").stat().st_size > 0
     assert (run_dir / "apad1.tlog").stat().st_size > 0
 
@@ -112,7 +118,7 @@ def test_the_same_command_twice_gives_identical_json(tmp_path: Path) -> None:
         (["run", "nowhere.toml"], "nowhere.toml: no such scenario file"),
         (["run", "pool12", "--strategy", "smart"], "invalid choice: 'smart'"),
         (["run", "pool12", "--duration", "forever"], "is not a duration"),
-        (["run", "pool12", "--theta", "-3"], "must be positive"),
+        (["run", "pool12", "--theta", "-3"], "argument --theta: -3.0 is outside [0.001, 10000.0]"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_code_2(tmp_path: Path, args: list[str], message: str) -> None:
