@@ -57,6 +57,20 @@ def test_a_livelock_is_reported_not_hung() -> None:
         clock.sleep(0)
 
 
+def test_a_flood_on_the_wall_clock_is_cut_and_counted_and_time_goes_on() -> None:
+    """In the field endless arrivals are someone flooding us, not a bug: the process must live on."""
+    t = [0.0]
+    clock = WallClock(monotonic=lambda: t[0], wait=lambda dt: t.__setitem__(0, t[0] + dt))
+    flood = CountingPoller(budget=10**9)
+    clock.scheduler.add_poller(flood)
+    ticks: list[int] = []
+    clock.scheduler.every(0.5, ticks.append, "tick")
+    t[0] += 0.6
+    clock.sleep(0.0)
+    assert ticks == [600_000, 600_000]  # both due runs (0 s and 0.5 s) happened in spite of the flood
+    assert clock.scheduler.drains_cut >= 1 and flood.budget < 10**9
+
+
 def test_zero_period_is_refused() -> None:
     with pytest.raises(ValueError, match="period must be positive"):
         Scheduler().every(0, lambda t: None, "bad")
