@@ -62,13 +62,17 @@ def _sysid(text: str) -> int:
     return int(text)
 
 
+MAX_DURATION_S = 7 * 86400.0  # longer: leave --duration out and stop it with Ctrl-C
+
+
 def _duration(text: str) -> float:
     try:
         value = float(text)
     except ValueError:
         value = -1.0
-    if not value > 0.0:
-        raise argparse.ArgumentTypeError(f"--duration must be a positive number of seconds, got {text!r}")
+    if not 0.0 < value <= MAX_DURATION_S:  # NaN and inf too
+        raise argparse.ArgumentTypeError(
+            f"--duration must be a positive number of seconds up to {MAX_DURATION_S:.0f}, got {text!r}")
     return value
 
 
@@ -106,22 +110,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _fence(path: Path) -> list[tuple[float, float]]:
-    """The outer ring of the first polygon in a GeoJSON file, as (lat, lon)."""
+    """The outer ring of the area in a GeoJSON file (several polygons: their hull), as (lat, lon)."""
     import json
 
-    import shapely.geometry
+    from mussel_sim.placement import load_area
 
     try:
-        obj = json.loads(path.read_text())
+        geom = load_area(path).geometry  # finite WGS84 vertices, a valid polygon
     except json.JSONDecodeError as exc:
         raise ValueError(f"{path}: not JSON: {exc.msg}") from None
-    if obj.get("type") == "FeatureCollection":
-        obj = obj["features"][0]
-    geom = shapely.geometry.shape(obj["geometry"] if obj.get("type") == "Feature" else obj)
+    except (ValueError, KeyError, TypeError, AttributeError) as exc:
+        raise ValueError(f"{path}: not a geofence: {exc}") from None
     if geom.geom_type == "MultiPolygon":
         geom = geom.convex_hull
-    if geom.geom_type != "Polygon":
-        raise ValueError(f"{path}: the geofence must be a Polygon")
     return [(float(y), float(x)) for x, y in geom.exterior.coords]
 
 
@@ -187,7 +188,8 @@ def run(args: argparse.Namespace) -> int:
         c = vehicle.codec
         vehicle.event("link", received=c.stats.received, bad_data=c.stats.bad_data, unknown=c.stats.unknown,
                       signing_refused=c.signing_refusals, transport_dropped=dict(getattr(transport, "dropped", {})),
-                      signing_save_errors=keeper.save_errors if keeper is not None else 0)
+                      signing_save_errors=keeper.save_errors if keeper is not None else 0,
+                      dropped=dict(vehicle.dropped), floods_cut=clock.scheduler.drains_cut)
         vehicle.close()
         for signum, handler in previous.items():
             signal.signal(signum, handler)
