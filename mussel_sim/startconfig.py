@@ -128,11 +128,14 @@ def start_config_from_geojson(obj: dict[str, Any]) -> StartConfig:
         props = feat.get("properties") or {}
         if geom.get("type") != "Point" or "id" not in props or "battery" not in props:
             raise ValueError(f"start config feature {k}: need a Point with properties id and battery")
-        lon, lat = geom["coordinates"][:2]
-        ids.append(int(props["id"]))
-        lats.append(float(lat))
-        lons.append(float(lon))
-        batteries.append(float(props["battery"]))
+        try:
+            lon, lat = geom["coordinates"][:2]
+            ids.append(int(props["id"]))
+            lats.append(float(lat))
+            lons.append(float(lon))
+            batteries.append(float(props["battery"]))
+        except (ValueError, TypeError, KeyError) as exc:
+            raise ValueError(f"start config feature {k}: {exc}") from None
     return StartConfig(
         np.asarray(ids, dtype=np.int64), np.asarray(lats, float), np.asarray(lons, float), np.asarray(batteries, float)
     )

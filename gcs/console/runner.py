@@ -86,11 +86,13 @@ def open_world(config: ConsoleConfig) -> World:
 
 
 class ConsoleRunner:
-    def __init__(self, config: ConsoleConfig) -> None:
+    def __init__(self, config: ConsoleConfig, world: World | None = None) -> None:
+        """`world`: already opened by `open_world(config)` (so `vil gcs` refuses what it cannot open
+        before the console starts); it is handed to the world thread, which owns it from then on."""
         self.config = config
         self.control = LoopControl(paused=config.start_paused)
         self.snapshot: Snapshot | None = None  # replaced whole; readers never see a half-built one
-        self.world: World | None = None
+        self.world: World | None = world
         self.loop: EnergySharingLoop | None = None
         self.error: str | None = None
         self.finished = threading.Event()
@@ -135,7 +137,7 @@ class ConsoleRunner:
 
     def run(self) -> None:
         try:
-            self.world = world = open_world(self.config)
+            self.world = world = self.world or open_world(self.config)
         except (OSError, ValueError) as exc:
             self.error = f"cannot start: {exc}"
             self.finished.set()

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import bisect
 import json
+import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,7 +25,8 @@ from gcs.link import telemetry
 from gcs.link.registry import VehicleRegistry
 from gcs.link.router import GCS_SYSTEM_ID
 from gcs.mission.scenario import MISSIONS_DIR, Scenario, ScenarioError, load_scenario
-from gcs.records.events import Event
+from gcs.records import rundirs
+from gcs.records.events import EVENTS_NAME, Event
 from mavlink_dialect import Codec, mavlink, tlog
 from missiontime import us_to_s
 from mussel_sim.placement import load_area
@@ -51,12 +53,30 @@ def read_events(path: Path) -> list[Event]:
     if not path.exists():
         return []
     out = []
-    for line in path.read_text().splitlines():
+    for k, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
         if line.strip():
-            obj = json.loads(line)
-            t_s, kind = float(obj.pop("t_s")), str(obj.pop("event"))
+            try:
+                obj = json.loads(line)
+                t_s, kind = float(obj.pop("t_s")), str(obj.pop("event"))
+            except (ValueError, TypeError, KeyError, AttributeError) as exc:
+                raise ReplayError(f"{path}:{k}: not an event ({type(exc).__name__}: {exc})") from None
+            if not math.isfinite(t_s):
+                raise ReplayError(f"{path}:{k}: t_s {t_s} is not a finite mission time")
             out.append(Event(t_s, kind, obj))
     return out
+
+
+def _read_json(path: Path) -> dict[str, object]:
+    """result.json or console.json of a run; {} if absent."""
+    if not path.exists():
+        return {}
+    try:
+        obj = json.loads(path.read_text(encoding="utf-8"))
+    except (ValueError, OSError) as exc:
+        raise ReplayError(f"{path}: not readable JSON: {exc}") from None
+    if not isinstance(obj, dict):
+        raise ReplayError(f"{path}: expected a JSON object")
+    return obj
 
 
 @dataclass
@@ -68,7 +88,7 @@ class RunFiles:
 
 
 def run_files(path: str | Path) -> RunFiles:
-    p = Path(path)
+    p = rundirs.resolve(Path(path))
     if p.is_dir():
         tlog = p / "gcs.tlog"
         if not tlog.exists():
@@ -77,12 +97,8 @@ def run_files(path: str | Path) -> RunFiles:
         tlog, p = p, p.parent
     else:
         raise ReplayError(f"{p}: no such run folder or .tlog")
-    result_path = p / "result.json"
-    result = json.loads(result_path.read_text()) if result_path.exists() else {}
-    console_path = p / "console.json"
-    if console_path.exists():
-        result = {**json.loads(console_path.read_text()), **result}
-    return RunFiles(p, tlog, p / "events.jsonl", result)
+    result = {**_read_json(p / "console.json"), **_read_json(p / "result.json")}
+    return RunFiles(p, tlog, p / EVENTS_NAME, result)
 
 
 def find_scenario(files: RunFiles, explicit: str | Path | None = None) -> Scenario | None:
@@ -133,7 +149,10 @@ def load_replay(path: str | Path, scenario: str | Path | None = None) -> Replay:
     apad_id, ids = _apad_and_mussels(stream)
     registry = VehicleRegistry()
     if found is not None:
-        outline = area_outline(load_area(found.fleet.area).geometry)
+        try:
+            outline = area_outline(load_area(found.fleet.area).geometry)
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise ReplayError(f"{found.fleet.area}: bad area: {exc}") from None
         model = ConsoleModel(registry, found.apad.system_id, found.mission.pool_threshold,
                              found.mission.duration_s, str(files.folder), ids, outline)
     else:

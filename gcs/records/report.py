@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from gcs.console.model import Snapshot
+from gcs.mission import flags
 from gcs.mission.results import PAPER_TABLE_II
 from gcs.mission.scenario import ScenarioError
 from gcs.records.replay import ReplayError, load_replay, run_files
@@ -253,7 +254,8 @@ td:first-child {{ text-align: left; }} img {{ width: 49%; }}
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("run", metavar="RUN_DIR", help="a run folder (gcs.tlog, events.jsonl, result.json)")
-    parser.add_argument("-o", "--out", metavar="OUT", required=True, help="folder for the report")
+    parser.add_argument("-o", "--out", type=flags.writable_dir, metavar="OUT", required=True,
+                        help="folder for the report")
     parser.add_argument("--scenario", metavar="FILE", help="scenario TOML (default: the one the run names)")
 
 
