@@ -13,6 +13,7 @@ from apad_sitl.vocabulary import Latch, Progress
 from gcs.api import ApadApi, CommandError, GeofenceError, Location
 from gcs.link.telemetry import SlotView
 from gcs.mission.control import EndReason, LoopControl, LoopSettings, LoopStatus, MissionEnded, Phase
+from gcs.mission.swarm import FleetShares, orphans
 from gcs.records.events import EventLog
 from missiontime import Clock, seconds_to_us, us_to_s
 from mussel_sim.geo import distance_m
@@ -36,7 +37,10 @@ class LoopActions:
         apad_id: int,
         events: EventLog | None = None,
         control: LoopControl | None = None,
+        shares: FleetShares | None = None,
     ) -> None:
+        """`shares`: with several aPads, the one record of who serves which aMussel (`gcs.mission.swarm`);
+        this loop then plans, calls up and fetches only within its aPad's share."""
         self.api = api
         self.clock = clock
         self.settings = settings
@@ -46,6 +50,8 @@ class LoopActions:
         self.control = control or LoopControl()
         self.status = LoopStatus(strategy=settings.mission.collect_strategy)
         self.unreachable: set[int] = set()  # aMussels found outside the geofence (logged once)
+        self.shares = shares
+        self._phase_since_s = clock.time()
 
     # --- primitives with waiting ------------------------------------------------------------
 
@@ -147,6 +153,7 @@ class LoopActions:
             self._command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
             if self._wait_until(lambda: self._state(mussel_id) not in (MusselState.FLOATING, MusselState.SURFACING),
                                 timeout_s=self.settings.poll_s * 8, interruptible=False):
+                self._release(mussel_id)
                 return
         self._log("lost", mussel=mussel_id, why="does not answer the sink command", state=self._state(mussel_id).name)
 
@@ -230,7 +237,7 @@ class LoopActions:
         ids = self.api.mussels.select((MusselState.ACTIVE,), battery_below=self.settings.mission.pool_threshold)
         out = []
         for m in ids:
-            if m not in self.homes:
+            if m not in self.homes or (self.shares is not None and not self.shares.serves(self.apad_id, m)):
                 continue
             if self.api.inside_geofence(self.api.get_location(m)):
                 out.append(m)
@@ -265,10 +272,24 @@ class LoopActions:
     def _too_late_to_call_up(self) -> bool:
         return self.settings.mission.duration_s - self.clock.time() < self.settings.call_up_margin_s
 
+    def _orphans(self) -> list[int]:
+        """aMussels of this aPad's share left floating by an aPad that was lost: fetch them first."""
+        return orphans(self.shares, self.api.link.registry, self.apad_id) if self.shares is not None else []
+
+    def _release(self, mussel_id: int) -> None:
+        if self.shares is not None:
+            self.shares.release(self.apad_id, mussel_id)
+
     def _call_up_if_in_range(self, mussel_id: int) -> bool:
-        """Safety: an aMussel is only called to the surface with an aPad within acoustic range."""
+        """Safety: an aMussel is only called to the surface with an aPad within acoustic range.
+        With several aPads it must be this one's to call, and is claimed first (never two aPads)."""
+        if self.shares is not None and not self.shares.claim(self.apad_id, mussel_id):
+            return False
+        if self._state(mussel_id) == MusselState.FLOATING:
+            return True  # already up (an orphan): nothing to call
         distance = self._distance_to(mussel_id)
         if distance > self.settings.acoustic_range_m:
+            self._release(mussel_id)
             return False
         self._command(self.api.command_mussel, mussel_id, MusselCommand.SURFACE, self.apad_id)
         self._log("call_up", mussel=mussel_id, distance_m=round(distance, 2))
@@ -276,8 +297,14 @@ class LoopActions:
 
     def _set_phase(self, phase: Phase) -> None:
         if phase != self.status.phase or phase == Phase.IDLE_WAIT:
+            now = self.clock.time()
+            spent = self.status.phase_s
+            spent[self.status.phase] = spent.get(self.status.phase, 0.0) + now - self._phase_since_s
+            self._phase_since_s = now
             self.status.phase = phase
             self._log("phase", phase=str(phase))
 
     def _log(self, kind: str, **fields: object) -> None:
+        if self.shares is not None:
+            fields = {"apad": self.apad_id, **fields}
         self.events.emit(self.clock.time(), kind, **fields)

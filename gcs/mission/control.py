@@ -57,6 +57,7 @@ class LoopStatus:
     cost_m: float = 0.0  # the paper's movement cost: aPad-to-setpoint distance summed over Go To commands
     cycles: int = 0  # completed collect-charge-redeploy cycles
     end_reason: EndReason | None = None
+    phase_s: dict[Phase, float] = field(default_factory=dict)  # mission seconds spent in each phase so far
 
 
 @dataclass(frozen=True)

@@ -88,6 +88,8 @@ class EnergySharingLoop(LoopActions):
         def pool_full() -> bool:
             if self.status.strategy == CollectStrategy.NONE or self._too_late_to_call_up():
                 return False
+            if self._orphans() and self._free_slots() and self._link_up():
+                return True  # left floating by a lost aPad: fetch them now
             need = min(mission.min_pool, len(self._free_slots()))
             return need > 0 and len(self._candidates()) >= need and self._link_up()
 
@@ -96,19 +98,21 @@ class EnergySharingLoop(LoopActions):
     def _plan_collection(self) -> list[int]:
         self._set_phase(Phase.PLAN_COLLECT)
         self._take_strategy_switch()
+        orphaned = self._orphans()[:len(self._free_slots())]
         candidates = [self.api.mussels[m] for m in self._candidates()]
         position = self.api.position(self.apad_id)
         inp = PlanInput(
             apads={self.apad_id: (position.lat, position.lon)},
-            capacity={self.apad_id: len(self._free_slots())},
+            capacity={self.apad_id: len(self._free_slots()) - len(orphaned)},
             mussel_ids=np.array([m.mussel_id for m in candidates], np.int64),
             lat_deg=np.array([m.location.lat for m in candidates]),
             lon_deg=np.array([m.location.lon for m in candidates]),
             battery_frac=np.array([m.battery_frac for m in candidates]),
         )
-        route = plan(self.status.strategy, inp, self._weights)[self.apad_id]
+        route = orphaned + plan(self.status.strategy, inp, self._weights)[self.apad_id]
         self.status.route = route
-        self._log("plan_collection", strategy=self.status.strategy, route=route)
+        self._log("plan_collection", strategy=self.status.strategy, route=route,
+                  **({"orphans": orphaned} if orphaned else {}))
         return route
 
     def _collect(self, route: list[int]) -> None:
@@ -123,6 +127,9 @@ class EnergySharingLoop(LoopActions):
                 self._log("skip", mussel=mussel_id, why="too close to the mission end to dock it")
                 break
             self.status.target_mussel = mussel_id
+            if self.shares is not None and not self.shares.serves(self.apad_id, mussel_id):
+                self._log("skip", mussel=mussel_id, why="another aPad's since the fleet was re-shared")
+                continue
             called = self._call_up_if_in_range(mussel_id)
             # From a call-up on, the waits ignore the mission end: the margin above leaves time to finish.
             if not self._go_to(self.api.get_location(mussel_id), interruptible=not called):
@@ -187,6 +194,7 @@ class EnergySharingLoop(LoopActions):
                 continue
             if self._undock(slot, mussel_id):
                 self._command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
+                self._release(mussel_id)
                 self._log("released", mussel=mussel_id, slot=slot)
         self.status.target_mussel = 0
 

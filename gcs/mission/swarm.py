@@ -1,0 +1,126 @@
+"""Several aPads sharing one fleet: who serves whom, and re-sharing when an aPad is lost or back.
+
+`FleetShares` is the one record of it: each aMussel has an owner (the aPad whose share it is, from
+`gcs.mission.partition`) and, while an aPad is fetching or holding it, a claim. An aPad only calls
+up aMussels it owns and claims first, and a claim by a live aPad is never taken away, so no two
+aPads ever call up the same aMussel. `SwarmWatch` re-shares the fleet whenever the set of usable
+aPads changes: an aPad is lost when it has been silent for `APAD_LOST_S` or its battery is at its
+end threshold, and usable again once heard with battery to spare. The lost aPad's claims go: an
+aMussel it left floating is then another aPad's to fetch (`orphans`); one docked on it stays on it,
+and the accounting reports it held there.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gcs.link.registry import VehicleRegistry
+from gcs.mission.partition import Partition, partition
+from gcs.records.events import EventLog
+from missiontime import Clock, seconds_to_us
+from mussel_sim.geo import LocalFrame
+from mussel_sim.vocabulary import MusselState
+
+APAD_LOST_S = 10.0  # an aPad silent this long is out of the sharing until heard again
+WATCH_PERIOD_S = 1.0
+
+
+@dataclass
+class FleetShares:
+    """Owners and claims of the aMussels among the aPads (read and written by the aPads' loops
+    and the watch; under `missiontime.processes` only one of them runs at a time)."""
+
+    owner: dict[int, int] = field(default_factory=dict)  # aMussel id -> aPad system id
+    claims: dict[int, int] = field(default_factory=dict)  # aMussel id -> the aPad fetching or holding it
+    usable: frozenset[int] = frozenset()  # aPads in the current sharing
+    partition: Partition | None = None
+    reshares: int = 0
+
+    def serves(self, apad: int, mussel: int) -> bool:
+        """May `apad` call this aMussel up: its share, and nobody else's claim on it."""
+        return self.owner.get(mussel) == apad and self.claims.get(mussel, apad) == apad
+
+    def claim(self, apad: int, mussel: int) -> bool:
+        if not self.serves(apad, mussel):
+            return False
+        self.claims[mussel] = apad
+        return True
+
+    def release(self, apad: int, mussel: int) -> None:
+        if self.claims.get(mussel) == apad:
+            del self.claims[mussel]
+
+    def claimed_by(self, apad: int) -> list[int]:
+        return sorted(m for m, a in self.claims.items() if a == apad)
+
+    def reshare(self, usable: frozenset[int], new: Partition) -> None:
+        """Take a new partition among `usable`; claims of aPads no longer usable are dropped, and
+        an aMussel claimed by a usable aPad stays that aPad's whatever the partition says."""
+        self.claims = {m: a for m, a in self.claims.items() if a in usable}
+        self.owner = new.owner() | dict(self.claims)
+        self.usable, self.partition = usable, new
+        self.reshares += 1
+
+
+class SwarmWatch:
+    """A periodic task on the world's clock: re-shares the fleet when the usable aPads change."""
+
+    def __init__(
+        self, registry: VehicleRegistry, shares: FleetShares, frame: LocalFrame, apads: dict[int, float],
+        events: EventLog, clock: Clock, seed: int = 0,
+    ) -> None:
+        """`apads`: every aPad of the scenario, by system id, with its battery end threshold (V)."""
+        self.registry, self.shares, self.frame, self.apads = registry, shares, frame, apads
+        self.events, self.clock, self.seed = events, clock, seed
+        self.on_reshare: list[Callable[[FleetShares], None]] = []
+
+    def register(self, start_us: int) -> None:
+        self.clock.scheduler.every(WATCH_PERIOD_S, self.check, "swarm.watch", start_us)
+
+    def usable_now(self, now_us: int) -> frozenset[int]:
+        out = set()
+        for sysid, end_v in self.apads.items():
+            view = self.registry.vehicles.get(sysid)
+            if view is None or view.lat_deg is None or view.lon_deg is None:
+                continue
+            if now_us - view.last_heartbeat_us > seconds_to_us(APAD_LOST_S):
+                continue
+            if view.battery_v is not None and view.battery_v <= end_v:
+                continue
+            out.add(sysid)
+        return frozenset(out)
+
+    def check(self, now_us: int) -> None:
+        usable = self.usable_now(now_us)
+        if usable == self.shares.usable or not usable:
+            return
+        lost, back = sorted(self.shares.usable - usable), sorted(usable - self.shares.usable)
+        self.reshare(usable)
+        self.events.emit(self.clock.time(), "reshare", usable=sorted(usable), lost=lost, back=back,
+                         shares={str(a): len(ids) for a, ids in self.shares.partition.shares.items()}
+                         if self.shares.partition else {})
+
+    def reshare(self, usable: frozenset[int]) -> None:
+        """Partition every aMussel heard among `usable` (positions as last reported)."""
+        table = self.registry.mussels
+        ids = np.array(sorted(table), np.int64)
+        rows = table.rows(ids)
+        x, y = self.frame.to_local(table.lat_e7[rows] / 1e7, table.lon_e7[rows] / 1e7)
+        apads_xy = {}
+        for sysid in sorted(usable):
+            view = self.registry.vehicles[sysid]
+            assert view.lat_deg is not None and view.lon_deg is not None  # usable: it has a position
+            ax, ay = self.frame.to_local(view.lat_deg, view.lon_deg)
+            apads_xy[sysid] = (float(ax), float(ay))
+        self.shares.reshare(usable, partition(ids, np.column_stack([x, y]), apads_xy, seed=self.seed))
+        for hook in self.on_reshare:
+            hook(self.shares)
+
+
+def orphans(shares: FleetShares, registry: VehicleRegistry, apad: int) -> list[int]:
+    """aMussels of `apad`'s share left floating with nobody's claim on them (their aPad was lost)."""
+    floating = registry.mussels.select((MusselState.FLOATING,))
+    return [m for m in floating if shares.owner.get(m) == apad and m not in shares.claims]
