@@ -62,12 +62,13 @@ class Area:
 def area_from_geojson(obj: dict[str, Any], name: str = "") -> Area:
     """The union of every polygon in a GeoJSON geometry, Feature or FeatureCollection."""
     kind = obj.get("type")
-    if kind == "FeatureCollection":
-        geoms = [shape(f["geometry"]) for f in obj.get("features", []) if f.get("geometry")]
-    elif kind == "Feature":
-        geoms = [shape(obj["geometry"])]
-    else:
-        geoms = [shape(obj)]
+    with np.errstate(invalid="ignore"):  # a NaN vertex: refused by `Area` in words, not warned about
+        if kind == "FeatureCollection":
+            geoms = [shape(f["geometry"]) for f in obj.get("features", []) if f.get("geometry")]
+        elif kind == "Feature":
+            geoms = [shape(obj["geometry"])]
+        else:
+            geoms = [shape(obj)]
     polys = [g for g in geoms if isinstance(g, Polygon | MultiPolygon)]
     if not polys:
         raise ValueError(f"area {name!r}: no Polygon or MultiPolygon in the GeoJSON")

@@ -1,6 +1,6 @@
 """`vil report RUN_DIR -o OUT`: plots, a one-page HTML summary and GeoJSON of a recorded run.
 
-    vil report runs/pool12-cautious-seed1 -o reports/pool12
+    vil report runs/latest -o reports/pool12      # or runs/pool12-cautious-seed1-run1
 
 Writes battery.png (every aMussel's battery over mission time), active.png (active aMussels
 over time, the paper's Fig. 9), uptime.png (uptime per aMussel, eq. 3), track.png (the aPad's

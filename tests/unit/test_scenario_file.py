@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pytest
@@ -35,8 +36,8 @@ def test_durations_with_units(text: str | int, expected: float) -> None:
     assert parse_duration_s(text) == expected
 
 
-@pytest.mark.parametrize("text", ["40 minutes", "-5", "0", "fast", "40km"])
-def test_durations_with_wrong_units_are_refused(text: str) -> None:
+@pytest.mark.parametrize("text", ["40 minutes", "-5", "0", "fast", "40km", math.inf, math.nan, 1e300, "9999h"])
+def test_durations_with_wrong_units_are_refused(text: str | float) -> None:
     with pytest.raises(ValueError):
         parse_duration_s(text)
 
@@ -66,6 +67,20 @@ def write_variant(tmp_path: Path, old: str, new: str) -> Path:
         ("home = [43.9400000, 15.4398381]", "home = [143.94, 15.44]", "apad.home: [143.94, 15.44] is not [lat, lon]"),
         ("start_battery = [0.6, 1.0]", "start_battery = [0.9, 0.6]", "fleet.start_battery: expected 0 <= min"),
         ("[environment]", "[environment]\nwind = 3", "environment.wind: unknown field"),
+        # Non-finite and out-of-range numbers: TOML has nan and inf literals.
+        ("pool_threshold = 0.80", "pool_threshold = nan", "mission.pool_threshold: nan is not a finite number"),
+        ("charged_threshold = 0.99", "charged_threshold = -nan", "mission.charged_threshold: nan is not a finite"),
+        ("theta = 30 ", "theta = inf ", "mission.theta: inf is not a finite number"),
+        ("min_pool = 4", "min_pool = 4\ndistance_scale = inf", "mission.distance_scale: inf is not a finite number"),
+        ("speed_mps = 0.5", "speed_mps = nan", "apad.speed_mps: nan is not a finite number"),
+        ("acoustic_range_m = 100", "acoustic_range_m = inf", "fleet.acoustic_range_m: inf is not a finite number"),
+        ("start_battery = [0.6, 1.0]", "start_battery = [nan, 1.0]", "fleet.start_battery: nan is not a finite"),
+        ("current_mps = [0.0, 0.0]", "current_mps = [0.0, -inf]", "environment.current_mps: -inf is not a finite"),
+        ("current_mps = [0.0, 0.0]", "current_mps = [300.0, 0.0]", "environment.current_mps: 300.0 is outside"),
+        ("home = [43.9400000, 15.4398381]", "home = [nan, 15.44]", "apad.home: nan is not a finite number"),
+        ('duration = "40m"', "duration = inf", "mission.duration: duration must be a positive number"),
+        ('duration = "40m"', 'duration = "100000h"', "mission.duration: '100000h' is more than a week"),
+        ("seed = 1", "seed = -1", "scenario.seed: -1 is outside [0, "),
     ],
 )
 def test_bad_fields_are_named_in_one_line(tmp_path: Path, old: str, new: str, message: str) -> None:
