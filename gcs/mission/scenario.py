@@ -117,9 +117,14 @@ class Scenario:
     path: Path
     seed: int
     fleet: FleetConfig
-    apad: ApadConfig
+    apads: tuple[ApadConfig, ...]  # one `[apad]` table, or several `[[apad]]` (a swarm), by system id
     mission: MissionConfig
     environment: EnvironmentConfig
+
+    @property
+    def apad(self) -> ApadConfig:
+        """The first aPad (the only one, in the paper's scenarios)."""
+        return self.apads[0]
 
     def with_overrides(
         self,
@@ -212,6 +217,15 @@ class _Table:
                 raise self.fail(key, problem)
         return float(value[0]), float(value[1])
 
+    def tables(self, key: str) -> list[_Table]:
+        """`[key]` (one table) or `[[key]]` (an array of tables; named `key[i].field` in errors)."""
+        value = self._take(key, {})
+        if isinstance(value, dict):
+            return [_Table(self.path, value, f"{self.prefix}{key}.")]
+        if not isinstance(value, list) or not value or not all(isinstance(v, dict) for v in value):
+            raise self.fail(key, "expected a table or an array of tables")
+        return [_Table(self.path, v, f"{self.prefix}{key}[{i}].") for i, v in enumerate(value)]
+
     def sub(self, key: str) -> _Table:
         value = self._take(key, {})
         if not isinstance(value, dict):
@@ -287,12 +301,20 @@ def load_scenario(path: str | Path) -> Scenario:
         raise f.fail("start_battery", "expected 0 <= min <= max <= 1")
     f.done()
 
-    a = root.sub("apad")
+    apads = tuple(_apad(a, default_id=1 + i) for i, a in enumerate(root.tables("apad")))
+    ids = [a.system_id for a in apads]
+    if len(set(ids)) != len(ids):
+        raise root.fail("apad", f"system ids must differ, got {ids}")
+    root.done()
+    return Scenario(name, path.resolve(), seed, fleet, apads, mission, environment)
+
+
+def _apad(a: _Table, default_id: int) -> ApadConfig:
     home = a.pair("home", _REQUIRED, -180.0, 180.0)
     if not (-90 <= home[0] <= 90 and -180 <= home[1] <= 180):
         raise a.fail("home", f"{list(home)} is not [lat, lon] in degrees")
     apad = ApadConfig(
-        system_id=a.integer("system_id", 1, lo=1, hi=249),
+        system_id=a.integer("system_id", default_id, lo=1, hi=249),
         home_lat_deg=home[0],
         home_lon_deg=home[1],
         speed_mps=a.number("speed_mps", 0.5, lo=0.01, hi=5.0),
@@ -303,5 +325,4 @@ def load_scenario(path: str | Path) -> Scenario:
         battery_end_v=a.number("battery_end_v", 11.0, lo=10.5, hi=16.0),
     )
     a.done()
-    root.done()
-    return Scenario(name, path.resolve(), seed, fleet, apad, mission, environment)
+    return apad

@@ -10,7 +10,7 @@ import numpy as np
 import shapely
 
 from apad_sitl.params import ApadParams
-from gcs.mission.scenario import Scenario, ScenarioError
+from gcs.mission.scenario import ApadConfig, Scenario, ScenarioError
 from mussel_sim.drift import NO_CURRENT, UniformCurrent
 from mussel_sim.fleet_state import FleetParams
 from mussel_sim.geo import LocalFrame
@@ -87,8 +87,9 @@ def fleet_params(scenario: Scenario) -> FleetParams:
     )
 
 
-def apad_params(scenario: Scenario) -> ApadParams:
-    a = scenario.apad
+def apad_params(scenario: Scenario, apad: ApadConfig | None = None) -> ApadParams:
+    """The SITL parameters of one aPad of the scenario (default: the first)."""
+    a = apad or scenario.apad
     return replace(
         ApadParams(), speed_max_mps=a.speed_mps, wp_radius_m=a.victory_radius_m, dock_reach_m=a.dock_reach_m,
         dock_time_s=a.dock_time_s, undock_time_s=a.undock_time_s, sysid_thismav=a.system_id,

@@ -8,7 +8,8 @@ aPad or a real one at an address.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -18,8 +19,9 @@ from gcs.api import ApadApi, Location
 from gcs.link.faultproxy import FaultProxy, LinkFaults
 from gcs.link.router import Link
 from gcs.mission.loop import EnergySharingLoop, LoopControl, LoopSettings
-from gcs.mission.scenario import Scenario
+from gcs.mission.scenario import ApadConfig, Scenario
 from gcs.mission.scenario_models import apad_params, fleet_params, geofence_ring, sensor_field, start_config
+from gcs.mission.swarm import FleetShares
 from gcs.records.events import EventLog
 from mavlink_dialect import Codec, Transport, mavlink, memory_pair, open_transport, signing
 from mavlink_dialect.transport import UdpTransport
@@ -49,6 +51,8 @@ class LinkOptions:
     faults: LinkFaults | None = None  # not None: embedded aPad over real UDP through a FaultProxy
     signing_key: bytes | None = None  # MAVLink 2 signing on both ends
     geofence_buffer_m: float | None = GEOFENCE_BUFFER_M  # None: no geofence
+    # Embedded aPads that go silent for good at a mission time: (system id, t_s) (`vil run --fail-apad`).
+    fail_apads: tuple[tuple[int, float], ...] = ()
 
 
 # What the mission loop needs from the aPad, requested like any GCS does (SET_MESSAGE_INTERVAL).
@@ -75,34 +79,52 @@ class World:
     start: StartConfig
     homes: dict[int, Location]  # where each aMussel started, and goes back to
     events: EventLog
-    vehicle: SitlVehicle | None = None  # the embedded SITL aPad, if any
-    proxy: FaultProxy | None = None  # the fault-injection proxy between GCS and aPad, if any
+    vehicles: dict[int, SitlVehicle] = field(default_factory=dict)  # the embedded SITL aPads, by system id
+    proxies: list[FaultProxy] = field(default_factory=list)  # fault-injection proxies, one per embedded aPad
     geofence_deg: list[tuple[float, float]] = field(default_factory=list)  # (lat, lon) ring; empty: none
 
-    def request_telemetry(self, rates_hz: dict[int, float] | None = None) -> None:
-        """Ask the aPad for the mission's telemetry rates; one it never grants (a lossy link) keeps
+    @property
+    def vehicle(self) -> SitlVehicle | None:
+        """The (first) embedded SITL aPad, if any."""
+        return next(iter(self.vehicles.values()), None)
+
+    @property
+    def proxy(self) -> FaultProxy | None:
+        return self.proxies[0] if self.proxies else None
+
+    def request_telemetry(self, rates_hz: dict[int, float] | None = None, apad_id: int | None = None) -> None:
+        """Ask an aPad for the mission's telemetry rates; one it never grants (a lossy link) keeps
         its default rate and is logged as a `telemetry_rate_failed` event, not fatal."""
-        for msg_id, exc in self.api.set_telemetry_rates(rates_hz or MISSION_TELEMETRY_HZ).items():
+        sysid = self.scenario.apad.system_id if apad_id is None else apad_id
+        for msg_id, exc in self.api.set_telemetry_rates(rates_hz or MISSION_TELEMETRY_HZ, sysid).items():
             known = mavlink.mavlink_map.get(msg_id)
             self.events.emit(self.clock.time(), "telemetry_rate_failed", message=known.msgname if known else msg_id,
-                             what=str(exc))
+                             what=str(exc), **({"apad": sysid} if len(self.scenario.apads) > 1 else {}))
 
-    def mission_loop(self, control: LoopControl | None = None) -> EnergySharingLoop:
+    def mission_loop(
+        self, control: LoopControl | None = None, apad_id: int | None = None, shares: FleetShares | None = None,
+        clock: Clock | None = None,
+    ) -> EnergySharingLoop:
+        """The energy-sharing loop of one aPad (default the first); with several, each on its own
+        process `clock` and within its share of `shares`."""
         s = self.scenario
+        a = next(a for a in s.apads if apad_id is None or a.system_id == apad_id)
         settings = LoopSettings(
             mission=s.mission,
             acoustic_range_m=s.fleet.acoustic_range_m,
-            dock_reach_m=s.apad.dock_reach_m,
-            battery_end_v=s.apad.battery_end_v,
-            apad_speed_mps=s.apad.speed_mps,
+            dock_reach_m=a.dock_reach_m,
+            battery_end_v=a.battery_end_v,
+            apad_speed_mps=a.speed_mps,
         )
-        return EnergySharingLoop(self.api, self.clock, settings, self.homes, s.apad.system_id, self.events, control)
+        clock = clock or self.clock
+        api = self.api if clock is self.clock else self.api.on_clock(clock)
+        return EnergySharingLoop(api, clock, settings, self.homes, a.system_id, self.events, control, shares)
 
     def close(self) -> None:
-        if self.vehicle is not None:
-            self.vehicle.close()
-        if self.proxy is not None:
-            self.proxy.close()
+        for vehicle in self.vehicles.values():
+            vehicle.close()
+        for proxy in self.proxies:
+            proxy.close()
         self.link.close()
         self.events.close()
 
@@ -166,30 +188,55 @@ def build_world(
 
 
 def _embed_sitl(world: World, options: LinkOptions, out_dir: Path | None, epoch_us: int, append_logs: bool) -> None:
-    """The SITL aPad on the world's clock, over an in-memory pair of real MAVLink bytes, localhost
-    UDP, or real UDP through a `FaultProxy` whose delays run on the same clock."""
+    """The scenario's SITL aPads on the world's clock, each over an in-memory pair of real MAVLink
+    bytes, localhost UDP, or real UDP through a `FaultProxy` whose delays run on the same clock;
+    the GCS link routes by system id over all of them."""
+    for a in world.scenario.apads:
+        _embed_one(world, a, options, out_dir, epoch_us, append_logs)
+    for sysid, t_s in options.fail_apads:
+        vehicle = world.vehicles.get(sysid)
+        if vehicle is None:
+            raise ValueError(f"--fail-apad {sysid}: the scenario has no aPad {sysid}")
+        # Silent for good: its tasks stop, its transport closes; what it held stays on it.
+        _once(world.clock, seconds_to_us(t_s), vehicle.close, f"fail.apad{sysid}")
+
+
+def _once(clock: Clock, at_us: int, action: Callable[[], None], name: str) -> None:
+    """Run `action` once, at mission time `at_us`."""
+    def fire(now_us: int) -> None:
+        task.active = False
+        action()
+
+    task = clock.scheduler.every(1.0, fire, name, at_us)
+
+
+def _embed_one(
+    world: World, a: ApadConfig, options: LinkOptions, out_dir: Path | None, epoch_us: int, append_logs: bool,
+) -> None:
     s, clock = world.scenario, world.clock
     gcs_end: Transport
     apad_end: Transport
     if options.faults is not None:
         apad_udp = UdpTransport("127.0.0.1", 0, listen=True, now_s=clock.time)  # peers age in mission time
-        world.proxy = FaultProxy(clock, ("127.0.0.1", apad_udp.local_port), options.faults)
-        gcs_end, apad_end = UdpTransport("127.0.0.1", world.proxy.listen_port, listen=False), apad_udp
+        # Each aPad its own proxy, seeded apart, so one aPad's faults do not shift another's draws.
+        faults = replace(options.faults, seed=options.faults.seed + 1000 * len(world.proxies))
+        proxy = FaultProxy(clock, ("127.0.0.1", apad_udp.local_port), faults)
+        world.proxies.append(proxy)
+        gcs_end, apad_end = UdpTransport("127.0.0.1", proxy.listen_port, listen=False), apad_udp
     elif options.sitl_medium == "udp":
         apad_udp = UdpTransport("127.0.0.1", 0, listen=True, now_s=clock.time)  # peers age in mission time
         gcs_end, apad_end = UdpTransport("127.0.0.1", apad_udp.local_port, listen=False), apad_udp
     else:
-        gcs_end, apad_end = memory_pair("apad")
-    a = s.apad
+        gcs_end, apad_end = memory_pair(f"apad{a.system_id}")
     vehicle = SitlVehicle(
-        apad_end, apad_params(s), a.home_lat_deg, a.home_lon_deg, system_id=a.system_id,
+        apad_end, apad_params(s, a), a.home_lat_deg, a.home_lon_deg, system_id=a.system_id,
         current_mps=(s.environment.current_east_mps, s.environment.current_north_mps),
         log_dir=out_dir, log_epoch_us=epoch_us, signing_key=options.signing_key,
         geofence_deg=world.geofence_deg or None, log_append=append_logs,
     )
     vehicle.attach(clock.scheduler, clock.now_us)
     world.link.add_transport(gcs_end)
-    world.vehicle = vehicle
+    world.vehicles[a.system_id] = vehicle
 
 
 def lockstep_world(
