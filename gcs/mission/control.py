@@ -58,6 +58,7 @@ class LoopStatus:
     cycles: int = 0  # completed collect-charge-redeploy cycles
     end_reason: EndReason | None = None
     phase_s: dict[Phase, float] = field(default_factory=dict)  # mission seconds spent in each phase so far
+    dockings: list[tuple[float, int]] = field(default_factory=list)  # (mission s, aMussel id) of each dock
 
 
 @dataclass(frozen=True)

@@ -73,6 +73,19 @@ def window(text: str) -> tuple[float, float]:
     return span
 
 
+def apad_at(text: str) -> tuple[int, float]:
+    """SYSID:T: an aPad system id (1..249) and a mission time in seconds (0 <= T <= a week)."""
+    sysid, sep, at = text.partition(":")
+    try:
+        pair = (int(sysid), float(at))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected SYSID:T (an aPad id, mission seconds), got {text!r}") from None
+    if not sep or not 1 <= pair[0] <= 249 or out_of_range(pair[1], 0.0, MAX_DURATION_S):
+        raise argparse.ArgumentTypeError(
+            f"expected SYSID:T with 1 <= SYSID <= 249 and 0 <= T <= {MAX_DURATION_S:.0f}, got {text!r}")
+    return pair
+
+
 def writable_file(text: str) -> Path:
     """A file we can write (created if new): checked now, not after a whole run."""
     path = Path(text)

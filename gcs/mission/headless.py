@@ -8,14 +8,18 @@ from __future__ import annotations
 
 import json
 import time
+from collections import Counter
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from gcs.mission.accounting import account
+from gcs.mission.loop import EnergySharingLoop
 from gcs.mission.results import MusselResult, RunResult
 from gcs.mission.scenario import Scenario
+from gcs.mission.swarm_run import apad_rows, run_swarm
 from gcs.mission.world import LOCKSTEP_EPOCH_US, LinkOptions, World, lockstep_world
 from gcs.records import checkpoint
 from missiontime import seconds_to_us, us_to_s
@@ -39,6 +43,10 @@ def run_mission(
     run checkpoints itself there; `resume` continues from that checkpoint (after a crash).
     """
     wall_start = time.perf_counter()
+    if len(scenario.apads) > 1:
+        if resume:
+            raise checkpoint.CheckpointError("resuming a mission of several aPads is not supported yet")
+        return _run_swarm(scenario, out_dir, progress, options, wall_start)
     ckpt_files = checkpoint.CheckpointFiles(out_dir / checkpoint.CHECKPOINT_NAME) if out_dir is not None else None
     saved = None
     if resume:
@@ -67,7 +75,7 @@ def run_mission(
             )
         end = loop.run(resume=saved is not None)
         result = _result(world, loop.status.cost_m, loop.status.cycles, str(end), time.perf_counter() - wall_start,
-                         out_dir)
+                         out_dir, {loop.apad_id: loop}, apad_rows(world, None, loop))
         if out_dir is not None:
             _write_outputs(world, result, out_dir)
         if ckpt_files is not None:
@@ -79,34 +87,64 @@ def run_mission(
         world.close()
 
 
-def _result(world: World, cost_m: float, cycles: int, end: str, wall_s: float, out_dir: Path | None) -> RunResult:
+def _run_swarm(
+    scenario: Scenario, out_dir: Path | None, progress: ProgressFn | None, options: LinkOptions | None,
+    wall_start: float,
+) -> RunResult:
+    """Several aPads (`gcs.mission.swarm_run`); no checkpoints yet."""
+    world = lockstep_world(scenario, out_dir, options)
+    try:
+        if progress is not None:
+            world.clock.scheduler.every(10.0, lambda now_us: progress(us_to_s(now_us)), "progress", world.clock.now_us)
+        outcome = run_swarm(world)
+        result = _result(world, outcome.cost_m, outcome.cycles, outcome.end_reason, time.perf_counter() - wall_start,
+                         out_dir, outcome.loops, apad_rows(world, outcome, None))
+        if out_dir is not None:
+            _write_outputs(world, result, out_dir)
+        return result
+    finally:
+        world.close()
+
+
+def _result(
+    world: World, cost_m: float, cycles: int, end: str, wall_s: float, out_dir: Path | None,
+    loops: dict[int, EnergySharingLoop], apads: list[dict[str, Any]],
+) -> RunResult:
     s = world.scenario
     rec = world.fleet.recorder
     summary = rec.summary()
     uptime = rec.uptime_pct()
     start_battery = dict(zip(world.start.ids.tolist(), world.start.battery_frac.tolist(), strict=True))
+    dockings: dict[int, list[dict[str, Any]]] = {}
+    for sysid, loop in sorted(loops.items()):
+        for t_s, mussel_id in loop.status.dockings:
+            dockings.setdefault(mussel_id, []).append({"t_s": round(t_s, 2), "apad": sysid})
     mussels = [
-        MusselResult(int(i), round(start_battery[int(i)], 6), round(float(u), 4))
+        MusselResult(int(i), round(start_battery[int(i)], 6), round(float(u), 4),
+                     sorted(dockings.get(int(i), []), key=lambda d: d["t_s"]))
         for i, u in zip(rec.ids, uptime, strict=True)
     ]
-    travelled = world.vehicle.state.distance_travelled_m if world.vehicle is not None else 0.0
+    travelled = sum(v.state.distance_travelled_m for v in world.vehicles.values())
     stats = world.link.codec.stats
     homes = {m: (h.lat, h.lon) for m, h in world.homes.items()}
     whereabouts = [
         {"id": a.mussel_id, "where": a.where, "detail": a.detail}
         for a in account(world.fleet.state, world.frame, homes, world.link.vehicles)
     ]
+    vehicles = list(world.vehicles.values())  # the aPads' counters are summed over the swarm
     messages = {"gcs_sent": stats.sent, "fleet_sent": world.fleet.codec.stats.sent,
-                "apad_sent": world.vehicle.codec.stats.sent if world.vehicle else 0,
+                "apad_sent": sum(v.codec.stats.sent for v in vehicles),
                 "gcs_bad_data": world.link.bad_data,
-                "apad_bad_data": world.vehicle.codec.stats.bad_data if world.vehicle else 0}
+                "apad_bad_data": sum(v.codec.stats.bad_data for v in vehicles)}
     # What each side refused after decoding, by reason (validation, id clashes, handler errors).
     messages |= {f"gcs_dropped.{reason}": n for reason, n in sorted(world.link.dropped.items())}
-    if world.vehicle is not None:
-        messages |= {f"apad_dropped.{reason}": n for reason, n in sorted(world.vehicle.dropped.items())}
-    if world.proxy is not None:
-        for way, st in (("to_apad", world.proxy.stats[True]), ("to_gcs", world.proxy.stats[False])):
-            messages |= {f"proxy_{way}_{k}": v for k, v in vars(st).items()}
+    apad_dropped: Counter[str] = sum((Counter(v.dropped) for v in vehicles), Counter())
+    messages |= {f"apad_dropped.{reason}": n for reason, n in sorted(apad_dropped.items())}
+    proxied: Counter[str] = Counter()
+    for proxy in world.proxies:
+        for way, st in (("to_apad", proxy.stats[True]), ("to_gcs", proxy.stats[False])):
+            proxied.update({f"proxy_{way}_{k}": v for k, v in vars(st).items()})
+    messages |= dict(proxied)
     return RunResult(
         scenario=s.name,
         strategy=s.mission.collect_strategy,
@@ -125,6 +163,7 @@ def _result(world: World, cost_m: float, cycles: int, end: str, wall_s: float, o
         out_dir=str(out_dir) if out_dir is not None else "",
         messages=messages,
         whereabouts=whereabouts,
+        apads=apads,
     )
 
 

@@ -149,6 +149,7 @@ class EnergySharingLoop(LoopActions):
                 self._go_to(self.api.get_location(mussel_id), interruptible=False)
             if self._dock(free[0], mussel_id):
                 self._log("docked", mussel=mussel_id, slot=free[0])
+                self.status.dockings.append((self.clock.time(), mussel_id))
             else:
                 self._sink(mussel_id)
                 self._log("skip", mussel=mussel_id, why="docking failed")

@@ -24,6 +24,7 @@ class MusselResult:
     id: int
     start_battery: float
     uptime_pct: float
+    dockings: list[dict[str, Any]] = field(default_factory=list)  # each {"t_s", "apad"} that docked it
 
 
 @dataclass(frozen=True)
@@ -44,6 +45,7 @@ class RunResult:
     out_dir: str = ""
     messages: dict[str, int] = field(default_factory=dict)  # MAVLink counters of the run
     whereabouts: list[dict[str, Any]] = field(default_factory=list)  # every aMussel at the end (gcs.mission.accounting)
+    apads: list[dict[str, Any]] = field(default_factory=list)  # one row per aPad (gcs.mission.swarm_run.apad_rows)
 
     def to_json(self) -> dict[str, Any]:
         return asdict(self)

@@ -96,6 +96,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="send this fraction of datagrams twice")
     faults.add_argument("--outage", type=flags.window, action="append", default=[], metavar="START:END",
                         help="total link loss between these mission times (s); repeatable")
+    faults.add_argument("--fail-apad", type=flags.apad_at, action="append", default=[], metavar="SYSID:T",
+                        help="that aPad goes silent for good at mission time T (s): the swarm re-shares its "
+                             "aMussels; repeatable")
     faults.add_argument("--proxy", action="store_true", help="route through the proxy even with no faults")
     faults.add_argument("--signing-key", type=Path, metavar="FILE",
                         help="MAVLink 2 signing with the passphrase in FILE (default: $VIL_SIGNING_KEY if set)")
@@ -127,9 +130,9 @@ def _link_options(args: argparse.Namespace) -> LinkOptions | None:
     faults = LinkFaults(args.loss, args.latency, args.jitter, args.duplicate, seed=args.seed or 0,
                         outages_s=tuple(args.outage))
     use_proxy = args.proxy or faults.any
-    if not use_proxy and key is None:
+    if not use_proxy and key is None and not args.fail_apad:
         return None
-    return LinkOptions(faults=faults if use_proxy else None, signing_key=key)
+    return LinkOptions(faults=faults if use_proxy else None, signing_key=key, fail_apads=tuple(args.fail_apad))
 
 
 def _jobs(args: argparse.Namespace) -> list[Job]:
@@ -149,6 +152,11 @@ def _jobs(args: argparse.Namespace) -> list[Job]:
         if name not in cache:
             cache[name] = load_scenario(name)
             check_inputs(cache[name])
+            ids = {a.system_id for a in cache[name].apads}
+            for sysid, _ in args.fail_apad:
+                if sysid not in ids:
+                    raise ScenarioError(f"--fail-apad {sysid}: {name} has no aPad {sysid} (its aPads: "
+                                        f"{', '.join(map(str, sorted(ids)))})")
     jobs = []
     for name, strategy in pairs:
         base = cache.setdefault(name, load_scenario(name))
