@@ -99,9 +99,9 @@ class SwarmWatch:
             return
         lost, back = sorted(self.shares.usable - usable), sorted(usable - self.shares.usable)
         self.reshare(usable)
+        shares = self.shares.partition.shares if self.shares.partition else {}
         self.events.emit(self.clock.time(), "reshare", usable=sorted(usable), lost=lost, back=back,
-                         shares={str(a): len(ids) for a, ids in self.shares.partition.shares.items()}
-                         if self.shares.partition else {})
+                         shares={str(a): ids for a, ids in shares.items()})
 
     def reshare(self, usable: frozenset[int]) -> None:
         """Partition every aMussel heard among `usable` (positions as last reported)."""

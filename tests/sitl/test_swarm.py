@@ -1,0 +1,72 @@
+"""Several aPads sharing one fleet, in lockstep: embedded SITL aPads over real MAVLink bytes."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from gcs.mission.headless import run_mission
+from gcs.mission.scenario import load_scenario
+from gcs.mission.world import LinkOptions
+
+pytestmark = pytest.mark.sitl
+
+
+def _events(folder: Path) -> list[dict[str, Any]]:
+    return [json.loads(line) for line in (folder / "events.jsonl").read_text().splitlines()]
+
+
+def _call_ups_within_shares(events: list[dict[str, Any]]) -> None:
+    """Every call-up is by an aPad of an aMussel in its share as last re-shared: never another's."""
+    shares: dict[int, set[int]] = {}
+    for e in events:
+        if e["event"] == "reshare":
+            shares = {int(a): set(ids) for a, ids in e["shares"].items()}
+        elif e["event"] == "call_up":
+            assert e["mussel"] in shares[e["apad"]], e
+
+
+def test_two_apads_share_the_pool_fleet_and_each_serves_only_its_share(tmp_path: Path) -> None:
+    s = load_scenario("pool12x2").with_overrides(duration_s=1200.0)
+    r = run_mission(s, tmp_path)
+    assert [a["sysid"] for a in r.apads] == [1, 2]
+    share_1, share_2 = (set(a["mussels"]) for a in r.apads)
+    assert share_1 | share_2 == set(range(1, 13)) and not share_1 & share_2
+    assert all(a["dockings"] >= 4 and a["travelled_m"] > 10.0 for a in r.apads)  # both worked
+    assert r.misplaced == [] and len(r.whereabouts) == 12
+    # Each docking is by the aPad whose share the aMussel is in (nobody was lost, no re-share).
+    for m in r.mussels:
+        for d in m.dockings:
+            assert m.id in (share_1 if d["apad"] == 1 else share_2)
+    events = _events(tmp_path)
+    assert [e["event"] for e in events].count("reshare") == 1
+    _call_ups_within_shares(events)
+    # Its own two SITL aPads, each with its own logs.
+    assert (tmp_path / "apad1.tlog").stat().st_size > 0 and (tmp_path / "apad2.tlog").stat().st_size > 0
+    # Lockstep stays deterministic with two loops taking turns on the clock.
+    again = run_mission(s)
+    assert (again.uptime, again.cost_m, again.apads) == (r.uptime, r.cost_m, r.apads)
+
+
+def test_a_failed_apad_is_noticed_its_share_is_taken_over_and_nothing_is_lost(tmp_path: Path) -> None:
+    s = load_scenario("pool12x2").with_overrides(duration_s=1500.0)
+    r = run_mission(s, tmp_path, options=LinkOptions(fail_apads=((2, 300.0),)))
+    events = _events(tmp_path)
+    reshares = [e for e in events if e["event"] == "reshare"]
+    assert len(reshares) == 2
+    lost_at = reshares[1]["t_s"]
+    assert reshares[1]["lost"] == [2] and 300.0 < lost_at <= 312.0  # silent for 10 s: lost
+    assert reshares[1]["shares"] == {"1": list(range(1, 13))}  # the whole fleet is aPad 1's now
+    was_2s = set(reshares[0]["shares"]["2"])
+    taken_over = [(m.id, d["t_s"]) for m in r.mussels for d in m.dockings
+                  if m.id in was_2s and d["apad"] == 1 and d["t_s"] > lost_at]
+    assert taken_over, "aPad 1 never docked an aMussel of aPad 2's share after it was lost"
+    assert not [d for m in r.mussels for d in m.dockings if d["apad"] == 2 and d["t_s"] > 300.0]
+    _call_ups_within_shares(events)
+    # Nothing lost: what aPad 2 held when it went silent is reported held on it, the rest is home.
+    assert r.misplaced == [] and len(r.whereabouts) == 12
+    held = [w for w in r.whereabouts if w["where"] == "slot" and "aPad 2" in w["detail"]]
+    assert all(w["id"] in was_2s for w in held)
