@@ -70,9 +70,31 @@ def misplaced_table(results: list[RunResult]) -> Table | None:
     return table
 
 
+def apads_table(results: list[RunResult]) -> Table | None:
+    """One row per aPad of every run with several: its share, travel, dockings, idle time; None if none."""
+    swarm = [r for r in results if len(r.apads) > 1]
+    if not swarm:
+        return None
+    several = len(swarm) > 1
+    table = Table(title="Per aPad", box=box.SIMPLE_HEAD)
+    for col in (["run"] if several else []) + ["aPad", "share", "moved m", "cost m", "docks", "cycles", "idle %",
+                                               "end"]:
+        table.add_column(col, justify="left" if col in ("run", "end") else "right", no_wrap=True)
+    for r in swarm:
+        for a in r.apads:
+            travelled = a["travelled_m"]
+            row = [str(a["sysid"]), str(len(a["mussels"])), "-" if travelled is None else f"{travelled:.1f}",
+                   f"{a['cost_m']:.1f}", str(a["dockings"]), str(a["cycles"]), f"{100 * a['idle_share']:.1f}",
+                   str(a["end_reason"])]
+            table.add_row(*([f"{r.scenario} {r.strategy} s{r.seed}"] if several else []), *row)
+    return table
+
+
 def results_table(results: list[RunResult], title: str = "Results") -> Table:
     """One row per run; where the paper ran the same thing, its figures follow in a dim row."""
-    table = Table(title=title, caption="paper: the paper's Table II (40 min, theta 30)", box=box.SIMPLE_HEAD)
+    with_paper = any((r.scenario, r.strategy) in PAPER_TABLE_II for r in results)
+    table = Table(title=title, caption="paper: the paper's Table II (40 min, theta 30)" if with_paper else None,
+                  box=box.SIMPLE_HEAD)
     for col in ("run", "avg %", "max %", "min %", "cost m", "active", "cycles"):
         table.add_column(col, justify="left" if col == "run" else "right", no_wrap=True)
     for r in results:

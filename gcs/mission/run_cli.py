@@ -36,6 +36,7 @@ from gcs.mission.headless import run_mission, run_stem
 from gcs.mission.planner import COLLECT
 from gcs.mission.results import (
     RunResult,
+    apads_table,
     misplaced_table,
     results_table,
     seed_stats,
@@ -216,6 +217,9 @@ def run(args: argparse.Namespace) -> int:
     else:
         title = "Table II reproduction (lockstep SITL)" if not args.scenario else "Mission result"
         console.print(results_table(results, title))
+        per_apad = apads_table(results)
+        if per_apad is not None:
+            console.print(per_apad)
     mission_s = sum(r.duration_s for r in results)
     run_s = sum(r.wall_s for r in results)
     out_dirs = sorted({str(Path(r.out_dir).parent) for r in results})
