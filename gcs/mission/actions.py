@@ -13,7 +13,7 @@ from apad_sitl.vocabulary import Latch, Progress
 from gcs.api import ApadApi, CommandError, GeofenceError, Location
 from gcs.link.telemetry import SlotView
 from gcs.mission.control import EndReason, LoopControl, LoopSettings, LoopStatus, MissionEnded, Phase
-from gcs.mission.swarm import FleetShares, orphans
+from gcs.mission.swarm import FleetShares, orphans, route_conflicts
 from gcs.records.events import EventLog
 from missiontime import Clock, seconds_to_us, us_to_s
 from mussel_sim.geo import distance_m
@@ -65,6 +65,8 @@ class LoopActions:
         distance = float(distance_m(here.lat, here.lon, target.lat, target.lon))
         self.status.cost_m += distance
         trip_limit_s = GOTO_SLACK_S + GOTO_SLOWNESS * distance / self.settings.apad_speed_mps
+        if self.shares is not None:
+            self._keep_apart(target, interruptible)
         for _ in range(self.settings.goto_attempts):
             try:
                 self.api.go_to(target, apad_id=self.apad_id)
@@ -90,6 +92,19 @@ class LoopActions:
             self._log("goto_resumed", lat=target.lat, lon=target.lon)
         self._log("gave_up", what="go to", lat=target.lat, lon=target.lon, attempts=self.settings.goto_attempts)
         return False
+
+    def _keep_apart(self, target: Location, interruptible: bool) -> None:
+        """Several aPads: do not set off while the straight leg to `target` passes within
+        `separation_m` of another aPad or of where it is going. Wait for the way to clear, at most
+        `separation_wait_s`, then go anyway (an event says so: e.g. another aPad charging there)."""
+        def blocked() -> list[int]:
+            return route_conflicts(self.api, self.apad_id, target, self.settings.separation_m)
+
+        if not blocked():
+            return
+        self._log("separation_wait", lat=target.lat, lon=target.lon, apads=blocked())
+        if not self._wait_until(lambda: not blocked(), self.settings.separation_wait_s, interruptible):
+            self._log("separation_wait_expired", lat=target.lat, lon=target.lon, apads=blocked())
 
     def _dock(self, slot: int, mussel_id: int) -> bool:
         """Dock and wait for the latch. The slot's own report decides, not the ACK or the primitive:

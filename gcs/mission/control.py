@@ -77,3 +77,6 @@ class LoopSettings:
     # leaves that aMussel or step for now, and goes on.
     goto_attempts: int = 8  # Go To commands per target (after failsafe preemptions or trip timeouts)
     command_attempts: int = 5  # tries of one API command (each itself 4 sends with backoff)
+    # Several aPads: a leg passing closer than this to another aPad (or its target) waits to set off.
+    separation_m: float = 3.0
+    separation_wait_s: float = 60.0

@@ -16,8 +16,12 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
+import shapely
 
+from apad_sitl.vocabulary import Primitive, Progress
+from gcs.api import ApadApi, Location
 from gcs.link.registry import VehicleRegistry
+from gcs.link.telemetry import DEG_E7
 from gcs.mission.partition import Partition, partition
 from gcs.records.events import EventLog
 from missiontime import Clock, seconds_to_us
@@ -124,3 +128,26 @@ def orphans(shares: FleetShares, registry: VehicleRegistry, apad: int) -> list[i
     """aMussels of `apad`'s share left floating with nobody's claim on them (their aPad was lost)."""
     floating = registry.mussels.select((MusselState.FLOATING,))
     return [m for m in floating if shares.owner.get(m) == apad and m not in shares.claims]
+
+
+def route_conflicts(api: ApadApi, apad: int, target: Location, separation_m: float) -> list[int]:
+    """The other aPads within `separation_m` of the straight leg from `apad` to `target`, by where
+    they are or where their Go To is taking them (distances in a local frame at `apad`)."""
+    here = api.position(apad)
+    frame = LocalFrame(here.lat, here.lon)
+    tx, ty = frame.to_local(target.lat, target.lon)
+    leg = shapely.LineString([(0.0, 0.0), (float(tx), float(ty))])
+    out = []
+    for sysid, view in sorted(api.link.vehicles.items()):
+        if sysid == apad or view.lat_deg is None or view.lon_deg is None:
+            continue
+        points = [(view.lat_deg, view.lon_deg)]
+        going = view.expected
+        if going is not None and going.kind == Primitive.GOTO and view.primitive.progress == Progress.IN_PROGRESS:
+            points.append((going.a / DEG_E7, going.b / DEG_E7))
+        for lat, lon in points:
+            x, y = frame.to_local(lat, lon)
+            if leg.distance(shapely.Point(float(x), float(y))) < separation_m:
+                out.append(sysid)
+                break
+    return out

@@ -8,9 +8,11 @@ from typing import Any
 
 import pytest
 
+from gcs.api import Location
 from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
-from gcs.mission.world import LinkOptions
+from gcs.mission.swarm import route_conflicts
+from gcs.mission.world import LinkOptions, lockstep_world
 
 pytestmark = pytest.mark.sitl
 
@@ -70,3 +72,21 @@ def test_a_failed_apad_is_noticed_its_share_is_taken_over_and_nothing_is_lost(tm
     assert r.misplaced == [] and len(r.whereabouts) == 12
     held = [w for w in r.whereabouts if w["where"] == "slot" and "aPad 2" in w["detail"]]
     assert all(w["id"] in was_2s for w in held)
+
+
+def test_a_leg_passing_another_apad_is_a_conflict_and_one_clear_of_it_is_not() -> None:
+    world = lockstep_world(load_scenario("pool12x2"))
+    try:
+        for sysid in (1, 2):
+            world.api.wait_apad(timeout_s=10.0, apad_id=sysid)
+        one, two = world.api.position(1), world.api.position(2)
+        beyond_two = Location(two.lat, two.lon + (two.lon - one.lon) * 0.2)  # past aPad 2, the leg runs over it
+        beside_one = Location(one.lat + 4e-5, one.lon)  # ~4.4 m north of aPad 1, away from aPad 2
+        assert route_conflicts(world.api, 1, beyond_two, separation_m=3.0) == [2]
+        assert route_conflicts(world.api, 1, beside_one, separation_m=3.0) == []
+        # Where aPad 2 is going counts too: send it next to aPad 1's short leg.
+        world.api.go_to(Location(one.lat + 2e-5, one.lon + 1e-5), apad_id=2)
+        world.clock.sleep(0.5)
+        assert route_conflicts(world.api, 1, beside_one, separation_m=3.0) == [2]
+    finally:
+        world.close()
