@@ -3,6 +3,7 @@
     vil sitl                                     # listen on udp:127.0.0.1:14550
     vil sitl --connect udp:127.0.0.1:14550       # send to a listening GCS (mavproxy --master=udpin:...)
     vil sitl --listen tcp:0.0.0.0:5760 --home 45.43,12.33 --current 0.1,0 --log-dir runs/sitl
+    vil sitl --count 3                           # aPads 1, 2, 3 on udp ports 14550, 14551, 14552, 5 m apart
 
 This is the edge: it opens the transport, reads the wall clock and handles Ctrl-C; the vehicle
 itself stays clock-free. With signing on and a log folder, it also keeps the signing timestamps
@@ -16,16 +17,18 @@ import argparse
 import signal
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 from types import FrameType
 from typing import Any
 
 from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.params import ApadParams, ParamError, with_param
-from mavlink_dialect import AddressError, mavlink, open_transport, signing
+from mavlink_dialect import AddressError, Transport, mavlink, open_transport, signing
 from mavlink_dialect.signing import SigningKeyError, load_key
 from mavlink_dialect.signing_state import SAVE_PERIOD_S, SigningKeeper
 from missiontime import Scheduler, WallClock
+from mussel_sim.geo import LocalFrame
 
 DEFAULT_LISTEN = "udp:127.0.0.1:14550"
 DEFAULT_HOME = (43.9400, 15.4400)  # off Biograd na Moru
@@ -54,6 +57,27 @@ def _current(text: str) -> tuple[float, float]:
     if not (abs(east) <= 5.0 and abs(north) <= 5.0):
         raise argparse.ArgumentTypeError(f"--current {text!r}: more than 5 m/s is not a sea we work in")
     return east, north
+
+
+MAX_COUNT = 16
+COUNT_SPACING_M = 5.0
+
+
+def _count(text: str) -> int:
+    if not text.isdigit() or not 1 <= int(text) <= MAX_COUNT:
+        raise argparse.ArgumentTypeError(f"--count must be 1..{MAX_COUNT}, got {text!r}")
+    return int(text)
+
+
+def _nth_address(address: str, k: int) -> str:
+    """The k-th aPad's address: the same host, the port k above (serial has no ports: refused)."""
+    if k == 0:
+        return address
+    scheme, _, rest = address.partition(":")
+    host, _, port = rest.rpartition(":")
+    if scheme not in ("udp", "tcp") or not port.isdigit() or int(port) + k > 65535:
+        raise AddressError(f"--count needs udp:HOST:PORT or tcp:HOST:PORT with room for {k + 1} ports, got {address!r}")
+    return f"{scheme}:{host}:{int(port) + k}"
 
 
 def _sysid(text: str) -> int:
@@ -96,6 +120,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--home", type=_home, default=DEFAULT_HOME, metavar="LAT,LON",
                         help="home and start position in degrees (default 43.9400,15.4400)")
     parser.add_argument("--sysid", type=_sysid, default=1, help="MAVLink system id, 1..255 (default 1)")
+    parser.add_argument("--count", type=_count, default=1, metavar="N",
+                        help=f"serve N aPads (up to {MAX_COUNT}): system ids SYSID.., each on the next port "
+                             f"(one link each), homes {COUNT_SPACING_M:g} m apart eastwards (default 1)")
     parser.add_argument("--current", type=_current, default=(0.0, 0.0), metavar="E,N",
                         help="water current east,north in m/s (default 0,0)")
     parser.add_argument("--param", type=_param, action="append", default=[], metavar="NAME=VALUE",
@@ -136,29 +163,43 @@ def run(args: argparse.Namespace) -> int:
     params = ApadParams()
     for name, value in args.param:
         params = with_param(params, name, value)
+    if args.sysid + args.count - 1 > 255:
+        print(f"vil sitl: --sysid {args.sysid} --count {args.count} runs past system id 255", file=sys.stderr)
+        return 2
+    transports: list[Transport] = []
     try:
-        transport = open_transport(address, listen=listen)
+        for k in range(args.count):
+            transports.append(open_transport(_nth_address(address, k), listen=listen))
     except AddressError as exc:
+        for t in transports:
+            t.close()
         print(f"vil sitl: {exc}", file=sys.stderr)
         return 2
-    lat, lon = args.home
     clock = WallClock(Scheduler())
     epoch_us = int(time.time() * 1e6)
     try:
         key = load_key(args.signing_key)
         fence = _fence(args.geofence) if args.geofence else None
     except (SigningKeyError, OSError, ValueError, KeyError) as exc:
-        transport.close()
+        for t in transports:
+            t.close()
         print(f"vil sitl: {exc}", file=sys.stderr)
         return 2
+    frame = LocalFrame(*args.home)
+    vehicles: list[SitlVehicle] = []
     try:
-        vehicle = SitlVehicle(
-            transport, params, lat, lon, system_id=args.sysid, current_mps=args.current,
-            log_dir=args.log_dir, rates_hz=REALTIME_RATES_HZ, log_epoch_us=epoch_us,
-            signing_key=key, geofence_deg=fence,
-        )
+        for k, transport in enumerate(transports):
+            lat, lon = (float(v) for v in frame.to_geodetic(COUNT_SPACING_M * k, 0.0))
+            vehicles.append(SitlVehicle(
+                transport, replace(params, sysid_thismav=args.sysid + k), lat, lon, system_id=args.sysid + k,
+                current_mps=args.current, log_dir=args.log_dir, rates_hz=REALTIME_RATES_HZ, log_epoch_us=epoch_us,
+                signing_key=key, geofence_deg=fence,
+            ))
     except OSError as exc:
-        transport.close()
+        for v in vehicles:
+            v.close()
+        for t in transports[len(vehicles):]:
+            t.close()
         print(f"vil sitl: cannot write logs in {args.log_dir}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     previous: dict[int, Any] = {}
@@ -168,12 +209,14 @@ def run(args: argparse.Namespace) -> int:
         previous[signal.SIGINT] = signal.signal(signal.SIGINT, signal.default_int_handler)
     except ValueError:
         pass  # not the main thread: the embedder handles signals
-    keeper = _keep_signing_state(vehicle, clock, epoch_us) if key is not None else None
-    vehicle.attach(clock.scheduler, clock.now_us)
+    keepers = [_keep_signing_state(v, clock, epoch_us) if key is not None else None for v in vehicles]
     verb = "listening on" if listen else "connecting to"
     east, north = args.current
-    print(f"vil sitl: aPad sysid {args.sysid} {verb} {address}, home {lat:.6f},{lon:.6f}, "
-          f"current {east:g},{north:g} m/s" + (f", logs in {args.log_dir}" if args.log_dir else ""), flush=True)
+    for k, vehicle in enumerate(vehicles):
+        vehicle.attach(clock.scheduler, clock.now_us)
+        print(f"vil sitl: aPad sysid {vehicle.system_id} {verb} {_nth_address(address, k)}, "
+              f"home {vehicle.home_lat_deg:.6f},{vehicle.home_lon_deg:.6f}, current {east:g},{north:g} m/s"
+              + (f", logs in {args.log_dir}" if args.log_dir else ""), flush=True)
     try:
         if args.duration is not None:
             clock.sleep(args.duration)
@@ -183,14 +226,15 @@ def run(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         pass
     finally:
-        if keeper is not None:
-            keeper.save()
-        c = vehicle.codec
-        vehicle.event("link", received=c.stats.received, bad_data=c.stats.bad_data, unknown=c.stats.unknown,
-                      signing_refused=c.signing_refusals, transport_dropped=dict(getattr(transport, "dropped", {})),
-                      signing_save_errors=keeper.save_errors if keeper is not None else 0,
-                      dropped=dict(vehicle.dropped), floods_cut=clock.scheduler.drains_cut)
-        vehicle.close()
+        for vehicle, keeper, transport in zip(vehicles, keepers, transports, strict=True):
+            if keeper is not None:
+                keeper.save()
+            c = vehicle.codec
+            vehicle.event("link", received=c.stats.received, bad_data=c.stats.bad_data, unknown=c.stats.unknown,
+                          signing_refused=c.signing_refusals, transport_dropped=dict(getattr(transport, "dropped", {})),
+                          signing_save_errors=keeper.save_errors if keeper is not None else 0,
+                          dropped=dict(vehicle.dropped), floods_cut=clock.scheduler.drains_cut)
+            vehicle.close()
         for signum, handler in previous.items():
             signal.signal(signum, handler)
     return 0
