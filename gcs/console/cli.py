@@ -28,7 +28,8 @@ SPEED_RANGE = (0.1, 1000.0)  # x real time, for a paced SITL world and for repla
 
 def add_gcs_arguments(parser: argparse.ArgumentParser) -> None:
     link = parser.add_mutually_exclusive_group(required=True)
-    link.add_argument("--connect", metavar="ADDR", help="the aPad at udp:HOST:PORT (or tcp:, serial:)")
+    link.add_argument("--connect", metavar="ADDR[,ADDR...]",
+                      help="the aPad(s) at udp:HOST:PORT (or tcp:, serial:); several addresses comma-separated")
     link.add_argument("--sitl", action="store_true", help="embed a SITL aPad (no other process needed)")
     parser.add_argument("--sitl-link", choices=("memory", "udp"), default="memory",
                         help="with --sitl: in-memory pair or a localhost UDP socket (real MAVLink bytes either way)")

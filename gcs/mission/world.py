@@ -46,7 +46,9 @@ APAD_HEARS_FROM_FLEET = frozenset({mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS})
 class LinkOptions:
     """How the GCS reaches its aPad: an embedded SITL aPad (default) or a vehicle at `connect`."""
 
-    connect: str | None = None  # a real or separate aPad at this address (udp:, tcp:, serial:)
+    # Real or separate aPads at these addresses (udp:, tcp:, serial:), comma-separated: one link
+    # each; one address may also carry several aPads (routing is by system id).
+    connect: str | None = None
     sitl_medium: str = "memory"  # embedded aPad: "memory" (in-memory pair) or "udp" (localhost sockets)
     faults: LinkFaults | None = None  # not None: embedded aPad over real UDP through a FaultProxy
     signing_key: bytes | None = None  # MAVLink 2 signing on both ends
@@ -175,7 +177,8 @@ def build_world(
     }
     world = World(scenario, clock, link, api, fleet, frame, config, homes, events, geofence_deg=fence)
     if options.connect is not None:
-        link.add_transport(open_transport(options.connect))
+        for address in options.connect.split(","):
+            link.add_transport(open_transport(address.strip()))
     else:
         _embed_sitl(world, options, out_dir, epoch_us, append_logs)
     if options.signing_key is not None:
