@@ -11,7 +11,12 @@ way the paper's surface-station node did. It listens to:
   edge of its charging on which the paper's aMussel sinks;
 - AMUSSEL_COMMAND: SURFACE / SINK for one of our ids;
 - AMUSSEL_STATUS with simulated == 0: a real aMussel. Mixing is allowed, sharing an id is not:
-  `MusselIdCollision` is raised.
+  the status is refused, counted and warned about (`MusselIdCollision` says why).
+
+Every incoming message is validated before it acts (an aPad we expect, latitude and longitude in
+range, a slot 1..N_SLOTS, a known latch and command, one of our ids); what fails is dropped and
+counted by reason in `dropped` ("invalid:DOCK_SLOT_STATUS:slot"), and a handler that still raises
+is caught in `feed`, counted ("handler_error:NAME") and the runner goes on.
 
 Incoming events are queued and become the inputs of the next step, so the model stays pure and a
 run in lockstep is deterministic. Refused surface commands are reported as STATUSTEXT warnings.
@@ -19,6 +24,7 @@ run in lockstep is deterministic. Refused surface commands are reported as STATU
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -43,6 +49,10 @@ DEG_E7 = 1e7
 STATUSTEXT_MAX = 50
 # DOCK_SLOT_STATUS latch values that hold an aMussel (the aPad's words, read here as wire values).
 HOLDING_LATCHES = (mavlink.DOCK_LATCH_STATE_CLOSING, mavlink.DOCK_LATCH_STATE_LATCHED)
+LATCHES = frozenset(mavlink.enums["DOCK_LATCH_STATE"]) - {max(mavlink.enums["DOCK_LATCH_STATE"])}  # minus _ENUM_END
+COMMANDS = frozenset(int(c) for c in MusselCommand)
+N_SLOTS = 4  # an aPad's docking slots (apad_sitl.vocabulary.N_SLOTS; the fleet does not import the aPad)
+MAX_LAT_E7, MAX_LON_E7 = 90 * 10**7, 180 * 10**7
 
 
 # Where a co-located router takes whole batches: (message id, frames, columns by wire field name).
@@ -66,7 +76,8 @@ class CommsConfig:
     step_period_s: float = 1.0  # the model's 1 Hz of mission time
     status_rate_hz: float = 1.0  # AMUSSEL_STATUS per aMussel
     sensors_rate_hz: float = 0.2  # AMUSSEL_SENSORS per aMussel
-    apad_ids: frozenset[int] | None = None  # systems whose GLOBAL_POSITION_INT is an aPad; None: any
+    apad_ids: frozenset[int] | None = None  # systems whose positions and slots are an aPad's; None: any
+    commanders: frozenset[int] | None = None  # systems whose AMUSSEL_COMMAND is obeyed (a GCS); None: any
     report_refusals: bool = True  # STATUSTEXT for surface commands refused for safety
 
 
@@ -119,6 +130,7 @@ class FleetRunner:
         self._apads_key: tuple[tuple[int, tuple[float, float]], ...] = ()
         self._apads_m: dict[int, tuple[float, float]] = {}
         self.real_mussel_ids: set[int] = set()
+        self.dropped: Counter[str] = Counter()  # received messages refused, by reason
         # Where we have docked each aMussel, and the reverse: (aPad, slot) -> aMussel id.
         self._docked_at: dict[int, tuple[int, int]] = {}
         self._slot_holds: dict[tuple[int, int], int] = {}
@@ -204,33 +216,63 @@ class FleetRunner:
     # --- incoming ---------------------------------------------------------------------------------------
 
     def feed(self, data: bytes) -> int:
-        """Parse bytes with this runner's codec and handle every message; returns how many."""
+        """Parse bytes with this runner's codec and handle every message; returns how many.
+        Never raises for what arrived: a handler's error is counted and the next message read."""
         msgs = self.codec.decode(data)
         for msg in msgs:
-            self.handle(msg)
+            try:
+                self.handle(msg)
+            except Exception:  # validation should have stopped it; a bug must not end the fleet
+                self.dropped[f"handler_error:{msg.get_type()}"] += 1
         return len(msgs)
 
     def handle(self, msg: mavlink.MAVLink_message) -> None:
+        """Validate one message, then act on it; what fails is counted in `dropped`."""
         src = int(msg.get_srcSystem())
         if src == self.codec.system_id:
             return  # our own traffic echoed back by a router
+        bad = self._invalid(src, msg)
+        if bad is not None:
+            self.dropped[f"invalid:{msg.get_type()}:{bad}"] += 1
+            return
         if isinstance(msg, mavlink.MAVLink_global_position_int_message):
-            if self.config.apad_ids is None or src in self.config.apad_ids:
-                self.apad_positions[src] = (msg.lat / DEG_E7, msg.lon / DEG_E7)
+            self.apad_positions[src] = (msg.lat / DEG_E7, msg.lon / DEG_E7)
         elif isinstance(msg, mavlink.MAVLink_dock_slot_status_message):
             self._slot_status(src, msg.slot, msg.mussel_id, msg.latch)
         elif isinstance(msg, mavlink.MAVLink_amussel_command_message):
-            mussel_id = msg.mussel_id
-            if mussel_id in self._ids:
-                if msg.command == MusselCommand.SURFACE:
-                    self._surface.append(mussel_id)
-                elif msg.command == MusselCommand.SINK:
-                    self._sink.append(mussel_id)
+            (self._surface if msg.command == MusselCommand.SURFACE else self._sink).append(msg.mussel_id)
         elif isinstance(msg, mavlink.MAVLink_amussel_status_message) and msg.simulated == 0:
             mussel_id = msg.mussel_id
-            if mussel_id in self._ids:
-                raise MusselIdCollision(mussel_id, src)
+            if mussel_id in self._ids:  # refused: neither may stand for the other
+                self.dropped["id_collision:AMUSSEL_STATUS"] += 1
+                if self.dropped["id_collision:AMUSSEL_STATUS"] == 1:
+                    self._warn(f"aMussel {mussel_id} also reported by system {src}: refused")
+                return
             self.real_mussel_ids.add(mussel_id)
+
+    def _invalid(self, src: int, msg: mavlink.MAVLink_message) -> str | None:
+        """The first field of `msg` that the fleet may not act on, or None."""
+        m: Any = msg
+        apads = self.config.apad_ids
+        if isinstance(msg, mavlink.MAVLink_global_position_int_message | mavlink.MAVLink_dock_slot_status_message):
+            if apads is not None and src not in apads:
+                return "source"
+            if isinstance(msg, mavlink.MAVLink_global_position_int_message):
+                return None if -MAX_LAT_E7 <= m.lat <= MAX_LAT_E7 and -MAX_LON_E7 <= m.lon <= MAX_LON_E7 else "lat_lon"
+            if not 1 <= m.slot <= N_SLOTS:
+                return "slot"
+            return None if m.latch in LATCHES else "latch"
+        if isinstance(msg, mavlink.MAVLink_amussel_command_message):
+            if self.config.commanders is not None and src not in self.config.commanders:
+                return "source"
+            if apads is not None and m.target_system not in apads:
+                return "target"  # relayed through an aPad, or not at all
+            if m.command not in COMMANDS:
+                return "command"
+            return None if m.mussel_id in self._ids else "mussel_id"
+        if isinstance(msg, mavlink.MAVLink_amussel_status_message) and msg.simulated == 0:
+            return None if 1 <= m.mussel_id <= MAX_MUSSEL_ID else "mussel_id"
+        return None
 
     def poller(self, transport: Transport) -> _TransportPoller:
         """A scheduler poller that feeds whatever `transport` received into this runner."""

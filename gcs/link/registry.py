@@ -6,6 +6,7 @@ loop, the console and replay read it. Nothing else keeps a second copy of what w
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from dataclasses import dataclass, field
 
 from apad_sitl.vocabulary import N_SLOTS, Primitive
@@ -81,12 +82,23 @@ class VehicleView:
 class VehicleRegistry:
     """One `VehicleView` per aPad system id (created by its first heartbeat) and one `MusselTable`."""
 
-    def __init__(self, gcs_system_id: int = GCS_SYSTEM_ID) -> None:
-        """`gcs_system_id`: our own system; only its Go Tos count towards the movement cost."""
+    def __init__(self, gcs_system_id: int = GCS_SYSTEM_ID, apad_ids: Collection[int] | None = None) -> None:
+        """`gcs_system_id`: our own system; only its Go Tos count towards the movement cost.
+        `apad_ids`: the aPads expected (only their heartbeats make vehicles); None: any vehicle."""
         self.gcs_system_id = gcs_system_id
+        self.apad_ids = None if apad_ids is None else frozenset(apad_ids)
         self.vehicles: dict[int, VehicleView] = {}
         self.mussels = MusselTable()
         self.version = 0  # bumped on every change a screen could show
+
+    def believes(self, system_id: int, record: Record) -> bool:
+        """Whether a record that came over a transport from `system_id` may be folded in: a heartbeat
+        of an expected aPad, vehicle telemetry of a known vehicle, an aMussel's status from anyone."""
+        if isinstance(record, MusselView | GoToSent):
+            return True
+        if isinstance(record, Heartbeat):
+            return self.apad_ids is None or system_id in self.apad_ids
+        return system_id in self.vehicles
 
     def apply(self, system_id: int, record: Record, now_us: int) -> str | None:
         """Fold one record from `system_id` into the state; a reason if it was refused."""

@@ -5,15 +5,20 @@ keep their own framing), what a local party sends from the object it encoded. Ea
 goes, as a typed and validated record (`gcs.link.telemetry`), into the one `VehicleRegistry`,
 its COMMAND_ACKs to the `CommandClient`, and, as the message itself, to every other local party
 (the simulated fleet is one). What fails validation is dropped and counted by reason in
-`dropped`. The link also sends the GCS heartbeat and records a .tlog of everything that crossed.
+`dropped`, and so is what no one may send us: a frame from a transport claiming to come from this
+GCS or from a local party (a spoof), telemetry of a system that is not one of the expected aPads
+(`apad_ids`). A handler that still raises is caught at the dispatch, counted ("handler_error:NAME"),
+kept in `errors` (the last few, with the message) and the loop goes on: no packet ends the link.
+The link also sends the GCS heartbeat and records a .tlog of everything that crossed.
 
 `Link` is the GCS's one System (MAVSDK's word): `registry`, `commands` and `params` beside it.
 """
 
 from __future__ import annotations
 
-from collections import Counter
-from collections.abc import Callable, Mapping, Sequence
+import logging
+from collections import Counter, deque
+from collections.abc import Callable, Collection, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +26,7 @@ from gcs.link.commands import CommandClient, CommandError
 from gcs.link.fleet_table import MusselBatch
 from gcs.link.params import ParamClient
 from gcs.link.registry import VehicleRegistry, VehicleView
-from gcs.link.telemetry import GCS_COMPONENT_ID, GCS_SYSTEM_ID, CommandAck, Rejected, read
+from gcs.link.telemetry import GCS_COMPONENT_ID, GCS_SYSTEM_ID, CommandAck, MusselView, Rejected, read
 from mavlink_dialect import Codec, Transport, hot, mavlink
 from mavlink_dialect.tlog import TlogWriter
 from missiontime import Clock, seconds_to_us
@@ -30,8 +35,10 @@ from missiontime import Clock, seconds_to_us
 # heartbeats in a row (16 needless holds in a 40 min mission at 20 % loss); 2 Hz tolerates five.
 HEARTBEAT_PERIOD_S = 0.5
 WAIT_POLL_S = 0.05
+ERRORS_KEPT = 20  # handler errors kept with their message, for the log and a post-mortem
 
 Handler = Callable[[Any], None]
+log = logging.getLogger(__name__)
 
 __all__ = ["GCS_SYSTEM_ID", "CommandError", "Link", "Port", "VehicleView"]
 
@@ -44,12 +51,15 @@ class Port:
     here, for the others).
     """
 
-    def __init__(self, link: Link, handler: Handler | None, forward: frozenset[int] | None = None) -> None:
+    def __init__(self, link: Link, handler: Handler | None, forward: frozenset[int] | None = None,
+                 system_id: int | None = None) -> None:
         """`forward`: the message ids of this party that go out to the vehicles (None: all of them);
-        a router sends a listener what it uses, as mavlink-router's filters do."""
+        a router sends a listener what it uses, as mavlink-router's filters do. `system_id`: the
+        party's own MAVLink system; a transport frame claiming it is a spoof."""
         self.link = link
         self.handler = handler
         self.forward = forward
+        self.system_id = system_id
 
     def _out(self, data: bytes) -> None:
         if self.forward is None or frame_msg_id(data) in self.forward:
@@ -94,7 +104,7 @@ class _TransportPoller:
         chunks = self.transport.receive()
         for chunk in chunks:
             for msg in self.codec.decode(chunk):
-                self.link._deliver(None, msg)
+                self.link._receive(msg)
         return bool(chunks)
 
     def fileno(self) -> int | None:
@@ -112,14 +122,18 @@ class Link:
         tlog_path: Path | None = None,
         tlog_epoch_us: int = 0,
         append: bool = False,
+        apad_ids: Collection[int] | None = None,
     ) -> None:
-        """`append` continues an existing .tlog (a resumed mission)."""
+        """`append` continues an existing .tlog (a resumed mission). `apad_ids`: the aPads this GCS
+        expects (their telemetry alone is believed); None: whatever vehicle is heard."""
         self.clock = clock
         self.codec = Codec(system_id, component_id)
-        self.registry = VehicleRegistry(system_id)
+        self.registry = VehicleRegistry(system_id, apad_ids)
         self.commands = CommandClient(self.send, clock)
         self.params = ParamClient(self.send, self.registry, clock)
         self.dropped: Counter[str] = Counter()  # received messages refused by validation, by reason
+        self.errors: deque[tuple[str, str]] = deque(maxlen=ERRORS_KEPT)  # (message, error) a handler raised
+        self._local_systems = {system_id}  # a transport frame from one of these is a spoof
         self._pollers: list[_TransportPoller] = []
         self._ports: list[Port] = []
         self._loopback = Codec(system_id, component_id)  # parses bare bytes of local parties, once
@@ -160,9 +174,12 @@ class Link:
         for poller in self._pollers:
             poller.codec.enable_signing(key, link_id, ticks)
 
-    def attach(self, handler: Handler | None, forward: frozenset[int] | None = None) -> Port:
-        port = Port(self, handler, forward)
+    def attach(self, handler: Handler | None, forward: frozenset[int] | None = None,
+               system_id: int | None = None) -> Port:
+        port = Port(self, handler, forward, system_id)
         self._ports.append(port)
+        if system_id is not None:
+            self._local_systems.add(system_id)
         return port
 
     def close(self) -> None:
@@ -185,19 +202,40 @@ class Link:
         for poller in self._pollers:
             poller.transport.send(data)
 
+    def _receive(self, msg: Any) -> None:
+        """One message from a transport, at the dispatch boundary: whatever it makes a handler
+        raise is counted, logged and kept, and the next message is read."""
+        try:
+            self._deliver(None, msg)
+        except Exception as exc:  # validation should have stopped it; a bug must not end the link
+            name = msg.get_type()
+            self.dropped[f"handler_error:{name}"] += 1
+            self.errors.append((repr(msg)[:300], f"{type(exc).__name__}: {exc}"[:200]))
+            log.warning("handler error on %s: %s: %s", msg, type(exc).__name__, exc)
+
     def _deliver(self, origin: Port | None, msg: Any) -> None:
         """One decoded message: recorded, read into the registry once, handed to the other parties."""
         if self._tlog is not None:
             self._tlog.write(self.clock.now_us, msg.get_msgbuf())
+        src = msg.get_srcSystem()
+        if origin is None and src in self._local_systems:  # only a local party speaks as itself
+            self.dropped[f"spoofed_source:{msg.get_type()}"] += 1
+            return
         record = read(msg)
         if isinstance(record, Rejected):
             self.dropped[record.reason] += 1
             return
         if isinstance(record, CommandAck):
             if record.target_system in (0, self.codec.system_id):  # not an answer to another GCS
-                self.commands.on_ack(msg.get_srcSystem(), record)
+                self.commands.on_ack(src, record)
         elif record is not None:
-            refused = self.registry.apply(msg.get_srcSystem(), record, self.clock.now_us)
+            if origin is None and isinstance(record, MusselView) and record.simulated and len(self._local_systems) > 1:
+                self.dropped["AMUSSEL_STATUS.source"] += 1  # our simulated fleet is a local party
+                return
+            if origin is None and not self.registry.believes(src, record):
+                self.dropped[f"{msg.get_type()}.system"] += 1  # not a vehicle we expect, or not yet heard
+                return
+            refused = self.registry.apply(src, record, self.clock.now_us)
             if refused is not None:
                 self.dropped[refused] += 1
                 return

@@ -226,7 +226,9 @@ def _param_value(m: Any) -> ParamValue | Rejected:
     return ParamValue(name, float(m.param_value))
 
 
-def _statustext(m: Any) -> StatusText:
+def _statustext(m: Any) -> StatusText | Rejected:
+    if m.severity > mavlink.MAV_SEVERITY_DEBUG:
+        return Rejected("STATUSTEXT.severity")
     text = m.text if isinstance(m.text, str) else bytes(m.text).decode("utf-8", "replace")
     return StatusText(int(m.severity), text.rstrip("\0"))
 

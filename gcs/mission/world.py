@@ -156,14 +156,16 @@ def build_world(
     params = fleet_params(scenario)
     if out_dir is not None:
         out_dir.mkdir(parents=True, exist_ok=True)
+    apad_ids = frozenset(a.system_id for a in scenario.apads)  # only their telemetry is believed
     link = Link(clock, tlog_path=out_dir / "gcs.tlog" if out_dir else None, tlog_epoch_us=epoch_us,
-                append=append_logs)
+                append=append_logs, apad_ids=apad_ids)
     events = EventLog(out_dir / "events.jsonl" if out_dir else None, append=append_logs)
-    port = link.attach(None, forward=APAD_HEARS_FROM_FLEET)
+    port = link.attach(None, forward=APAD_HEARS_FROM_FLEET, system_id=FLEET_SYSTEM_ID)
     fleet = FleetRunner(
         initial_state(config, frame, params, clock.now_us), params, rng, frame,
         Codec(FLEET_SYSTEM_ID, FLEET_COMPONENT_ID), port.send_bytes, sensor_field(scenario, area, frame),
-        CommsConfig(status_rate_hz=scenario.fleet.status_rate_hz, sensors_rate_hz=scenario.fleet.sensors_rate_hz),
+        CommsConfig(status_rate_hz=scenario.fleet.status_rate_hz, sensors_rate_hz=scenario.fleet.sensors_rate_hz,
+                    apad_ids=apad_ids, commanders=frozenset({link.codec.system_id})),
         local=port.send_local, local_batch=port.send_batch,
     )
     port.handler = fleet.handle

@@ -9,7 +9,7 @@ from apad_sitl.vocabulary import Latch
 from mavlink_dialect import Codec, mavlink, memory_pair
 from missiontime import VirtualClock
 from mussel_sim.battery import to_millivolts
-from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner, MusselIdCollision
+from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner
 from mussel_sim.fleet_state import FleetParams, state_from_arrays
 from mussel_sim.geo import LocalFrame
 from mussel_sim.sensors import AnoxicPatch, pressure_hpa
@@ -204,11 +204,13 @@ def real_status(mussel_id: int, simulated: int, system: int = 42) -> bytes:
 
 
 def test_real_mussel_with_a_simulated_id_is_refused_loudly() -> None:
-    runner, _ = make_runner()
+    runner, wire = make_runner()
     runner.feed(real_status(77, simulated=0))
     assert runner.real_mussel_ids == {77}
-    with pytest.raises(MusselIdCollision, match=r"aMussel id 5 .*system 42"):
-        runner.feed(real_status(5, simulated=0))
+    runner.feed(real_status(5, simulated=0))  # refused and counted, never raised: no packet ends the fleet
+    assert runner.real_mussel_ids == {77} and runner.dropped == {"id_collision:AMUSSEL_STATUS": 1}
+    [warning] = wire.messages("STATUSTEXT")
+    assert warning.text == "aMussel 5 also reported by system 42: refused"
 
 
 def test_our_own_status_echoed_back_is_not_a_collision() -> None:
