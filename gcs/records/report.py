@@ -4,8 +4,9 @@
 
 Writes battery.png (every aMussel's battery over mission time), active.png (active aMussels
 over time, the paper's Fig. 9), uptime.png (uptime per aMussel, eq. 3), track.png (the aPad's
-track over the area), index.html (the Table II indices, beside the paper's where it ran the same
-thing) and run.geojson (the track and the aMussels' positions, for GIS tools).
+track over the area), partition.png (several aPads: who serves which aMussels), index.html (the
+Table II indices, beside the paper's where it ran the same thing) and run.geojson (the track and
+the aMussels' positions, for GIS tools).
 
 The figures come from the GCS log replayed through the console's model; the indices from
 result.json when the run wrote one (headless runs), else from the same replay.
@@ -72,6 +73,9 @@ def write_report(run: str | Path, out: Path, scenario: str | Path | None = None)
         _track_png(replay.frames, out / "track.png", title),
         _geojson(replay.frames, out / "run.geojson"),
     ]
+    shares = _partition_png(replay.frames, files.events, out / "partition.png", title)
+    if shares is not None:
+        written.append(shares)
     written.append(_html(files.result, ind, last, title, out / "index.html"))
     return written
 
@@ -193,6 +197,68 @@ def _track_png(frames: list[Snapshot], path: Path, title: str) -> Path:
     return _save(fig, path)
 
 
+def _reshares(events_path: Path) -> list[dict[str, object]]:
+    """The swarm's re-share events (which aPad serves which aMussels), oldest first."""
+    if not events_path.exists():
+        return []
+    out = []
+    for line in events_path.read_text().splitlines():
+        try:
+            event = json.loads(line)
+        except json.JSONDecodeError:
+            continue  # a torn last line after a crash
+        if not isinstance(event, dict) or event.get("event") != "reshare":
+            continue
+        if not isinstance(event.get("t_s"), int | float):
+            continue
+        shares = event.get("shares")
+        if isinstance(shares, dict) and all(isinstance(ids, list) and all(type(m) is int for m in ids)
+                                            for ids in shares.values()):
+            out.append(event)  # an older run's event (counts, not ids) or a damaged one is left out
+    return out
+
+
+def _partition_png(frames: list[Snapshot], events_path: Path, path: Path, title: str) -> Path | None:
+    """Several aPads: the k-means shares of the fleet, one panel per sharing (the first, then each
+    re-share after an aPad was lost or came back). None for a one-aPad run."""
+    reshares = _reshares(events_path)
+    if not reshares:
+        return None
+    import matplotlib.pyplot as plt
+
+    last = frames[-1]
+    m_lat, m_lon = _first_positions(frames)
+    lat0, lon0 = float(np.nanmean(m_lat)), float(np.nanmean(m_lon))
+    mx, my = flat_m(m_lat, m_lon, lat0, lon0)
+    where = {int(m): k for k, m in enumerate(last.mussel_ids)}
+    panels = reshares[:1] + reshares[1:][-2:]  # the first sharing and the last two re-shares
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.5 * len(panels), 4.5), dpi=110, layout="constrained",
+                             squeeze=False)
+    colours = plt.get_cmap("tab10")
+    for ax, event in zip(axes[0], panels, strict=True):
+        if last.outline_lat_deg.size:
+            ox, oy = flat_m(last.outline_lat_deg, last.outline_lon_deg, lat0, lon0)
+            ax.plot(ox, oy, color=GREY, lw=1.2)
+        shares = event["shares"]
+        assert isinstance(shares, dict)
+        for apad, ids in sorted(shares.items(), key=lambda kv: int(kv[0])):
+            colour = colours((int(apad) - 1) % 10)  # an aPad keeps its colour from panel to panel
+            rows = [where[int(m)] for m in ids if int(m) in where]
+            ax.scatter(mx[rows], my[rows], s=22, color=colour, edgecolor="black", lw=0.4,
+                       label=f"aPad {apad}: {len(ids)}")
+            if rows:
+                ax.plot(np.mean(mx[rows]), np.mean(my[rows]), "X", ms=11, color=colour, mec="black")
+        lost = event.get("lost")
+        gone = ", ".join(str(a) for a in lost) if isinstance(lost, list) else ""
+        what = f"t = {float(str(event['t_s'])) / 60:.1f} min" + (f", aPad {gone} lost" if gone else "")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.grid(True, alpha=0.3)
+        ax.set(xlabel="east [m]", ylabel="north [m]", title=what)
+        ax.legend(fontsize=7, loc="best")
+    fig.suptitle(f"The fleet shared among the aPads (k-means, balanced; X: share centre) — {title}")
+    return _save(fig, path)
+
+
 def _geojson(frames: list[Snapshot], path: Path) -> Path:
     last = frames[-1]
     lat, lon = _track(frames)
@@ -230,6 +296,8 @@ def _html(result: dict[str, object], ind: Indices, last: Snapshot, title: str, p
     facts = [("mission time", f"{last.t_s / 60:.1f} min"), ("aMussels", str(last.mussel_ids.size)),
              ("end", str(result.get("end_reason") or last.ended or "-")), ("indices from", ind.source)]
     facts_html = "".join(f"<li><b>{html.escape(k)}</b>: {html.escape(v)}</li>" for k, v in facts)
+    drawn = (path.parent / "partition.png").exists()
+    partition = '<img src="partition.png" alt="the fleet shared among the aPads">' if drawn else ""
     page = f"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>vil report: {html.escape(title)}</title>
 <style>
@@ -244,7 +312,8 @@ td:first-child {{ text-align: left; }} img {{ width: 49%; }}
 {table}
 </table>
 <p><img src="battery.png" alt="battery levels"> <img src="active.png" alt="active aMussels over time">
-<img src="uptime.png" alt="uptime per aMussel"> <img src="track.png" alt="aPad track"></p>
+<img src="uptime.png" alt="uptime per aMussel"> <img src="track.png" alt="aPad track">
+{partition}</p>
 <p>GeoJSON of the aPad track and the aMussels' start and end positions: <a href="run.geojson">run.geojson</a></p>
 </body></html>
 """

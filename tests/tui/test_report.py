@@ -48,3 +48,22 @@ def test_report_takes_the_indices_from_result_json(recorded_run: Path, tmp_path:
     page = (out / "index.html").read_text()
     assert "pool12 cautious seed 1" in page and "<td>70.50</td>" in page and "<td>123.4</td>" in page
     assert "paper (Table II)" in page and "<td>74.37</td>" in page  # the paper's row beside ours
+
+
+def test_a_swarm_run_report_draws_the_partition_and_a_single_run_does_not(
+        recorded_run: Path, tmp_path: Path) -> None:
+    from gcs.mission.headless import run_mission
+    from gcs.mission.scenario import load_scenario
+    from gcs.mission.world import LinkOptions
+
+    run = tmp_path / "run"
+    run_mission(load_scenario("pool12x2").with_overrides(duration_s=420.0), run,
+                options=LinkOptions(fail_apads=((2, 200.0),)))
+    out = tmp_path / "report"
+    assert main(["report", str(run), "-o", str(out)]) == 0
+    data = (out / "partition.png").read_bytes()
+    assert data.startswith(PNG_MAGIC) and len(data) > 20_000
+    assert 'src="partition.png"' in (out / "index.html").read_text()
+    single = tmp_path / "single"
+    assert main(["report", str(recorded_run), "-o", str(single)]) == 0
+    assert not (single / "partition.png").exists() and "partition.png" not in (single / "index.html").read_text()
