@@ -92,13 +92,14 @@ class VehicleRegistry:
         self.version = 0  # bumped on every change a screen could show
 
     def believes(self, system_id: int, record: Record) -> bool:
-        """Whether a record that came over a transport from `system_id` may be folded in: a heartbeat
-        of an expected aPad, vehicle telemetry of a known vehicle, an aMussel's status from anyone."""
+        """Whether a record that came over a transport from `system_id` may be folded in: an aMussel's
+        status from anyone; anything else from an expected aPad (or, expecting none in particular, a
+        heartbeat from anyone and telemetry from a vehicle heard)."""
         if isinstance(record, MusselView | GoToSent):
             return True
-        if isinstance(record, Heartbeat):
-            return self.apad_ids is None or system_id in self.apad_ids
-        return system_id in self.vehicles
+        if self.apad_ids is not None:
+            return system_id in self.apad_ids
+        return isinstance(record, Heartbeat) or system_id in self.vehicles
 
     def apply(self, system_id: int, record: Record, now_us: int) -> str | None:
         """Fold one record from `system_id` into the state; a reason if it was refused."""

@@ -22,6 +22,7 @@ from gcs.mission.scenario import Scenario
 from gcs.mission.swarm_run import apad_rows, run_swarm
 from gcs.mission.world import LOCKSTEP_EPOCH_US, LinkOptions, World, lockstep_world
 from gcs.records import checkpoint
+from mavlink_dialect.transport import UdpTransport
 from missiontime import seconds_to_us, us_to_s
 
 ProgressFn = Callable[[float], None]  # receives mission time done, seconds
@@ -57,6 +58,8 @@ def run_mission(
         checkpoint.cut_logs(out_dir, saved, LOCKSTEP_EPOCH_US)  # the stretch after it is simulated again
     world = lockstep_world(scenario, out_dir, options, start_us=saved.time_us if saved else 0,
                            append_logs=saved is not None)
+    if out_dir is not None:
+        _write_endpoints(world, out_dir)
     try:
         if saved is not None:
             checkpoint.restore(world, saved)
@@ -138,6 +141,7 @@ def _result(
                 "apad_bad_data": sum(v.codec.stats.bad_data for v in vehicles)}
     # What each side refused after decoding, by reason (validation, id clashes, handler errors).
     messages |= {f"gcs_dropped.{reason}": n for reason, n in sorted(world.link.dropped.items())}
+    messages |= {f"fleet_dropped.{reason}": n for reason, n in sorted(world.fleet.dropped.items())}
     apad_dropped: Counter[str] = sum((Counter(v.dropped) for v in vehicles), Counter())
     messages |= {f"apad_dropped.{reason}": n for reason, n in sorted(apad_dropped.items())}
     proxied: Counter[str] = Counter()
@@ -165,6 +169,18 @@ def _result(
         whereabouts=whereabouts,
         apads=apads,
     )
+
+
+def _write_endpoints(world: World, out_dir: Path) -> None:
+    """endpoints.json: the UDP ports a run over real sockets opened (ephemeral, so unknowable from
+    outside otherwise): each aPad's, its fault proxy's and the GCS link's. Tests spray them."""
+    apads = {str(s): v.transport for s, v in world.vehicles.items()}
+    ports: dict[str, Any] = {
+        "apad": {s: t.local_port for s, t in apads.items() if isinstance(t, UdpTransport)},
+        "proxy": [p.listen_port for p in world.proxies],
+        "gcs": [t.local_port for t in (p.transport for p in world.link._pollers) if isinstance(t, UdpTransport)],
+    }
+    (out_dir / "endpoints.json").write_text(json.dumps(ports) + "\n")
 
 
 def _write_outputs(world: World, result: RunResult, out_dir: Path) -> None:
