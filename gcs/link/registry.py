@@ -89,6 +89,9 @@ class VehicleRegistry:
         self.apad_ids = None if apad_ids is None else frozenset(apad_ids)
         self.vehicles: dict[int, VehicleView] = {}
         self.mussels = MusselTable()
+        # When (our clock) each aMussel reported alone, as real agents do; the simulated fleet's
+        # batches arrive every second and are not tracked here.
+        self.mussel_heard_us: dict[int, int] = {}
         self.version = 0  # bumped on every change a screen could show
 
     def believes(self, system_id: int, record: Record) -> bool:
@@ -105,7 +108,9 @@ class VehicleRegistry:
         """Fold one record from `system_id` into the state; a reason if it was refused."""
         if isinstance(record, MusselView):
             refused = self.mussels.update(record)
-            self.version += refused is None
+            if refused is None:
+                self.mussel_heard_us[record.mussel_id] = now_us
+                self.version += 1
             return refused
         if isinstance(record, GoToSent):
             if system_id == self.gcs_system_id:  # another GCS's (or a forged) Go To is not our cost

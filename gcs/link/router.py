@@ -95,16 +95,18 @@ def frame_msg_id(frame: bytes) -> int:
 class _TransportPoller:
     """Reads one transport for the scheduler; one parser per transport keeps stream framing apart."""
 
-    def __init__(self, link: Link, transport: Transport) -> None:
+    def __init__(self, link: Link, transport: Transport, forward: frozenset[int] = frozenset()) -> None:
         self.link = link
         self.transport = transport
         self.codec = Codec(GCS_SYSTEM_ID, GCS_COMPONENT_ID)
+        self.forward = forward  # message ids relayed, once accepted, to the other transports
 
     def poll(self) -> bool:
         chunks = self.transport.receive()
         for chunk in chunks:
             for msg in self.codec.decode(chunk):
-                self.link._receive(msg)
+                if self.link._receive(msg) and msg.get_msgId() in self.forward:
+                    self.link._relay(self, bytes(msg.get_msgbuf()))
         return bool(chunks)
 
     def fileno(self) -> int | None:
@@ -152,8 +154,10 @@ class Link:
 
     # --- wiring -----------------------------------------------------------------------------
 
-    def add_transport(self, transport: Transport) -> None:
-        poller = _TransportPoller(self, transport)
+    def add_transport(self, transport: Transport, forward: frozenset[int] = frozenset()) -> None:
+        """Read and write `transport`. `forward`: message ids that, received on it and accepted, are
+        relayed to the other transports (a bridge of real aMussels: the aPads dock by their status)."""
+        poller = _TransportPoller(self, transport, forward)
         if self._signing is not None:
             poller.codec.enable_signing(*self._signing)
         self._pollers.append(poller)
@@ -202,46 +206,54 @@ class Link:
         for poller in self._pollers:
             poller.transport.send(data)
 
-    def _receive(self, msg: Any) -> None:
+    def _receive(self, msg: Any) -> bool:
         """One message from a transport, at the dispatch boundary: whatever it makes a handler
-        raise is counted, logged and kept, and the next message is read."""
+        raise is counted, logged and kept, and the next message is read. True if it was taken."""
         try:
-            self._deliver(None, msg)
+            return self._deliver(None, msg)
         except Exception as exc:  # validation should have stopped it; a bug must not end the link
             name = msg.get_type()
             self.dropped[f"handler_error:{name}"] += 1
             self.errors.append((repr(msg)[:300], f"{type(exc).__name__}: {exc}"[:200]))
             log.warning("handler error on %s: %s: %s", msg, type(exc).__name__, exc)
+            return False
 
-    def _deliver(self, origin: Port | None, msg: Any) -> None:
-        """One decoded message: recorded, read into the registry once, handed to the other parties."""
+    def _relay(self, source: _TransportPoller, data: bytes) -> None:
+        for poller in self._pollers:
+            if poller is not source:
+                poller.transport.send(data)
+
+    def _deliver(self, origin: Port | None, msg: Any) -> bool:
+        """One decoded message: recorded, read into the registry once, handed to the other parties.
+        False if it was refused (and counted)."""
         if self._tlog is not None:
             self._tlog.write(self.clock.now_us, msg.get_msgbuf())
         src = msg.get_srcSystem()
         if origin is None and src in self._local_systems:  # only a local party speaks as itself
             self.dropped[f"spoofed_source:{msg.get_type()}"] += 1
-            return
+            return False
         record = read(msg)
         if isinstance(record, Rejected):
             self.dropped[record.reason] += 1
-            return
+            return False
         if isinstance(record, CommandAck):
             if record.target_system in (0, self.codec.system_id):  # not an answer to another GCS
                 self.commands.on_ack(src, record)
         elif record is not None:
             if origin is None and isinstance(record, MusselView) and record.simulated and len(self._local_systems) > 1:
                 self.dropped["AMUSSEL_STATUS.source"] += 1  # our simulated fleet is a local party
-                return
+                return False
             if origin is None and not self.registry.believes(src, record):
                 self.dropped[f"{msg.get_type()}.system"] += 1  # not a vehicle we expect, or not yet heard
-                return
+                return False
             refused = self.registry.apply(src, record, self.clock.now_us)
             if refused is not None:
                 self.dropped[refused] += 1
-                return
+                return False
         for port in self._ports:
             if port is not origin and port.handler is not None:
                 port.handler(msg)
+        return True
 
     def _deliver_batch(self, msg_id: int, frames: Sequence[bytes], columns: Mapping[str, Any]) -> None:
         if self._tlog is not None:

@@ -13,6 +13,7 @@ from apad_sitl.vocabulary import Latch, Progress
 from gcs.api import ApadApi, CommandError, GeofenceError, Location
 from gcs.link.telemetry import SlotView
 from gcs.mission.control import EndReason, LoopControl, LoopSettings, LoopStatus, MissionEnded, Phase
+from gcs.mission.real_fleet import RealFleet
 from gcs.mission.swarm import FleetShares, orphans, route_conflicts
 from gcs.records.events import EventLog
 from missiontime import Clock, seconds_to_us, us_to_s
@@ -38,6 +39,7 @@ class LoopActions:
         events: EventLog | None = None,
         control: LoopControl | None = None,
         shares: FleetShares | None = None,
+        real: RealFleet | None = None,
     ) -> None:
         """`shares`: with several aPads, the one record of who serves which aMussel (`gcs.mission.swarm`);
         this loop then plans, calls up and fetches only within its aPad's share."""
@@ -51,6 +53,7 @@ class LoopActions:
         self.status = LoopStatus(strategy=settings.mission.collect_strategy)
         self.unreachable: set[int] = set()  # aMussels found outside the geofence (logged once)
         self.shares = shares
+        self.real = real  # estimates of real aMussels between their sparse reports
         self._phase_since_s = clock.time()
 
     # --- primitives with waiting ------------------------------------------------------------
@@ -249,9 +252,15 @@ class LoopActions:
         """The charging pool: ids of active aMussels below the pool threshold, lowest first, that
         the aPad may go to (one outside the geofence, e.g. carried off by a current while it
         floated, is left out with one `unreachable` event instead of being tried again and again)."""
-        ids = self.api.mussels.select((MusselState.ACTIVE,), battery_below=self.settings.mission.pool_threshold)
+        threshold = self.settings.mission.pool_threshold
+        ids = self.api.mussels.select((MusselState.ACTIVE,), battery_below=threshold)
+        if self.real is not None:  # a real one's last report may be old: its estimate decides
+            real = set(self.real.ids())
+            ids = sorted({m for m in ids if m not in real} | set(self.real.below(threshold, self.clock.now_us)))
         out = []
         for m in ids:
+            if m not in self.homes and not self.api.mussels[m].simulated:
+                self.homes[m] = self.api.get_location(m)  # a real aMussel goes back where it was found
             if m not in self.homes or (self.shares is not None and not self.shares.serves(self.apad_id, m)):
                 continue
             if self.api.inside_geofence(self.api.get_location(m)):
@@ -278,7 +287,11 @@ class LoopActions:
         return self.api.mussels[mussel_id].state
 
     def _battery(self, mussel_id: int) -> float:
-        return self.api.mussels[mussel_id].battery_frac
+        """As last reported; for a real aMussel out of the water, estimated since (`RealFleet`)."""
+        view = self.api.mussels[mussel_id]
+        if self.real is not None and not view.simulated and mussel_id in self.real.heard_us:
+            return self.real.estimate(mussel_id, self.clock.now_us).battery_frac
+        return view.battery_frac
 
     def _distance_to(self, mussel_id: int) -> float:
         here, there = self.api.position(self.apad_id), self.api.get_location(mussel_id)

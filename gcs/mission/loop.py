@@ -107,7 +107,7 @@ class EnergySharingLoop(LoopActions):
             mussel_ids=np.array([m.mussel_id for m in candidates], np.int64),
             lat_deg=np.array([m.location.lat for m in candidates]),
             lon_deg=np.array([m.location.lon for m in candidates]),
-            battery_frac=np.array([m.battery_frac for m in candidates]),
+            battery_frac=np.array([self._battery(m.mussel_id) for m in candidates]),
         )
         route = orphaned + plan(self.status.strategy, inp, self._weights)[self.apad_id]
         self.status.route = route

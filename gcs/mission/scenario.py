@@ -77,6 +77,10 @@ class FleetConfig:
     status_rate_hz: float
     sensors_rate_hz: float
     sensor_field: str  # "anoxic_patch" or "dummy"
+    # Real aMussels expected on the bridge (`--bridge`), beside the simulated ones. An id that is
+    # also simulated is refused at start, unless the real one is to replace the simulated one.
+    real_ids: tuple[int, ...] = ()
+    real_replaces_simulated: bool = False
 
 
 @dataclass(frozen=True)
@@ -184,6 +188,24 @@ class _Table:
         if choices is not None and value not in choices:
             raise self.fail(key, f"{value!r} is not one of {', '.join(choices)}")
         return value
+
+    def flag(self, key: str, default: bool = False) -> bool:
+        value = self._take(key, default)
+        if not isinstance(value, bool):
+            raise self.fail(key, f"expected true or false, got {value!r}")
+        return value
+
+    def integers(self, key: str, lo: int, hi: int) -> tuple[int, ...]:
+        """A list of distinct integers in [lo, hi] (default empty)."""
+        value = self._take(key, [])
+        if not isinstance(value, list) or not all(isinstance(v, int) and not isinstance(v, bool) for v in value):
+            raise self.fail(key, f"expected a list of integers, got {value!r}")
+        bad = [v for v in value if out_of_range(v, lo, hi)]
+        if bad:
+            raise self.fail(key, f"{bad[0]} is outside [{lo}, {hi}]")
+        if len(set(value)) != len(value):
+            raise self.fail(key, f"ids must differ, got {value}")
+        return tuple(value)
 
     def duration(self, key: str, default: Any = None) -> float:
         value = self._take(key, default)
@@ -296,6 +318,8 @@ def load_scenario(path: str | Path) -> Scenario:
         status_rate_hz=f.number("status_rate_hz", 1.0, lo=0.01, hi=50.0),
         sensors_rate_hz=f.number("sensors_rate_hz", 0.2, lo=0.01, hi=50.0),
         sensor_field=f.text("sensor_field", "anoxic_patch", ("anoxic_patch", "dummy")),
+        real_ids=f.integers("real_ids", 1, 65535),
+        real_replaces_simulated=f.flag("real_replaces_simulated"),
     )
     if not 0.0 <= fleet.battery_min <= fleet.battery_max <= 1.0:
         raise f.fail("start_battery", "expected 0 <= min <= max <= 1")

@@ -4,6 +4,7 @@ sensor field and the geofence, and a check that reads the scenario's files befor
 from __future__ import annotations
 
 import json
+from collections.abc import Iterable
 from dataclasses import replace
 
 import numpy as np
@@ -26,6 +27,7 @@ def check_inputs(scenario: Scenario) -> None:
     """Read the scenario's area and start configuration now, so a bad file is one `ScenarioError` line
     (file: what is wrong) before any mission starts, never a traceback from the middle of one."""
     path, what = scenario.fleet.area, "area"
+    simulated: Iterable[int] = range(1, scenario.fleet.count + 1)  # a drawn fleet's ids
     try:
         area = load_area(path)  # checks its vertices: finite WGS84 degrees, a valid polygon
         if scenario.fleet.start_config is not None:
@@ -34,6 +36,7 @@ def check_inputs(scenario: Scenario) -> None:
             if config.n != scenario.fleet.count:
                 raise ValueError(f"holds {config.n} aMussels, the scenario says {scenario.fleet.count}")
             _check_inside(config, area)
+            simulated = config.ids.tolist()
     except OSError as exc:
         raise ScenarioError(f"{path}: cannot read the {what}: {exc.strerror or exc}") from None
     except json.JSONDecodeError as exc:
@@ -41,6 +44,7 @@ def check_inputs(scenario: Scenario) -> None:
     except (ValueError, KeyError, TypeError, IndexError, AttributeError) as exc:
         detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise ScenarioError(f"{path}: bad {what}: {detail}") from None
+    _real_and_simulated(scenario, simulated)
 
 
 def _check_inside(config: StartConfig, area: Area) -> None:
@@ -56,7 +60,8 @@ def _check_inside(config: StartConfig, area: Area) -> None:
 
 
 def start_config(scenario: Scenario, area: Area, rng: np.random.Generator) -> tuple[StartConfig, LocalFrame]:
-    """The scenario's saved start configuration, or one drawn from its area with the run's rng."""
+    """The simulated fleet: the scenario's saved start configuration, or one drawn from its area with
+    the run's rng; without the ids of real aMussels that replace simulated ones (`fleet.real_ids`)."""
     frame = area.frame()
     if scenario.fleet.start_config is not None:
         config = load_start_config(scenario.fleet.start_config)
@@ -64,9 +69,30 @@ def start_config(scenario: Scenario, area: Area, rng: np.random.Generator) -> tu
             raise ValueError(
                 f"{scenario.fleet.start_config}: holds {config.n} aMussels, the scenario says {scenario.fleet.count}"
             )
-        return config, frame
-    battery = (scenario.fleet.battery_min, scenario.fleet.battery_max)
-    return generate_start_config(area, scenario.fleet.count, frame, rng, battery_range=battery), frame
+    else:
+        battery = (scenario.fleet.battery_min, scenario.fleet.battery_max)
+        config = generate_start_config(area, scenario.fleet.count, frame, rng, battery_range=battery)
+    return _without_real(scenario, config), frame
+
+
+def _real_and_simulated(scenario: Scenario, simulated_ids: Iterable[int]) -> list[int]:
+    """Ids both real and simulated: refused, unless the real ones replace the simulated ones."""
+    f = scenario.fleet
+    both = sorted(set(f.real_ids) & {int(i) for i in simulated_ids})
+    if both and not f.real_replaces_simulated:
+        raise ScenarioError(
+            f"{scenario.path}: fleet.real_ids: {', '.join(map(str, both))} also simulated aMussel id(s); "
+            "give the real ones other ids, or set fleet.real_replaces_simulated = true")
+    return both
+
+
+def _without_real(scenario: Scenario, config: StartConfig) -> StartConfig:
+    """Refuse an id both real and simulated, or (the scenario says so) drop the simulated one."""
+    both = _real_and_simulated(scenario, config.ids)
+    if not both:
+        return config
+    keep = ~np.isin(config.ids, both)
+    return StartConfig(config.ids[keep], config.lat_deg[keep], config.lon_deg[keep], config.battery_frac[keep])
 
 
 def fleet_params(scenario: Scenario) -> FleetParams:

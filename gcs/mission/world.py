@@ -19,6 +19,7 @@ from gcs.api import ApadApi, Location
 from gcs.link.faultproxy import FaultProxy, LinkFaults
 from gcs.link.router import Link
 from gcs.mission.loop import EnergySharingLoop, LoopControl, LoopSettings
+from gcs.mission.real_fleet import RealFleet
 from gcs.mission.scenario import ApadConfig, Scenario
 from gcs.mission.scenario_models import apad_params, fleet_params, geofence_ring, sensor_field, start_config
 from gcs.mission.swarm import FleetShares
@@ -26,6 +27,7 @@ from gcs.records.events import EventLog
 from mavlink_dialect import Codec, Transport, mavlink, memory_pair, open_transport, signing
 from mavlink_dialect.transport import UdpTransport
 from missiontime import Clock, VirtualClock, seconds_to_us
+from mussel_sim.battery import discharge_profile
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner
 from mussel_sim.fleet_state import initial_state
 from mussel_sim.geo import LocalFrame
@@ -53,6 +55,9 @@ class LinkOptions:
     faults: LinkFaults | None = None  # not None: embedded aPad over real UDP through a FaultProxy
     signing_key: bytes | None = None  # MAVLink 2 signing on both ends
     geofence_buffer_m: float | None = GEOFENCE_BUFFER_M  # None: no geofence
+    # Where real aMussels report (AMUSSEL_STATUS, simulated = 0): an address the GCS listens on
+    # (udp:HOST:PORT, serial:DEV). Their statuses are relayed to the aPads, which dock by them.
+    bridge: str | None = None
     # Embedded aPads that go silent for good at a mission time: (system id, t_s) (`vil run --fail-apad`).
     fail_apads: tuple[tuple[int, float], ...] = ()
 
@@ -83,6 +88,7 @@ class World:
     events: EventLog
     vehicles: dict[int, SitlVehicle] = field(default_factory=dict)  # the embedded SITL aPads, by system id
     proxies: list[FaultProxy] = field(default_factory=list)  # fault-injection proxies, one per embedded aPad
+    real: RealFleet | None = None  # estimates of the real aMussels heard on the bridge
     geofence_deg: list[tuple[float, float]] = field(default_factory=list)  # (lat, lon) ring; empty: none
 
     @property
@@ -120,7 +126,8 @@ class World:
         )
         clock = clock or self.clock
         api = self.api if clock is self.clock else self.api.on_clock(clock)
-        return EnergySharingLoop(api, clock, settings, self.homes, a.system_id, self.events, control, shares)
+        return EnergySharingLoop(api, clock, settings, self.homes, a.system_id, self.events, control, shares,
+                                 self.real)
 
     def close(self) -> None:
         for vehicle in self.vehicles.values():
@@ -178,6 +185,11 @@ def build_world(
         for i, lat, lon in zip(config.ids, config.lat_deg, config.lon_deg, strict=True)
     }
     world = World(scenario, clock, link, api, fleet, frame, config, homes, events, geofence_deg=fence)
+    world.real = RealFleet(link.registry.mussels, link.registry.mussel_heard_us,
+                           discharge_profile(scenario.fleet.discharge), scenario.mission.theta)
+    if options.bridge is not None:
+        link.add_transport(open_transport(options.bridge, listen=True),
+                           forward=frozenset({mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS}))
     if options.connect is not None:
         for address in options.connect.split(","):
             link.add_transport(open_transport(address.strip()))

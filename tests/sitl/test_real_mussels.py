@@ -1,0 +1,91 @@
+"""Real aMussels beside simulated ones: a separate process plays real agents reporting sparsely over
+UDP to the GCS's bridge; the planner serves both; an id that is both real and simulated is refused."""
+
+from __future__ import annotations
+
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from gcs.cli import main
+from gcs.mission.control import LoopControl
+from gcs.mission.scenario import load_scenario
+from gcs.mission.world import LinkOptions, build_world
+from missiontime import PacedClock
+
+pytestmark = pytest.mark.sitl
+ROOT = Path(__file__).resolve().parents[2]
+MISSIONS = ROOT / "missions"
+REAL = {101: (43.94002, 15.43990), 102: (43.93998, 15.43995)}  # in the pool, near the aPad's home
+
+
+def _scenario(tmp_path: Path, extra: str) -> Path:
+    text = (MISSIONS / "pool12.toml").read_text()
+    text = text.replace('"areas/', f'"{MISSIONS}/areas/').replace('"starts/', f'"{MISSIONS}/starts/')
+    text = text.replace("[fleet]\n", f"[fleet]\n{extra}\n").replace('duration = "40m"', 'duration = "15m"')
+    path = tmp_path / "pool12_real.toml"
+    path.write_text(text)
+    return path
+
+
+def _free_udp_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def test_real_amussels_on_the_bridge_are_served_beside_the_simulated_fleet(tmp_path: Path) -> None:
+    scenario = load_scenario(_scenario(tmp_path, "real_ids = [101, 102]"))
+    port = _free_udp_port()
+    world = build_world(scenario, PacedClock(20.0), tmp_path / "run", LinkOptions(bridge=f"udp:127.0.0.1:{port}"))
+    mussels = [f"--mussel={m}:{lat},{lon}" for m, (lat, lon) in REAL.items()] + ["--mussel=5:43.94,15.44"]
+    agent = subprocess.Popen([sys.executable, str(ROOT / "tests/sitl/real_mussel_agent.py"), "--gcs",
+                              f"127.0.0.1:{port}", *mussels, "--duration", "60"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        world.api.wait_apad(timeout_s=10.0)
+        world.request_telemetry()
+        while not all(m in world.api.mussels for m in REAL):  # the agent's first sparse reports
+            assert world.clock.time() < 300.0 and agent.poll() is None, "no report from the real aMussels"
+            world.clock.sleep(1.0)
+        control = LoopControl()
+        loop = world.mission_loop(control)
+        # Stop once a real aMussel is on board (or at the mission's end).
+        control.before_wait = lambda: any(m in REAL for _, m in loop.status.dockings)
+        loop.run()
+        estimate = world.real.estimate(101, world.clock.now_us) if world.real else None
+        dropped = dict(world.link.dropped)
+        table = world.api.mussels
+        simulated_5 = table[5].simulated
+    finally:
+        world.close()
+        agent.terminate()
+        out, err = agent.communicate(timeout=10)
+    docked = [m for _, m in loop.status.dockings]
+    assert any(m in REAL for m in docked), f"no real aMussel docked: {docked}"
+    route = set(loop.status.route)
+    assert route & set(REAL) and route - set(REAL)  # one plan over real and simulated aMussels alike
+    assert f"SURFACE {next(m for m in docked if m in REAL)}" in out.splitlines(), out + err
+    # One fleet to the planner: the real ones got homes (where they were found) like the simulated.
+    assert set(REAL) <= set(loop.homes) and len(loop.homes) == 12 + len(REAL)
+    # The real one reporting a simulated aMussel's id was refused, never believed.
+    assert dropped.get("AMUSSEL_STATUS.id_collision", 0) >= 1 and simulated_5
+    # Between reports the GCS estimates, and says how old its knowledge is.
+    assert estimate is not None and estimate.age_s >= 0.0 and estimate.battery_frac <= estimate.reported_battery_frac
+
+
+def test_an_id_both_real_and_simulated_is_refused_at_start(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    clash = _scenario(tmp_path, "real_ids = [101, 5]")
+    assert main(["run", str(clash), "--out", str(tmp_path / "runs")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "fleet.real_ids: 5 also simulated" in err
+    # Unless the scenario says the real one replaces the simulated one: then the simulated fleet is 11.
+    replaced = load_scenario(_scenario(tmp_path, "real_ids = [101, 5]\nreal_replaces_simulated = true"))
+    world = build_world(replaced, PacedClock(1000.0))
+    try:
+        assert 5 not in world.start.ids.tolist() and len(world.start.ids) == 11
+    finally:
+        world.close()
