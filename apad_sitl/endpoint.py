@@ -120,8 +120,9 @@ class SitlVehicle:
 
         if log_dir is not None:
             self.log = VehicleLog(Path(log_dir), f"apad{system_id}", log_epoch_us, append=log_append)
-            self.event("start", system_id=system_id, home_lat_deg=home_lat_deg, home_lon_deg=home_lon_deg,
-                       current_mps=list(current_mps))
+        # Logged at attach, stamped with the mission time then (a resumed mission's aPad starts late).
+        self._start_fields = {"system_id": system_id, "home_lat_deg": home_lat_deg, "home_lon_deg": home_lon_deg,
+                              "current_mps": list(current_mps)}
 
     # ------------------------------------------------------------------ lifecycle
 
@@ -134,6 +135,7 @@ class SitlVehicle:
             raise RuntimeError("vehicle already attached to a scheduler")
         self._scheduler = scheduler
         self.now_us = max(self.now_us, start_us)
+        self.event("start", **self._start_fields)
         name = f"apad{self.system_id}"
         self._physics_task = scheduler.every(1.0 / self.physics_hz, self._physics, f"{name}.physics", start_us)
         self.streams.attach(scheduler, start_us, name)

@@ -10,11 +10,14 @@ signing timestamps beside them (`signing_path`, see `mavlink_dialect.signing_sta
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 from mavlink_dialect.tlog import TlogWriter
-from missiontime import us_to_s
+from missiontime import seconds_to_us, us_to_s
+
+EVENTS_SUFFIX = ".events.jsonl"
 
 
 class VehicleLog:
@@ -22,7 +25,7 @@ class VehicleLog:
         """`append` continues existing logs (the mission resumed after a GCS crash)."""
         log_dir.mkdir(parents=True, exist_ok=True)
         self.tlog_path = log_dir / f"{stem}.tlog"
-        self.events_path = log_dir / f"{stem}.events.jsonl"
+        self.events_path = log_dir / f"{stem}{EVENTS_SUFFIX}"
         self.signing_path = log_dir / f"{stem}.signing.json"
         self.epoch_us = epoch_us
         self._tlog = TlogWriter(self.tlog_path, epoch_us, append)
@@ -46,3 +49,19 @@ class VehicleLog:
         self._tlog.close()
         if not self._events.closed:
             self._events.close()
+
+
+def event_records(path: Path) -> Iterator[tuple[int, int, bool]]:
+    """Each line of an aPad event log as (mission time in us, its length in bytes, whether it is whole):
+    what `gcs.records.checkpoint.cut_logs` needs to cut the log back to a checkpoint. A line a crash
+    cut short (no newline, or not a record) is not whole; nothing is read past it."""
+    with path.open("rb") as f:
+        for line in f:
+            try:
+                record = json.loads(line) if line.endswith(b"\n") else None
+                t_us = seconds_to_us(float(record["t_s"])) if isinstance(record, dict) else None
+            except (ValueError, KeyError, TypeError):
+                t_us = None
+            yield (t_us or 0, len(line), t_us is not None)
+            if t_us is None:
+                return

@@ -264,21 +264,22 @@ class PacedClock(VirtualClock):
 
     def __init__(
         self, speed: float, monotonic: Callable[[], float] = time.monotonic,
-        wait: Callable[[float], None] = time.sleep,
+        wait: Callable[[float], None] = time.sleep, start_us: int = 0,
     ) -> None:
-        """`monotonic` and `wait` are the wall clock it keeps pace with (tests pass their own)."""
-        super().__init__()
+        """`monotonic` and `wait` are the wall clock it keeps pace with (tests pass their own);
+        `start_us` > 0 starts the clock later (a resumed mission), paced from then on."""
+        super().__init__(start_us=start_us)
         if speed <= 0:
             raise ValueError(f"speed must be positive, got {speed}")
         self.speed = speed
         self._monotonic, self._wait = monotonic, wait
-        self._wall0 = monotonic()
+        self._wall0, self._start_us = monotonic(), start_us
 
     def sleep(self, dt_s: float) -> None:
         target_us = self.now_us + seconds_to_us(max(dt_s, 0.0))
         while True:
             self.advance_to(min(target_us, self.now_us + 100_000))
-            ahead_s = us_to_s(self.now_us) / self.speed - (self._monotonic() - self._wall0)
+            ahead_s = us_to_s(self.now_us - self._start_us) / self.speed - (self._monotonic() - self._wall0)
             if ahead_s > 0:
                 self._wait(ahead_s)
             if self.now_us >= target_us:

@@ -2,6 +2,7 @@
 
     vil gcs --sitl                                   # demo: embedded SITL aPad, pool12
     vil gcs --connect udp:127.0.0.1:14550 --scenario missions/pool12.toml
+    vil gcs --sitl --resume                          # continue the console mission that crashed
     vil replay runs/latest --speed 16                # the last run; or runs/pool12-cautious-seed1-run1
 
 Everything `vil gcs` is given (scenario and its files, address, output folder) is opened before the
@@ -16,11 +17,16 @@ import json
 import shutil
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from gcs.mission import flags
-from gcs.mission.scenario import MAX_DURATION_S, MISSIONS_DIR, ScenarioError, load_scenario
+from gcs.mission.scenario import MAX_DURATION_S, MISSIONS_DIR, Scenario, ScenarioError, load_scenario
 from gcs.records import rundirs
 from mavlink_dialect.signing import SigningKeyError, load_key
+from missiontime import unix_time_us
+
+if TYPE_CHECKING:
+    from gcs.console.runner import ResumePoint
 
 DEFAULT_SCENARIO = MISSIONS_DIR / "pool12.toml"
 SPEED_RANGE = (0.1, 1000.0)  # x real time, for a paced SITL world and for replays
@@ -41,6 +47,10 @@ def add_gcs_arguments(parser: argparse.ArgumentParser) -> None:
                         help="write gcs.tlog and events.jsonl here (default: a new runs/console-NAME-runK, "
                              "and runs/latest points at it)")
     parser.add_argument("--paused", action="store_true", help="start with the scenario loop paused")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue the mission of a console that crashed, from its last checkpoint: the "
+                             "newest runs/console-NAME-runK holding one (or --out DIR); docked aMussels are not "
+                             "called up again")
     parser.add_argument("--signing-key", type=Path, metavar="FILE",
                         help="MAVLink 2 signing with the passphrase in FILE (default: $VIL_SIGNING_KEY if set); "
                              "the aPad's unsigned frames are then refused")
@@ -50,6 +60,7 @@ def run_gcs(args: argparse.Namespace) -> int:
     from gcs.console.app import LiveConsole
     from gcs.console.runner import ConsoleConfig, ConsoleRunner, open_world
     from gcs.mission.scenario_models import check_inputs
+    from gcs.records.checkpoint import CheckpointError
 
     path = Path(args.scenario) if args.scenario else DEFAULT_SCENARIO
     try:
@@ -62,23 +73,37 @@ def run_gcs(args: argparse.Namespace) -> int:
     if args.speed is not None and not args.sitl:
         print("vil gcs: --speed needs --sitl (a real aPad runs in real time)", file=sys.stderr)
         return 2
-    try:
-        out = args.out or rundirs.new_run_dir(Path("runs"), f"console-{scenario.name}")
-        out.mkdir(parents=True, exist_ok=True)
-        (out / "console.json").write_text(json.dumps({"scenario": scenario.name,
-                                                      "scenario_path": str(path.resolve())}))
-    except OSError as exc:
-        print(f"vil gcs: cannot write the logs in {args.out or 'runs'}: {exc.strerror or exc}", file=sys.stderr)
+    if len(scenario.apads) > 1:
+        print(f"vil gcs: the console serves one aPad; {path} has {len(scenario.apads)} (use vil run)", file=sys.stderr)
         return 2
+    stem = f"console-{scenario.name}"
+    if args.resume:
+        try:
+            out, epoch_us, resume = _resume_point(args.out, stem, scenario)
+        except CheckpointError as exc:
+            print(f"vil gcs: {exc}", file=sys.stderr)
+            return 2
+    else:
+        epoch_us, resume = unix_time_us(), None
+        try:
+            out = args.out or rundirs.new_run_dir(Path("runs"), stem)
+            out.mkdir(parents=True, exist_ok=True)
+            (out / CONSOLE_JSON).write_text(json.dumps({"scenario": scenario.name, "scenario_path": str(path.resolve()),
+                                                        "epoch_us": epoch_us}))
+        except OSError as exc:
+            print(f"vil gcs: cannot write the logs in {args.out or 'runs'}: {exc.strerror or exc}", file=sys.stderr)
+            return 2
     config = ConsoleConfig(
         scenario, connect=args.connect, sitl=args.sitl_link if args.sitl else None, speed=args.speed,
-        out_dir=out, start_paused=args.paused, signing_key=key,
+        out_dir=out, start_paused=args.paused, signing_key=key, epoch_us=epoch_us, resume=resume,
     )
     try:  # open everything now: what cannot be used is refused before the console starts
         world = open_world(config)
-    except (OSError, ValueError) as exc:  # AddressError is a ValueError
-        if args.out is None:
+    except (OSError, ValueError, CheckpointError) as exc:  # AddressError is a ValueError
+        if args.out is None and resume is None:
             shutil.rmtree(out, ignore_errors=True)  # the folder made for this run holds nothing
+        if resume is not None:
+            resume.files.close()
         print(f"vil gcs: {exc}", file=sys.stderr)
         return 2
     if args.out is None:
@@ -95,6 +120,31 @@ def run_gcs(args: argparse.Namespace) -> int:
 
 
 QUIT_TIMEOUT_S = 150.0
+CONSOLE_JSON = "console.json"  # in a console's run folder: its scenario, and the Unix time of mission time 0
+
+
+def _resume_point(out: Path | None, stem: str, scenario: Scenario) -> tuple[Path, int, ResumePoint]:
+    """The folder, log epoch and checkpoint of the console mission to resume; `CheckpointError` (one
+    line) if there is none or it is unusable. The folder's logs are cut back to the checkpoint."""
+    from gcs.console.runner import ResumePoint
+    from gcs.records.checkpoint import CHECKPOINT_NAME, CheckpointError, CheckpointFiles, cut_logs, scenario_key
+
+    if out is None:
+        out = rundirs.newest_run_dir(Path("runs"), stem, holding=CHECKPOINT_NAME)
+        if out is None:
+            raise CheckpointError(f"nothing to resume: no runs/{stem}-runK holds a {CHECKPOINT_NAME}")
+    files = CheckpointFiles(out / CHECKPOINT_NAME)
+    saved = files.read()
+    try:
+        epoch_us = json.loads((out / CONSOLE_JSON).read_text(encoding="utf-8"))["epoch_us"]
+        if not isinstance(epoch_us, int) or isinstance(epoch_us, bool):
+            raise TypeError
+    except (OSError, ValueError, KeyError, TypeError):
+        raise CheckpointError(f"{out / CONSOLE_JSON} does not say when the mission began (epoch_us)") from None
+    if saved.run_key != scenario_key(scenario):
+        raise CheckpointError(f"the checkpoint in {out} is of run {saved.run_key}, not {scenario_key(scenario)}")
+    cut_logs(out, saved, epoch_us)  # the stretch after it runs again: each event logged once
+    return out, epoch_us, ResumePoint(files, saved)
 
 
 def add_replay_arguments(parser: argparse.ArgumentParser) -> None:

@@ -9,11 +9,17 @@ talks to it only through thread-safe doors:
   loop's waits (never inside another command's ACK wait), or while the loop is not running;
 - `snapshot`: a frozen `Snapshot` (copies) replaced at 10 Hz when something changed.
 
+With an output folder the mission checkpoints itself there every `CHECKPOINT_PERIOD_S` of mission
+time (deleted when the loop ends), so `vil gcs --resume` continues it after a crash: the world is
+built on a clock starting at the checkpoint's time, the saved state put back, and the loop first
+settles what the crash interrupted (`EnergySharingLoop.run(resume=True)`).
+
 Nothing here imports Textual: tests drive a runner directly.
 """
 
 from __future__ import annotations
 
+import json
 import queue
 import threading
 from dataclasses import dataclass
@@ -24,11 +30,14 @@ import numpy as np
 from apad_sitl.vocabulary import Latch, Primitive, Progress
 from gcs.api import CommandError
 from gcs.console.model import ConsoleModel, Snapshot, area_outline
+from gcs.mission.accounting import account
 from gcs.mission.loop import EnergySharingLoop, LoopControl
 from gcs.mission.scenario import Scenario
 from gcs.mission.world import LinkOptions, World, build_world
-from gcs.records.events import Event
-from missiontime import Clock, PacedClock, WallClock, unix_time_us, us_to_s
+from gcs.records import checkpoint
+from gcs.records.checkpoint import CHECKPOINT_NAME, CHECKPOINT_PERIOD_S, Checkpoint, CheckpointFiles
+from gcs.records.events import EVENTS_NAME, Event
+from missiontime import Clock, PacedClock, Task, WallClock, seconds_to_us, unix_time_us, us_to_s
 from mussel_sim.placement import load_area
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
@@ -65,6 +74,15 @@ OperatorCommand = Hold | GoToMussel | DockMussel | UndockMussel
 
 
 @dataclass(frozen=True)
+class ResumePoint:
+    """A crashed console mission to continue: its checkpoint's files (the same instance goes on
+    saving, it knows where the side files' valid rows end) and what they held."""
+
+    files: CheckpointFiles
+    checkpoint: Checkpoint
+
+
+@dataclass(frozen=True)
 class ConsoleConfig:
     scenario: Scenario
     connect: str | None = None  # udp:HOST:PORT of a real or separate SITL aPad
@@ -74,15 +92,30 @@ class ConsoleConfig:
     start_paused: bool = False  # connect and show, but start the loop only on resume
     connect_timeout_s: float = 5.0
     signing_key: bytes | None = None  # MAVLink 2 signing on the aPad link (`vil gcs --signing-key`)
+    epoch_us: int | None = None  # Unix time of mission time 0 in the logs (None: now)
+    resume: ResumePoint | None = None  # continue this checkpoint's mission (`vil gcs --resume`)
 
 
 def open_world(config: ConsoleConfig) -> World:
-    """The mission's world on the console's clock, with a remote aPad or the embedded SITL one."""
+    """The mission's world on the console's clock, with a remote aPad or the embedded SITL one; a
+    resumed one starts at the checkpoint's time with its state put back (`CheckpointError` if it
+    is another run's)."""
     if (config.connect is None) == (config.sitl is None):
         raise ValueError("give exactly one of connect or sitl")
-    clock: Clock = WallClock() if config.speed is None else PacedClock(config.speed)
+    saved = config.resume.checkpoint if config.resume is not None else None
+    start_us = saved.time_us if saved is not None else 0
+    clock: Clock = WallClock(start_us=start_us) if config.speed is None else PacedClock(config.speed, start_us=start_us)
     options = LinkOptions(connect=config.connect, sitl_medium=config.sitl or "memory", signing_key=config.signing_key)
-    return build_world(config.scenario, clock, config.out_dir, options, epoch_us=unix_time_us())
+    epoch_us = unix_time_us() if config.epoch_us is None else config.epoch_us
+    world = build_world(config.scenario, clock, config.out_dir, options, epoch_us=epoch_us,
+                        mission_start_us=0 if saved is not None else None, append_logs=saved is not None)
+    if saved is not None:
+        try:
+            checkpoint.restore(world, saved)
+        except checkpoint.CheckpointError:
+            world.close()
+            raise
+    return world
 
 
 class ConsoleRunner:
@@ -103,6 +136,7 @@ class ConsoleRunner:
         self._model: ConsoleModel | None = None
         self._last_event: Event | None = None
         self._published: tuple[int, bool, str | None, str] = (-1, False, None, "")
+        self._checkpoints: CheckpointFiles | None = config.resume.files if config.resume else None
 
     # --- the UI's doors (any thread) -------------------------------------------------------------
 
@@ -149,6 +183,8 @@ class ConsoleRunner:
             self._publish(world.clock.now_us)
             raise
         finally:
+            if self._checkpoints is not None:
+                self._checkpoints.close()  # kept: the mission did not end, so it can be resumed
             world.close()
             self.finished.set()
 
@@ -161,6 +197,8 @@ class ConsoleRunner:
             world.start.ids.astype(np.int64), area_outline(load_area(s.fleet.area).geometry),
         )
         model.strategy = s.mission.collect_strategy  # until the loop says otherwise
+        if self.config.resume is not None:
+            self._replay_history(model, self.config.resume.checkpoint)
         self._model = model
         clock.scheduler.every(PUBLISH_PERIOD_S, self._publish, "console.publish", clock.now_us)
         clock.scheduler.every(SAMPLE_PERIOD_S, lambda now_us: model.sample(us_to_s(now_us)), "console.sample",
@@ -176,13 +214,57 @@ class ConsoleRunner:
             # Operator commands run between the loop's waits; a quit-now ends it at one (never mid-dock).
             self.control.before_wait = lambda: self._before_wait(world)
             self.loop = loop = world.mission_loop(self.control)
+            if self.config.resume is not None:
+                loop.status = self.config.resume.checkpoint.loop_status
+            task = self._start_checkpoints(world, loop)
             self._notice = ""
-            end = loop.run()
+            end = loop.run(resume=self.config.resume is not None)
+            if task is not None:
+                task.active = False
+            if self._checkpoints is not None:
+                self._checkpoints.remove()  # the mission ended: nothing to resume
+                self._checkpoints = None
             self._notice = f"mission ended: {end}"
         while not self._quit.is_set():  # telemetry and manual commands go on until the operator quits
             self._serve()
             clock.sleep(PUBLISH_PERIOD_S)
         self._leave_holding(world)
+        self._log_whereabouts(world)
+
+    def _start_checkpoints(self, world: World, loop: EnergySharingLoop) -> Task | None:
+        """Save the mission every `CHECKPOINT_PERIOD_S` of mission time (with an output folder)."""
+        out = self.config.out_dir
+        if out is None:
+            return None
+        if self._checkpoints is None:
+            self._checkpoints = CheckpointFiles(out / CHECKPOINT_NAME)
+        files = self._checkpoints
+        return world.clock.scheduler.every(
+            CHECKPOINT_PERIOD_S, lambda now_us: checkpoint.save(files, checkpoint.capture(world, loop)),
+            "console.checkpoint", world.clock.now_us + seconds_to_us(CHECKPOINT_PERIOD_S))
+
+    def _replay_history(self, model: ConsoleModel, saved: Checkpoint) -> None:
+        """A resumed console shows the mission so far: the events logged up to the checkpoint."""
+        out = self.config.out_dir
+        if out is None:
+            return
+        with (out / EVENTS_NAME).open("rb") as f:
+            head = f.read(saved.events_bytes)
+        for line in head.decode("utf-8", "replace").splitlines():
+            try:
+                record = json.loads(line)
+                model.event(Event(float(record.pop("t_s")), str(record.pop("event")), record))
+            except (ValueError, KeyError, TypeError, AttributeError):
+                continue  # the console's history is for show; the mission does not depend on it
+
+    def _log_whereabouts(self, world: World) -> None:
+        """Where every aMussel is as the console quits: on the seabed, on a slot, or lost (and why)."""
+        homes = {m: (h.lat, h.lon) for m, h in world.homes.items()}
+        accounts = account(world.fleet.state, world.frame, homes, world.link.vehicles)
+        world.events.emit(world.clock.time(), "whereabouts",
+                          seabed=[a.mussel_id for a in accounts if a.where == "seabed"],
+                          slot=[a.mussel_id for a in accounts if a.where == "slot"],
+                          lost={str(a.mussel_id): a.detail for a in accounts if a.lost})
 
     def _before_wait(self, world: World) -> bool:
         """The loop's hook: run queued operator commands; True ends the mission (quit now, no dock running)."""
@@ -309,5 +391,6 @@ __all__ = [
     "GoToMussel",
     "Hold",
     "OperatorCommand",
+    "ResumePoint",
     "UndockMussel",
 ]

@@ -37,13 +37,14 @@ import os
 import pickle
 import struct
 import zlib
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
 import numpy as np
 
+from apad_sitl import logs as apad_logs
 from apad_sitl.primitives import PrimitiveState
 from apad_sitl.vehicle import VehicleState
 from gcs.link.registry import VehicleRegistry
@@ -55,11 +56,13 @@ from mussel_sim.recorder import Recorder, RecorderHead, RecorderRows
 
 if TYPE_CHECKING:
     from gcs.mission.loop import EnergySharingLoop
+    from gcs.mission.scenario import Scenario
     from gcs.mission.world import World
 
 CHECKPOINT_NAME = "checkpoint.pkl"
 CHECKPOINT_PERIOD_S = 10.0  # mission time between checkpoints
 FORMAT_VERSION = 3
+RESTORE_SLACK_US = 30_000_000  # a wall clock started at the checkpoint's time runs on while the world is built
 STEPS_SUFFIX = ".steps"  # side files beside CHECKPOINT_NAME
 TRACES_SUFFIX = ".traces"
 
@@ -93,9 +96,13 @@ class Checkpoint:
     events_bytes: int = 0  # how long events.jsonl was
 
 
-def run_key(world: World) -> tuple[str, str, int]:
-    s = world.scenario
+def scenario_key(s: Scenario) -> tuple[str, str, int]:
+    """The run a scenario makes: a checkpoint resumes only its own."""
     return (s.name, s.mission.collect_strategy, s.seed)
+
+
+def run_key(world: World) -> tuple[str, str, int]:
+    return scenario_key(world.scenario)
 
 
 def capture(world: World, loop: EnergySharingLoop) -> Checkpoint:
@@ -296,23 +303,29 @@ def _one_line(exc: BaseException) -> str:
 
 def cut_logs(out_dir: Path, ckpt: Checkpoint, epoch_us: int) -> None:
     """Cut the run's logs back to the checkpoint: events.jsonl to its length then, each .tlog (the GCS's
-    and the aPad's, stamped `epoch_us` + mission time) before the checkpoint's mission time."""
+    and the aPad's, stamped `epoch_us` + mission time) and each aPad's event log (stamped with mission
+    time) before the checkpoint's mission time."""
     try:
         events = out_dir / EVENTS_NAME
         if events.exists() and events.stat().st_size > ckpt.events_bytes:
             os.truncate(events, ckpt.events_bytes)
         for path in sorted(out_dir.glob("*.tlog")):
-            _cut_tlog(path, epoch_us + ckpt.time_us)
+            _cut(path, ((stamp, 8 + len(frame), _whole(frame)) for stamp, frame in tlog.frames(path)),
+                 epoch_us + ckpt.time_us)
+        for path in sorted(out_dir.glob(f"*{apad_logs.EVENTS_SUFFIX}")):
+            _cut(path, apad_logs.event_records(path), ckpt.time_us)
     except (OSError, tlog.TlogError) as exc:
         raise CheckpointError(f"cannot cut the logs in {out_dir} back to the checkpoint: {_one_line(exc)}") from None
 
 
-def _cut_tlog(path: Path, stamp_us: int) -> None:
+def _cut(path: Path, records: Iterable[tuple[int, int, bool]], stamp_us: int) -> None:
+    """Truncate a log of (stamp, length in bytes, whole) records before the first stamped at or after
+    `stamp_us` (logged again after the resume) or cut short by the crash."""
     size, offset = path.stat().st_size, 0
-    for stamp, frame in tlog.frames(path):
-        if stamp >= stamp_us or not _whole(frame):  # simulated again after the resume, or cut by the crash
+    for stamp, length, whole in records:
+        if stamp >= stamp_us or not whole:
             break
-        offset += 8 + len(frame)
+        offset += length
     if offset < size:
         os.truncate(path, offset)
 
@@ -328,10 +341,11 @@ def _whole(frame: bytes) -> bool:
 
 
 def restore(world: World, ckpt: Checkpoint) -> None:
-    """Put the saved state into a freshly built world whose clock stands at `ckpt.time_us`."""
+    """Put the saved state into a freshly built world whose clock started at `ckpt.time_us` (a wall
+    clock has run on a little since: the fleet's next step still falls a step after the saved time)."""
     if ckpt.run_key != run_key(world):
         raise CheckpointError(f"the checkpoint is of run {ckpt.run_key}, not {run_key(world)}")
-    if world.clock.now_us != ckpt.time_us:
+    if not 0 <= world.clock.now_us - ckpt.time_us <= RESTORE_SLACK_US:
         raise CheckpointError("the world's clock must start at the checkpoint's mission time")
     fleet = world.fleet
     if not (np.array_equal(ckpt.recorder.ids, fleet.recorder.ids)

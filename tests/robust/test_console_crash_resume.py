@@ -1,0 +1,173 @@
+"""kill -9 of a real `vil gcs --sitl` console mid-mission, with aMussels docked, then `vil gcs --resume`.
+
+The console runs as the operator runs it: its own process on a pseudo-terminal (Textual's real
+terminal driver draws into it; the test reads and discards the drawing, and presses q like a
+person). The world is the embedded SITL aPad on a paced lockstep clock, 200x real time.
+
+Checked: the resumed mission goes on from the last checkpoint's mission time in the same folder, each
+event is in events.jsonl once (and each aPad event and .tlog frame once, in time order), the aMussels
+docked at the crash are released before any of them is called up again, and when the console quits
+every aMussel is on the seabed or on a slot, none lost.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import json
+import os
+import pty
+import signal
+import struct
+import subprocess
+import sys
+import termios
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from gcs.mission.control import Phase
+from gcs.records import checkpoint
+from gcs.records.checkpoint import CHECKPOINT_NAME, load
+from mavlink_dialect import tlog
+from mussel_sim.vocabulary import MusselState
+
+pytestmark = [pytest.mark.sitl, pytest.mark.slow, pytest.mark.tui]
+
+VIL = [sys.executable, "-m", "gcs.cli"]
+GCS = ["gcs", "--sitl", "--speed", "200"]
+ROOT = Path(__file__).resolve().parents[2]
+RUN = Path("runs") / "console-pool12-run1"
+WALL_TIMEOUT_S = 120.0
+KILL_AFTER_S = 450.0  # mission time: the second charging cycle, with a history before it
+
+
+class Console:
+    """`vil gcs ARGS` on a pseudo-terminal of 150 x 46 whose screen output is read and dropped."""
+
+    def __init__(self, cwd: Path, *args: str) -> None:
+        master, slave = pty.openpty()
+        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 46, 150, 0, 0))
+        env = {**os.environ, "TERM": "xterm-256color", "PYTHONPATH": str(ROOT)}
+        self.stdout = cwd / f"stdout-{time.monotonic_ns()}.txt"
+        with self.stdout.open("wb") as out:  # the one line `vil gcs` prints after the console closes
+            self.proc = subprocess.Popen([*VIL, *GCS, *args], cwd=cwd, stdin=slave, stdout=out, stderr=slave,
+                                         env=env, start_new_session=True)
+        os.close(slave)
+        self.master = master
+        self.tail = bytearray()  # the last screen bytes, for a failure message
+        threading.Thread(target=self._drain, daemon=True).start()
+
+    def _drain(self) -> None:
+        while True:
+            try:
+                data = os.read(self.master, 1 << 16)
+            except OSError:  # the process is gone
+                return
+            if not data:
+                return
+            self.tail = (self.tail + data)[-4000:]
+
+    def alive(self) -> None:
+        assert self.proc.poll() is None, f"vil gcs exited {self.proc.returncode}: {bytes(self.tail)[-800:]!r}"
+
+    def press(self, key: bytes) -> None:
+        os.write(self.master, key)
+
+    def close(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+        self.proc.wait(10)
+        os.close(self.master)
+
+
+def _events(path: Path) -> list[dict[str, Any]]:
+    return [json.loads(line) for line in path.read_text().splitlines()]
+
+
+def _wait(what: str, condition: Any, console: Console) -> None:
+    deadline = time.monotonic() + WALL_TIMEOUT_S
+    while not condition():
+        console.alive()
+        assert time.monotonic() < deadline, f"no {what} within {WALL_TIMEOUT_S} s"
+        time.sleep(0.02)
+
+
+def test_sigkill_of_the_console_with_amussels_docked_then_resume(tmp_path: Path) -> None:
+    run = tmp_path / RUN
+    ckpt = run / CHECKPOINT_NAME
+
+    def charging_late_enough() -> bool:
+        if not ckpt.exists():
+            return False
+        saved = load(ckpt)
+        return saved.time_us > KILL_AFTER_S * 1e6 and saved.loop_status.phase == Phase.CHARGING_WAIT
+
+    first = Console(tmp_path)
+    try:
+        _wait("checkpoint in a charging wait", charging_late_enough, first)
+        os.kill(first.proc.pid, signal.SIGKILL)
+        first.proc.wait(10)
+    finally:
+        first.close()
+    assert first.proc.returncode == -signal.SIGKILL
+    saved = load(ckpt)  # the last checkpoint before the kill: the resume starts here
+    at_s = saved.time_us / 1e6
+    docked = sorted(int(i) for i, s in zip(saved.fleet_state.ids, saved.fleet_state.state, strict=True)
+                    if s == MusselState.DOCKED)
+    assert docked and KILL_AFTER_S < at_s < 2400
+    before = (run / "events.jsonl").read_bytes()
+    apad_before = _events(run / "apad1.events.jsonl")
+
+    second = Console(tmp_path, "--resume")  # finds runs/console-pool12-run1 by its checkpoint
+    try:
+        _wait("mission end", lambda: b'"mission_end"' in (run / "events.jsonl").read_bytes(), second)
+        assert not ckpt.exists()  # the mission ended: nothing left to resume
+        second.press(b"q")
+        second.proc.wait(WALL_TIMEOUT_S)
+    finally:
+        second.close()
+    assert second.proc.returncode == 0, bytes(second.tail)[-800:]
+    assert f"logs in {RUN}" in second.stdout.read_text()
+    assert not any(ckpt.with_suffix(x).exists() for x in (checkpoint.STEPS_SUFFIX, checkpoint.TRACES_SUFFIX))
+
+    # The same folder goes on from the checkpoint: what was logged up to it is kept as it was.
+    after = (run / "events.jsonl").read_bytes()
+    assert after[: saved.events_bytes] == before[: saved.events_bytes]
+    lines = after.decode().splitlines()
+    events = [json.loads(line) for line in lines]
+    kinds = [e["event"] for e in events]
+    assert kinds.count("mission_start") == kinds.count("mission_resume") == kinds.count("mission_end") == 1
+    resume = kinds.index("mission_resume")
+    assert len(after[: saved.events_bytes].decode().splitlines()) == resume
+    assert at_s <= events[resume]["t_s"] < at_s + 10  # on at once, not from 0 and not later
+    assert events[resume]["strategy"] == "cautious"
+    # Each event once: nothing the killed console logged after its checkpoint is repeated.
+    assert all(e["t_s"] <= at_s for e in events[:resume])
+    times = [e["t_s"] for e in events]
+    assert times == sorted(times) and len(set(lines)) == len(lines)
+    end = events[kinds.index("mission_end")]
+    assert end["reason"] == "mission time" and end["t_s"] >= 2400
+
+    # The aMussels docked at the crash: released (or still on board), never called up while on board.
+    (where,) = [e for e in events if e["event"] == "whereabouts"]
+    for mussel in docked:
+        mine = [e["event"] for e in events[resume:] if e.get("mussel") == mussel and e["event"] in
+                ("call_up", "released", "docked")]
+        assert mine[:1] == ["released"] or (mine == [] and mussel in where["slot"]), (mussel, mine)
+    assert any(e["event"] == "call_up" for e in events[resume:])  # and the mission really went on
+
+    # The aPad's own log and both .tlogs: cut back to the checkpoint, each record once, in time order.
+    apad = _events(run / "apad1.events.jsonl")
+    kept = [e for e in apad_before if e["t_s"] < at_s]
+    assert apad[: len(kept)] == kept
+    assert apad[len(kept)]["event"] == "start" and apad[len(kept)]["t_s"] == pytest.approx(at_s)
+    assert [e["t_s"] for e in apad] == sorted(e["t_s"] for e in apad)
+    for name in ("gcs.tlog", "apad1.tlog"):
+        stamps = [stamp for stamp, _ in tlog.frames(run / name)]
+        assert stamps == sorted(stamps), name
+
+    # Every aMussel accounted for when the console quit: on the seabed or on a slot, none lost.
+    assert where["lost"] == {} and sorted(where["seabed"] + where["slot"]) == list(range(1, 13))
