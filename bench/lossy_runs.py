@@ -43,7 +43,6 @@ def main() -> int:
     ap.add_argument("--latency", type=float, default=0.2)
     ap.add_argument("--duplicate", type=float, default=0.05)
     args = ap.parse_args()
-    faults = LinkFaults(loss_frac=args.loss, latency_s=args.latency, duplicate_frac=args.duplicate, seed=0)
     table = Table(title=f"{args.scenario}: {args.loss:.0%} loss, {args.latency * 1000:.0f} ms, "
                         f"{args.duplicate:.0%} duplicates, both ways")
     for name in ("seed", "wall s", "RTF", "end", "avg %", "min %", "cost m", "cycles", "misplaced", "failsafe",
@@ -52,6 +51,8 @@ def main() -> int:
     walls, misplaced_runs = [], 0
     for seed in range(1, args.seeds + 1):
         scenario = load_scenario(args.scenario).with_overrides(seed=seed)
+        # As `vil run --seed N` does: the proxy's draws are seeded with the run's seed too.
+        faults = LinkFaults(loss_frac=args.loss, latency_s=args.latency, duplicate_frac=args.duplicate, seed=seed)
         with tempfile.TemporaryDirectory() as tmp:
             out = Path(tmp)
             start = time.perf_counter()
