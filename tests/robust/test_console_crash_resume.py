@@ -171,3 +171,61 @@ def test_sigkill_of_the_console_with_amussels_docked_then_resume(tmp_path: Path)
 
     # Every aMussel accounted for when the console quit: on the seabed or on a slot, none lost.
     assert where["lost"] == {} and sorted(where["seabed"] + where["slot"]) == list(range(1, 13))
+
+
+# --- what `vil gcs --resume` refuses: one line on stderr, exit 2, before the console opens ----------
+
+
+def _gcs(cwd: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.run([*VIL, "gcs", "--sitl", *args], cwd=cwd, capture_output=True, text=True, timeout=60,
+                          env=env, stdin=subprocess.DEVNULL)
+
+
+def _refused(done: subprocess.CompletedProcess[str], *words: str) -> None:
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert done.stderr.count("\n") == 1 and all(w in done.stderr for w in words), done.stderr
+
+
+def _left_checkpoint(folder: Path, strategy: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A short headless run that leaves its last checkpoint behind, as a crash would."""
+    from gcs.mission.headless import run_mission
+    from gcs.mission.scenario import load_scenario
+
+    monkeypatch.setattr(checkpoint.CheckpointFiles, "remove", checkpoint.CheckpointFiles.close)
+    run_mission(load_scenario("pool12").with_overrides(strategy=strategy, duration_s=60.0), folder)
+    monkeypatch.undo()
+    assert (folder / CHECKPOINT_NAME).exists()
+
+
+def test_resume_with_nothing_to_resume_is_refused(tmp_path: Path) -> None:
+    _refused(_gcs(tmp_path, "--resume"), "nothing to resume", "console-pool12")
+    folder = tmp_path / "runs" / "console-pool12-run1"
+    folder.mkdir(parents=True)  # a console that quit: its checkpoint is gone
+    _refused(_gcs(tmp_path, "--resume", "--out", str(folder)), "no checkpoint to resume from")
+
+
+def test_a_corrupt_checkpoint_is_refused(tmp_path: Path) -> None:
+    folder = tmp_path / "runs" / "console-pool12-run1"
+    folder.mkdir(parents=True)
+    (folder / "console.json").write_text('{"scenario": "pool12", "epoch_us": 1591920000000000}')
+    (folder / CHECKPOINT_NAME).write_bytes(b"\x80\x05garbage")
+    _refused(_gcs(tmp_path, "--resume"), str(Path("runs") / "console-pool12-run1" / CHECKPOINT_NAME))
+
+
+def test_a_checkpoint_of_another_run_or_without_its_epoch_is_refused_and_the_logs_are_left_alone(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    folder = tmp_path / "console-pool12-run1"
+    _left_checkpoint(folder, "greedy", monkeypatch)  # the console's pool12 collects "cautious"
+    events = (folder / "events.jsonl").read_bytes()
+    (folder / "console.json").write_text('{"scenario": "pool12"}')  # written before consoles kept the epoch
+    _refused(_gcs(tmp_path, "--resume", "--out", str(folder)), "epoch_us")
+    (folder / "console.json").write_text('{"scenario": "pool12", "epoch_us": 1591920000000000}')
+    _refused(_gcs(tmp_path, "--resume", "--out", str(folder)), "greedy", "cautious")
+    assert (folder / "events.jsonl").read_bytes() == events  # nothing cut for a resume that did not happen
+
+
+def test_a_scenario_of_several_apads_is_refused(tmp_path: Path) -> None:
+    _refused(_gcs(tmp_path, "--scenario", str(ROOT / "missions" / "pool12x2.toml")), "one aPad", "vil run")
+    assert not (tmp_path / "runs").exists()

@@ -17,6 +17,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -135,7 +136,7 @@ def test_a_resume_cuts_what_the_crashed_run_logged_after_its_last_checkpoint(
         elif at and "logs" not in at and ckpt.time_us >= at["t_s"] * 1e6 + 60e6:
             # The crash: a minute of logs past that checkpoint, its next checkpoints lost.
             at["logs"] = True
-            for name in ("events.jsonl", "gcs.tlog", "apad1.tlog"):
+            for name in ("events.jsonl", "gcs.tlog", "apad1.tlog", "apad1.events.jsonl"):
                 shutil.copy(whole / name, crashed / name)
 
     monkeypatch.setattr(checkpoint, "save", save_and_crash)
@@ -143,6 +144,9 @@ def test_a_resume_cuts_what_the_crashed_run_logged_after_its_last_checkpoint(
     monkeypatch.setattr(checkpoint, "save", real_save)
     before = (crashed / "events.jsonl").read_bytes()
     assert "logs" in at and len(before) > at["events_bytes"]  # events after the checkpoint were logged
+    apad_before = (crashed / "apad1.events.jsonl").read_text().splitlines()
+    apad_kept = [line for line in apad_before if json.loads(line)["t_s"] < at["t_s"]]
+    assert len(apad_kept) < len(apad_before)  # and the aPad logged commands after it too
     run_mission(scenario, crashed, resume=True)
     after = (crashed / "events.jsonl").read_bytes()
     assert after[: at["events_bytes"]] == before[: at["events_bytes"]]
@@ -153,6 +157,26 @@ def test_a_resume_cuts_what_the_crashed_run_logged_after_its_last_checkpoint(
     for name in ("gcs.tlog", "apad1.tlog"):
         stamps = [stamp for stamp, _ in tlog.frames(crashed / name)]
         assert stamps == sorted(stamps), name
+    # The aPad's own event log: cut by mission time, then continued.
+    apad_after = (crashed / "apad1.events.jsonl").read_text().splitlines()
+    assert apad_after[: len(apad_kept)] == apad_kept
+    resumed = [json.loads(line) for line in apad_after[len(apad_kept):]]
+    assert resumed[0]["event"] == "start" and resumed[0]["t_s"] == pytest.approx(at["t_s"])
+    assert [e["t_s"] for e in resumed] == sorted(e["t_s"] for e in resumed)
+
+
+def test_the_apads_event_log_is_cut_before_the_checkpoint_and_before_a_line_the_kill_cut_short(
+    tmp_path: Path,
+) -> None:
+    log = tmp_path / "apad1.events.jsonl"
+    kept = '{"t_s":1.0,"event":"start"}\n{"t_s":9.5,"event":"command"}\n'
+    log.write_text(kept + '{"t_s":9.9,"event":"comm')  # the kill fell mid-line, before the checkpoint
+    saved = SimpleNamespace(time_us=10_000_000, events_bytes=0)
+    checkpoint.cut_logs(tmp_path, saved, 0)  # type: ignore[arg-type]  # only its time and events length count
+    assert log.read_text() == kept
+    log.write_text(kept + '{"t_s":10.0,"event":"command"}\n{"t_s":12.0,"event":"command"}\n')
+    checkpoint.cut_logs(tmp_path, saved, 0)  # type: ignore[arg-type]
+    assert log.read_text() == kept  # logged again by the resumed aPad
 
 
 def test_resuming_from_the_checkpoint_files_is_resuming_from_the_whole_state_they_were_saved_of(

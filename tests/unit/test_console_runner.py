@@ -88,6 +88,20 @@ def test_paced_clock_keeps_to_its_speed() -> None:
     assert len(waits) == 20  # in steps of 0.1 s of mission time, so a watcher sees it move
 
 
+def test_a_paced_clock_started_late_keeps_its_pace_from_its_start() -> None:
+    """A resumed mission's clock starts at the checkpoint's time and is paced from then, not from 0."""
+    wall = {"now_s": 50.0}
+
+    def wait(dt_s: float) -> None:
+        wall["now_s"] += dt_s
+
+    clock = PacedClock(speed=20.0, monotonic=lambda: wall["now_s"], wait=wait, start_us=600_000_000)
+    assert clock.time() == 600.0
+    clock.sleep(2.0)
+    assert clock.time() == 602.0
+    assert wall["now_s"] - 50.0 == pytest.approx(2.0 / 20.0)  # no 30 s wait to "catch up" with 600 s
+
+
 @pytest.mark.sitl
 def test_runner_serves_operator_commands_between_loop_waits() -> None:
     runner = ConsoleRunner(ConsoleConfig(load_scenario(POOL12), sitl="udp", speed=40.0))
