@@ -22,13 +22,14 @@ run's folder; a missing, short or garbled side file is a `CheckpointError`.
 
 The run's logs go on past the last checkpoint until the crash; the resumed run simulates that
 stretch again, so `cut_logs` first cuts them back to the checkpoint (events.jsonl to its length
-then, each .tlog before its mission time): every event and message is in the logs once.
+then, each .tlog and aPad event log before its mission time): every event and message is in the logs once.
 
-For the console (`vil gcs --resume`): `files = CheckpointFiles(path)`, `load(files)`, `cut_logs`, then
-`restore(world, ckpt)` on a world built with `mission_start_us=0`, `start_us=ckpt.time_us` and
-`append_logs=True`, and `loop.run(resume=True)`; `save(files, capture(world, loop))` while it runs
-(the same `files`, which know where the side files' valid rows end); `files.close()` at the end, or
-`files.remove()` when the mission finished.
+A resume (`vil run --resume` in lockstep, `vil gcs --resume` on the console's clock): `files.read()`,
+`cut_logs`, a world built with `mission_start_us=0`, its clock starting at `ckpt.time_us` and
+`append_logs=True` (the console keeps its log epoch in `console.json`), `restore(world, ckpt)`,
+`loop.status = ckpt.loop_status`, `loop.run(resume=True)`, saving with the same `files` (they know
+where the side files' valid rows end), `files.remove()` once the mission ended. A wall clock runs on
+while the world is built, hence `RESTORE_SLACK_US`.
 """
 
 from __future__ import annotations
