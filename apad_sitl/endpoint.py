@@ -50,6 +50,8 @@ from mussel_sim.geo import LocalFrame
 __all__ = ["DEFAULT_RATES_HZ", "PHYSICS_HZ", "Command", "Geofence", "MusselTable", "SitlVehicle"]
 
 PHYSICS_HZ = 10.0
+# One for every vehicle of the process: the aPads of a swarm get the same status datagrams (hot.SharedDecode).
+_STATUS_DECODE = hot.SharedDecode()
 MessageHandler = Callable[[Any], None]  # a decoded pymavlink message in
 
 
@@ -237,7 +239,8 @@ class SitlVehicle:
         """Take the fleet's AMUSSEL_STATUS frames in one batch (`mavlink_dialect.hot`) into the fix
         table (and the .tlog); return every other frame for the codec."""
         try:
-            split = hot.decode_datagrams(datagrams, hot.AMUSSEL_STATUS, self.codec.stats, keep_raw=self.log is not None)
+            keep_raw = self.log is not None
+            split = _STATUS_DECODE.decode(datagrams, hot.AMUSSEL_STATUS, self.codec.stats, keep_raw=keep_raw)
             if len(split.hot):
                 f = split.hot.fields
                 self.mussels.update_many(f["mussel_id"], f["lat"], f["lon"], f["state"])
