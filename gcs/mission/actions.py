@@ -68,7 +68,7 @@ class LoopActions:
         distance = float(distance_m(here.lat, here.lon, target.lat, target.lon))
         self.status.cost_m += distance
         trip_limit_s = GOTO_SLACK_S + GOTO_SLOWNESS * distance / self.settings.apad_speed_mps
-        if self.shares is not None:
+        if self.shares is not None and self.api.inside_geofence(target):
             self._keep_apart(target, interruptible)
         for _ in range(self.settings.goto_attempts):
             try:
@@ -174,6 +174,7 @@ class LoopActions:
                 self._release(mussel_id)
                 return
         self._log("lost", mussel=mussel_id, why="does not answer the sink command", state=self._state(mussel_id).name)
+        self._release(mussel_id)  # floating, unclaimed: an orphan its owner will come back for
 
     def _command(self, fn: Callable[..., None], *args: object, **kwargs: object) -> bool:
         """Run an API command; a refused or unanswered one is logged and tried again, at most
@@ -259,9 +260,9 @@ class LoopActions:
             ids = sorted({m for m in ids if m not in real} | set(self.real.below(threshold, self.clock.now_us)))
         out = []
         for m in ids:
-            if m not in self.homes and not self.api.mussels[m].simulated:
-                self.homes[m] = self.api.get_location(m)  # a real aMussel goes back where it was found
-            if m not in self.homes or (self.shares is not None and not self.shares.serves(self.apad_id, m)):
+            if not self.api.mussels[m].simulated:
+                self._note_home(m)
+            if m not in self.homes or not self._serves(m):
                 continue
             if self.api.inside_geofence(self.api.get_location(m)):
                 out.append(m)
@@ -301,8 +302,27 @@ class LoopActions:
         return self.settings.mission.duration_s - self.clock.time() < self.settings.call_up_margin_s
 
     def _orphans(self) -> list[int]:
-        """aMussels of this aPad's share left floating by an aPad that was lost: fetch them first."""
-        return orphans(self.shares, self.api.link.registry, self.apad_id) if self.shares is not None else []
+        """aMussels of this aPad's share floating with no live claim (`swarm.orphans`): fetch them first."""
+        if self.shares is None:
+            return []
+        return orphans(self.shares, self.api.link.registry, self.apad_id, self.clock.now_us)
+
+    def _serves(self, mussel_id: int) -> bool:
+        """Whether this aPad may call the aMussel up (always, with no other aPad)."""
+        return self.shares is None or self.shares.serves(self.apad_id, mussel_id, self.clock.now_us)
+
+    def _taken_over(self, mussel_id: int) -> bool:
+        """This aPad was lost long enough for another to take over its claim: leave the aMussel to
+        that one (no sink: it is being fetched). Logged."""
+        if self.shares is None or self.shares.holds(self.apad_id, mussel_id):
+            return False
+        self._log("skip", mussel=mussel_id, why="taken over by another aPad while this one was unheard")
+        return True
+
+    def _note_home(self, mussel_id: int) -> None:
+        """A real aMussel goes back where it was first found (a simulated one: its start)."""
+        if mussel_id not in self.homes and mussel_id in self.api.mussels:
+            self.homes[mussel_id] = self.api.get_location(mussel_id)
 
     def _release(self, mussel_id: int) -> None:
         if self.shares is not None:
@@ -311,8 +331,9 @@ class LoopActions:
     def _call_up_if_in_range(self, mussel_id: int) -> bool:
         """Safety: an aMussel is only called to the surface with an aPad within acoustic range.
         With several aPads it must be this one's to call, and is claimed first (never two aPads)."""
-        if self.shares is not None and not self.shares.claim(self.apad_id, mussel_id):
+        if self.shares is not None and not self.shares.claim(self.apad_id, mussel_id, self.clock.now_us):
             return False
+        self._note_home(mussel_id)
         if self._state(mussel_id) == MusselState.FLOATING:
             return True  # already up (an orphan): nothing to call
         distance = self._distance_to(mussel_id)

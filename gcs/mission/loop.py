@@ -21,6 +21,8 @@ from gcs.mission.control import EndReason, LoopControl, LoopSettings, MissionEnd
 from gcs.mission.planner import CollectStrategy, CostWeights, PlanInput, plan
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
+RESHARED = "another aPad's since the fleet was re-shared"
+
 __all__ = ["EndReason", "EnergySharingLoop", "LoopControl", "LoopSettings", "MissionEnded", "Phase"]
 
 
@@ -127,8 +129,8 @@ class EnergySharingLoop(LoopActions):
                 self._log("skip", mussel=mussel_id, why="too close to the mission end to dock it")
                 break
             self.status.target_mussel = mussel_id
-            if self.shares is not None and not self.shares.serves(self.apad_id, mussel_id):
-                self._log("skip", mussel=mussel_id, why="another aPad's since the fleet was re-shared")
+            if not self._serves(mussel_id):
+                self._log("skip", mussel=mussel_id, why=RESHARED)
                 continue
             called = self._call_up_if_in_range(mussel_id)
             # From a call-up on, the waits ignore the mission end: the margin above leaves time to finish.
@@ -137,16 +139,23 @@ class EnergySharingLoop(LoopActions):
                     self._sink(mussel_id)
                 continue
             if not called and not self._call_up_if_in_range(mussel_id):
-                self._log("skip", mussel=mussel_id, why="no aPad within acoustic range")
+                self._log("skip", mussel=mussel_id,
+                          why=RESHARED if not self._serves(mussel_id) else "no aPad within acoustic range")
                 continue
             if not self._wait_until(functools.partial(self._floating, mussel_id), self.settings.surfacing_timeout_s,
                                     interruptible=False):
+                if self._taken_over(mussel_id):
+                    continue
                 self._log("skip", mussel=mussel_id, why="did not surface", state=self._state(mussel_id).name)
                 self._sink(mussel_id)  # it may surface later: it must not float there forever
                 continue
             # It surfaced where it was last localised underwater, give or take drift: close in.
+            if self._taken_over(mussel_id):
+                continue
             if self._distance_to(mussel_id) > 0.8 * self.settings.dock_reach_m:
                 self._go_to(self.api.get_location(mussel_id), interruptible=False)
+            if self._taken_over(mussel_id):
+                continue
             if self._dock(free[0], mussel_id):
                 self._log("docked", mussel=mussel_id, slot=free[0])
                 self.status.dockings.append((self.clock.time(), mussel_id))
@@ -170,6 +179,8 @@ class EnergySharingLoop(LoopActions):
         self._set_phase(Phase.PLAN_REDEPLOY)
         docked = self._docked()  # slot -> mussel
         ids = list(docked.values())
+        for m in ids:
+            self._note_home(m)  # one docked with no home known (e.g. held since a crash): back to here
         position = self.api.position(self.apad_id)
         inp = PlanInput(
             apads={self.apad_id: (position.lat, position.lon)},
@@ -194,8 +205,11 @@ class EnergySharingLoop(LoopActions):
                 self._log("kept_on_board", mussel=mussel_id, slot=slot, why="its position could not be reached")
                 continue
             if self._undock(slot, mussel_id):
-                self._command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
-                self._release(mussel_id)
+                if self.api.mussels[mussel_id].simulated:  # a local party: the command cannot be lost
+                    self._command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
+                    self._release(mussel_id)
+                else:
+                    self._sink(mussel_id)  # over a radio: seen to leave the surface (releases the claim)
                 self._log("released", mussel=mussel_id, slot=slot)
         self.status.target_mussel = 0
 

@@ -29,43 +29,69 @@ from mussel_sim.geo import LocalFrame
 from mussel_sim.vocabulary import MusselState
 
 APAD_LOST_S = 10.0  # an aPad silent this long is out of the sharing until heard again
+# A lost aPad's claims hold this long: a called-up aMussel surfaces (up to the surfacing timeout,
+# 120 s) and is docked (10 s) by its own aPad if that one comes back in time.
+CLAIM_GRACE_S = 150.0
 WATCH_PERIOD_S = 1.0
 
 
 @dataclass
 class FleetShares:
     """Owners and claims of the aMussels among the aPads (read and written by the aPads' loops
-    and the watch; under `missiontime.processes` only one of them runs at a time)."""
+    and the watch; under `missiontime.processes` only one of them runs at a time).
+
+    A claim lasts until its aPad releases it. An aPad found lost keeps its claims for
+    `CLAIM_GRACE_S` (it may be mid-collection behind a bad link and come back); after that its
+    floating aMussels are orphans, another aPad's to fetch, and the lost one, if it comes back,
+    finds the claim gone and leaves that aMussel alone (the loop checks before closing in and docking).
+    """
 
     owner: dict[int, int] = field(default_factory=dict)  # aMussel id -> aPad system id
     claims: dict[int, int] = field(default_factory=dict)  # aMussel id -> the aPad fetching or holding it
     usable: frozenset[int] = frozenset()  # aPads in the current sharing
+    lost_since_us: dict[int, int] = field(default_factory=dict)  # aPad -> when it was found lost
     partition: Partition | None = None
+    first: Partition | None = None  # the sharing the mission started with
     reshares: int = 0
 
-    def serves(self, apad: int, mussel: int) -> bool:
-        """May `apad` call this aMussel up: its share, and nobody else's claim on it."""
-        return self.owner.get(mussel) == apad and self.claims.get(mussel, apad) == apad
+    def live_claim(self, mussel: int, now_us: int) -> int | None:
+        """The aPad whose claim on `mussel` holds now (a lost aPad's, within the grace)."""
+        apad = self.claims.get(mussel)
+        lost = self.lost_since_us.get(apad) if apad is not None else None
+        if lost is not None and now_us - lost >= seconds_to_us(CLAIM_GRACE_S):
+            return None
+        return apad
 
-    def claim(self, apad: int, mussel: int) -> bool:
-        if not self.serves(apad, mussel):
+    def serves(self, apad: int, mussel: int, now_us: int) -> bool:
+        """May `apad` call this aMussel up: its share, and no live claim of another aPad on it."""
+        return self.owner.get(mussel) == apad and self.live_claim(mussel, now_us) in (None, apad)
+
+    def claim(self, apad: int, mussel: int, now_us: int) -> bool:
+        if not self.serves(apad, mussel, now_us):
             return False
         self.claims[mussel] = apad
         return True
+
+    def holds(self, apad: int, mussel: int) -> bool:
+        """Whether `apad`'s claim on `mussel` still stands (not taken over while it was lost)."""
+        return self.claims.get(mussel) == apad
 
     def release(self, apad: int, mussel: int) -> None:
         if self.claims.get(mussel) == apad:
             del self.claims[mussel]
 
-    def claimed_by(self, apad: int) -> list[int]:
-        return sorted(m for m, a in self.claims.items() if a == apad)
-
-    def reshare(self, usable: frozenset[int], new: Partition) -> None:
-        """Take a new partition among `usable`; claims of aPads no longer usable are dropped, and
-        an aMussel claimed by a usable aPad stays that aPad's whatever the partition says."""
-        self.claims = {m: a for m, a in self.claims.items() if a in usable}
-        self.owner = new.owner() | dict(self.claims)
+    def reshare(self, usable: frozenset[int], new: Partition, now_us: int) -> None:
+        """Take a new partition among `usable`. An aMussel claimed by a usable aPad stays that
+        aPad's whatever the partition says; the claims of an aPad no longer usable are kept (for
+        the grace) and the time it was lost noted."""
+        for apad in self.usable - usable:
+            self.lost_since_us.setdefault(apad, now_us)
+        for apad in usable:
+            self.lost_since_us.pop(apad, None)
+        self.owner = new.owner() | {m: a for m, a in self.claims.items() if a in usable}
         self.usable, self.partition = usable, new
+        if self.first is None:
+            self.first = new
         self.reshares += 1
 
 
@@ -80,6 +106,12 @@ class SwarmWatch:
         self.registry, self.shares, self.frame, self.apads = registry, shares, frame, apads
         self.events, self.clock, self.seed = events, clock, seed
         self.on_reshare: list[Callable[[FleetShares], None]] = []
+        self.retired: set[int] = set()  # aPads whose loop has ended (battery): never shared again
+
+    def retire(self, apad: int) -> None:
+        """`apad`'s loop has ended: take it out of the sharing now, for good."""
+        self.retired.add(apad)
+        self.check(self.clock.now_us)
 
     def register(self, start_us: int) -> None:
         self.clock.scheduler.every(WATCH_PERIOD_S, self.check, "swarm.watch", start_us)
@@ -87,6 +119,8 @@ class SwarmWatch:
     def usable_now(self, now_us: int) -> frozenset[int]:
         out = set()
         for sysid, end_v in self.apads.items():
+            if sysid in self.retired:
+                continue
             view = self.registry.vehicles.get(sysid)
             if view is None or view.lat_deg is None or view.lon_deg is None:
                 continue
@@ -119,15 +153,17 @@ class SwarmWatch:
             assert view.lat_deg is not None and view.lon_deg is not None  # usable: it has a position
             ax, ay = self.frame.to_local(view.lat_deg, view.lon_deg)
             apads_xy[sysid] = (float(ax), float(ay))
-        self.shares.reshare(usable, partition(ids, np.column_stack([x, y]), apads_xy, seed=self.seed))
+        self.shares.reshare(usable, partition(ids, np.column_stack([x, y]), apads_xy, seed=self.seed),
+                            self.clock.now_us)
         for hook in self.on_reshare:
             hook(self.shares)
 
 
-def orphans(shares: FleetShares, registry: VehicleRegistry, apad: int) -> list[int]:
-    """aMussels of `apad`'s share left floating with nobody's claim on them (their aPad was lost)."""
+def orphans(shares: FleetShares, registry: VehicleRegistry, apad: int, now_us: int) -> list[int]:
+    """aMussels of `apad`'s share floating with no live claim on them: left by an aPad that was
+    lost, or one that surfaced after its own aPad had given up on it."""
     floating = registry.mussels.select((MusselState.FLOATING,))
-    return [m for m in floating if shares.owner.get(m) == apad and m not in shares.claims]
+    return [m for m in floating if shares.owner.get(m) == apad and shares.live_claim(m, now_us) is None]
 
 
 def route_conflicts(api: ApadApi, apad: int, target: Location, separation_m: float) -> list[int]:
@@ -138,12 +174,15 @@ def route_conflicts(api: ApadApi, apad: int, target: Location, separation_m: flo
     tx, ty = frame.to_local(target.lat, target.lon)
     leg = shapely.LineString([(0.0, 0.0), (float(tx), float(ty))])
     out = []
+    now_us = api.clock.now_us
     for sysid, view in sorted(api.link.vehicles.items()):
         if sysid == apad or view.lat_deg is None or view.lon_deg is None:
             continue
-        points = [(view.lat_deg, view.lon_deg)]
+        points = [(view.lat_deg, view.lon_deg)]  # a silent aPad is still an obstacle where last seen
         going = view.expected
-        if going is not None and going.kind == Primitive.GOTO and view.primitive.progress == Progress.IN_PROGRESS:
+        heard = now_us - view.last_heartbeat_us <= seconds_to_us(APAD_LOST_S)
+        if (heard and going is not None and going.kind == Primitive.GOTO and going.matches(view.primitive)
+                and view.primitive.progress == Progress.IN_PROGRESS):
             points.append((going.a / DEG_E7, going.b / DEG_E7))
         for lat, lon in points:
             x, y = frame.to_local(lat, lon)

@@ -12,7 +12,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from gcs.mission.control import Phase
+from gcs.mission.control import EndReason, Phase
 from gcs.mission.loop import EnergySharingLoop
 from gcs.mission.swarm import FleetShares, SwarmWatch
 from gcs.mission.world import World
@@ -60,7 +60,10 @@ def run_swarm(world: World, on_start: Callable[[], None] | None = None) -> Swarm
     for a in s.apads:
         def script(clock: Clock, sysid: int = a.system_id) -> Any:
             loop = loops[sysid] = world.mission_loop(apad_id=sysid, shares=shares, clock=clock)
-            return loop.run()
+            end = loop.run()
+            if end == EndReason.APAD_BATTERY:  # out for good: its share goes to the others now
+                watch.retire(sysid)
+            return end
 
         processes.spawn(f"apad{a.system_id}", script)
     processes.run()
@@ -75,11 +78,12 @@ def apad_rows(world: World, outcome: SwarmOutcome | None, single: EnergySharingL
     for sysid, loop in sorted(loops.items()):
         vehicle = world.vehicles.get(sysid)
         spent = loop.status.phase_s
-        share = outcome.shares.partition.shares.get(sysid, []) if outcome and outcome.shares.partition else (
-            sorted(world.homes))
+        first = outcome.shares.first if outcome is not None else None
+        last = outcome.shares.partition if outcome is not None else None
         rows.append({
             "sysid": sysid,
-            "mussels": share,
+            "mussels": first.shares.get(sysid, []) if first is not None else sorted(world.homes),  # its share at start
+            "share_at_end": last.shares.get(sysid, []) if last is not None else sorted(world.homes),
             "travelled_m": round(vehicle.state.distance_travelled_m, 3) if vehicle is not None else None,
             "cost_m": round(loop.status.cost_m, 3),
             "dockings": len(loop.status.dockings),

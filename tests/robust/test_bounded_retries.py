@@ -32,7 +32,8 @@ def _events(path: Path) -> list[dict[str, object]]:
 
 def test_the_seed_6_livelock_at_40pc_loss_completes_with_nothing_lost(tmp_path: Path) -> None:
     s = load_scenario("pool12").with_overrides(seed=6)
-    faults = LinkFaults(loss_frac=0.4, latency_s=0.2, duplicate_frac=0.05, seed=6)  # vil run --seed 6 seeds the proxy too
+    # `vil run --seed 6` seeds the proxy with 6 too.
+    faults = LinkFaults(loss_frac=0.4, latency_s=0.2, duplicate_frac=0.05, seed=6)
     r = run_mission(s, tmp_path, options=LinkOptions(faults=faults))
     assert r.end_reason == "mission time"
     assert len(r.whereabouts) == 12 and r.misplaced == []

@@ -11,7 +11,7 @@ import pytest
 from gcs.api import Location
 from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
-from gcs.mission.swarm import route_conflicts
+from gcs.mission.swarm import FleetShares, SwarmWatch, route_conflicts
 from gcs.mission.world import LinkOptions, lockstep_world
 
 pytestmark = pytest.mark.sitl
@@ -71,7 +71,25 @@ def test_a_failed_apad_is_noticed_its_share_is_taken_over_and_nothing_is_lost(tm
     # Nothing lost: what aPad 2 held when it went silent is reported held on it, the rest is home.
     assert r.misplaced == [] and len(r.whereabouts) == 12
     held = [w for w in r.whereabouts if w["where"] == "slot" and "aPad 2" in w["detail"]]
-    assert all(w["id"] in was_2s for w in held)
+    assert held and all(w["id"] in was_2s for w in held)  # it was mid-cycle at 300 s
+    assert r.apads[1]["mussels"] == sorted(was_2s) and r.apads[1]["share_at_end"] == []
+
+
+def test_an_apad_whose_loop_ended_is_retired_and_its_share_goes_to_the_others() -> None:
+    world = lockstep_world(load_scenario("pool12x2"))
+    try:
+        for sysid in (1, 2):
+            world.api.wait_apad(timeout_s=10.0, apad_id=sysid)
+        shares = FleetShares()
+        watch = SwarmWatch(world.link.registry, shares, world.frame, {1: 11.0, 2: 11.0}, world.events, world.clock)
+        watch.check(world.clock.now_us)
+        assert shares.usable == {1, 2} and len(shares.owner) == 12
+        watch.retire(2)  # e.g. its battery ended its loop; it is still heard, with volts to spare now
+        world.clock.sleep(5.0)
+        watch.check(world.clock.now_us)
+        assert shares.usable == {1} and set(shares.owner.values()) == {1}
+    finally:
+        world.close()
 
 
 def test_a_leg_passing_another_apad_is_a_conflict_and_one_clear_of_it_is_not() -> None:
