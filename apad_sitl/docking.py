@@ -80,26 +80,33 @@ class MusselTable(Mapping[int, MusselFix]):
             if a.shape != (n,) or not np.issubdtype(a.dtype, np.integer):
                 raise ValueError("update_many takes integer arrays of one shape (n,)")
         i, la, lo, st = columns
-        with np.errstate(over="ignore"):
-            fine = (i >= 1) & (i <= MAX_MUSSEL_ID) & (la >= -MAX_LAT_E7) & (la <= MAX_LAT_E7)
-            fine &= (lo >= -MAX_LON_E7) & (lo <= MAX_LON_E7) & (st >= 0) & (st < len(MusselState))  # 0..5
-        if not fine.all():  # the rare case: count each bad row by its first bad field, keep the rest
-            checks = (
-                ("mussel_id", (i >= 1) & (i <= MAX_MUSSEL_ID)),
-                ("lat", (la >= -MAX_LAT_E7) & (la <= MAX_LAT_E7)),
-                ("lon", (lo >= -MAX_LON_E7) & (lo <= MAX_LON_E7)),
-                ("state", np.isin(st, KNOWN_STATES)),
-            )
+        ids, lats, lons, states = i.tolist(), la.tolist(), lo.tolist(), st.tolist()
+        # Range checks on the Python lists the dict takes anyway: a fleet's batch is a few dozen rows,
+        # where numpy's cost per call outweighs its speed per row.
+        fine = not n or (
+            min(ids) >= 1 and max(ids) <= MAX_MUSSEL_ID and min(lats) >= -MAX_LAT_E7 and max(lats) <= MAX_LAT_E7
+            and min(lons) >= -MAX_LON_E7 and max(lons) <= MAX_LON_E7
+            and min(states) >= 0 and max(states) < len(MusselState)  # 0..5
+        )
+        if not fine:  # the rare case: count each bad row by its first bad field, keep the rest
+            with np.errstate(over="ignore"):
+                checks = (
+                    ("mussel_id", (i >= 1) & (i <= MAX_MUSSEL_ID)),
+                    ("lat", (la >= -MAX_LAT_E7) & (la <= MAX_LAT_E7)),
+                    ("lon", (lo >= -MAX_LON_E7) & (lo <= MAX_LON_E7)),
+                    ("state", np.isin(st, KNOWN_STATES)),
+                )
             good = np.ones(n, dtype=bool)
             for field, ok in checks:
                 bad = int(np.count_nonzero(good & ~ok))
                 if bad:
                     self.dropped[f"invalid:{STATUS}:{field}"] += bad
                 good &= ok
-            i, la, lo, st = i[good], la[good], lo[good], st[good]
+            i = i[good]
+            ids, lats, lons, states = i.tolist(), la[good].tolist(), lo[good].tolist(), st[good].tolist()
         # A batch is the whole fleet once a second: take it in one dict update, and let every fix be
         # converted afresh when next asked (only a dock asks, for one aMussel).
-        self._raw.update(zip(i.tolist(), zip(la.tolist(), lo.tolist(), st.tolist(), strict=True), strict=True))
+        self._raw.update(zip(ids, zip(lats, lons, states, strict=True), strict=True))
         self._fixes.clear()
         return int(i.size)
 
