@@ -12,11 +12,15 @@ still what the vehicle does (the same mode, primitive, target, slot, aMussel and
 command's `Effect`), is a re-send after a lost ACK or a duplicated datagram. It is answered with
 the first answer and not executed again. No time window: a re-send that comes after the failsafe
 (or anything else) changed the vehicle's course is a command to do it again, and it is executed.
+A datagram the network duplicated is the very same frame, sequence number included: one seen in
+the last DUPLICATE_HORIZON_US (far less than the 8-bit sequence takes to wrap) is answered, never
+executed, whatever happened in between.
 """
 
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -27,6 +31,9 @@ from mavlink_dialect import mavlink
 
 if TYPE_CHECKING:
     from apad_sitl.endpoint import SitlVehicle
+
+DUPLICATE_HORIZON_US = 30 * 1_000_000  # a GCS at 2 Hz heartbeats wraps its 8-bit sequence in > 2 min
+RECENT_FRAMES = 64
 
 ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
 DENIED = mavlink.MAV_RESULT_DENIED
@@ -42,6 +49,7 @@ class Command:
     frame: int | None  # COMMAND_INT frame; None for COMMAND_LONG (whose lat/lon are degrees)
     source_system: int
     source_component: int
+    seq: int = -1  # the frame's MAVLink sequence number (-1: not from a frame)
 
     @property
     def message(self) -> str:
@@ -136,6 +144,8 @@ class CommandTable:
         self._v = vehicle
         self._entries: dict[int, _Entry] = {}
         self._executed: dict[tuple[int, int], _Executed] = {}  # (system, component) -> last accepted
+        # Frames of stateful commands executed lately: (system, component, seq, key) -> (answer, time)
+        self._frames: OrderedDict[tuple[Any, ...], tuple[int, int, int]] = OrderedDict()
         vehicle.on(mavlink.MAVLINK_MSG_ID_COMMAND_LONG, self._on_command_long)
         vehicle.on(mavlink.MAVLINK_MSG_ID_COMMAND_INT, self._on_command_int)
 
@@ -149,13 +159,14 @@ class CommandTable:
         if not self._v.for_us(msg.target_system, msg.target_component):
             return
         params = (msg.param1, msg.param2, msg.param3, msg.param4, msg.param5, msg.param6, msg.param7)
-        self.handle(Command(msg.command, params, None, msg.get_srcSystem(), msg.get_srcComponent()))
+        self.handle(Command(msg.command, params, None, msg.get_srcSystem(), msg.get_srcComponent(), msg.get_seq()))
 
     def _on_command_int(self, msg: Any) -> None:
         if not self._v.for_us(msg.target_system, msg.target_component):
             return
         params = (msg.param1, msg.param2, msg.param3, msg.param4, float(msg.x), float(msg.y), msg.z)
-        self.handle(Command(msg.command, params, msg.frame, msg.get_srcSystem(), msg.get_srcComponent()))
+        self.handle(Command(msg.command, params, msg.frame, msg.get_srcSystem(), msg.get_srcComponent(),
+                            msg.get_seq()))
 
     def handle(self, cmd: Command) -> None:
         """Execute (or recognise as a retransmission) and ACK; a requested message follows the ACK."""
@@ -164,7 +175,11 @@ class CommandTable:
         entry = self._entries.get(cmd.command)
         stateful = entry is not None and entry.stateful
         last = self._executed.get(source) if stateful else None
-        if last is not None and last.key == cmd.key and last.effect == Effect.of(v):
+        frame = self._frames.get((*source, cmd.seq, cmd.key)) if stateful and cmd.seq >= 0 else None
+        if frame is not None and v.now_us - frame[2] <= DUPLICATE_HORIZON_US:
+            reply = Reply(frame[0], frame[1])
+            v.event("command_duplicate", command=cmd.command, result=_result_name(reply.result))
+        elif last is not None and last.key == cmd.key and last.effect == Effect.of(v):
             reply = Reply(last.result, last.result_param2)
             v.event("command_retry", command=cmd.command, result=_result_name(reply.result))
         else:
@@ -178,6 +193,10 @@ class CommandTable:
                     self._executed[source] = _Executed(cmd.key, reply.result, reply.param2, Effect.of(v))
                 else:
                     self._executed.pop(source, None)
+                if cmd.seq >= 0:
+                    self._frames[(*source, cmd.seq, cmd.key)] = (reply.result, reply.param2, v.now_us)
+                    if len(self._frames) > RECENT_FRAMES:
+                        self._frames.popitem(last=False)
             extra: dict[str, Any] = {}
             if reply.invalid is not None:
                 v.count_invalid(cmd.message, reply.invalid)

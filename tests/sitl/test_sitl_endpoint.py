@@ -395,6 +395,27 @@ def test_a_go_to_resent_after_the_failsafe_took_over_is_executed_again(world: Wo
         "command", "command", "command_retry"]
 
 
+def test_a_datagram_the_network_duplicated_is_never_executed_twice_even_after_a_hold(world: World) -> None:
+    """A re-send (a new frame) of a Go To after a Hold is a new command; the very same frame coming
+    late (a duplicated datagram) is not, whatever happened in between."""
+    gcs = world.gcs
+    lat_e7, lon_e7 = latlon_e7(20.0, 0.0)
+    frame = gcs.codec.encode(mavlink.MAVLink_command_int_message(
+        SYSID, 1, mavlink.MAV_FRAME_GLOBAL_INT, mavlink.MAV_CMD_DO_REPOSITION, 0, 0,
+        -1.0, mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE, 0.0, math.nan, lat_e7, lon_e7, 0.0))
+    mark = len(gcs.inbox)
+    gcs.transport.send(frame)
+    assert gcs.ack(mavlink.MAV_CMD_DO_REPOSITION, mark).result == ACCEPTED
+    assert gcs.command_long(mavlink.MAV_CMD_DO_SET_MODE, 1, 4).result == ACCEPTED  # HOLD
+    assert world.vehicle.primitive.kind == Primitive.HOLD
+    mark = len(gcs.inbox)
+    gcs.transport.send(frame)  # the duplicate, late
+    assert gcs.ack(mavlink.MAV_CMD_DO_REPOSITION, mark).result == ACCEPTED  # answered as the first time
+    assert world.vehicle.primitive.kind == Primitive.HOLD  # and not executed again
+    assert gcs.reposition(20.0, 0.0).result == ACCEPTED  # a re-send: a new frame, executed
+    assert world.vehicle.primitive.kind == Primitive.GOTO
+
+
 def test_a_mussel_drifting_away_mid_dock_fails_it(world: World) -> None:
     gcs = world.gcs
     gcs.mussel(5, 1.0, 0.0)
