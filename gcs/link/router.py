@@ -35,6 +35,7 @@ from missiontime import Clock, seconds_to_us
 # heartbeats in a row (16 needless holds in a 40 min mission at 20 % loss); 2 Hz tolerates five.
 HEARTBEAT_PERIOD_S = 0.5
 WAIT_POLL_S = 0.05
+RELAY_MEMORY = 256  # frames a relaying transport remembers, to relay each once
 ERRORS_KEPT = 20  # handler errors kept with their message, for the log and a post-mortem
 
 Handler = Callable[[Any], None]
@@ -95,18 +96,27 @@ def frame_msg_id(frame: bytes) -> int:
 class _TransportPoller:
     """Reads one transport for the scheduler; one parser per transport keeps stream framing apart."""
 
-    def __init__(self, link: Link, transport: Transport, forward: frozenset[int] = frozenset()) -> None:
+    def __init__(
+        self, link: Link, transport: Transport, forward: frozenset[int] = frozenset(),
+        outbound: frozenset[int] | None = None,
+    ) -> None:
         self.link = link
         self.transport = transport
         self.codec = Codec(GCS_SYSTEM_ID, GCS_COMPONENT_ID)
         self.forward = forward  # message ids relayed, once accepted, to the other transports
+        self.outbound = outbound  # the message ids this transport is sent (None: all)
+        self._relayed: deque[tuple[int, int, int]] = deque(maxlen=RELAY_MEMORY)  # (system, seq, msg id)
 
     def poll(self) -> bool:
         chunks = self.transport.receive()
         for chunk in chunks:
             for msg in self.codec.decode(chunk):
                 if self.link._receive(msg) and msg.get_msgId() in self.forward:
-                    self.link._relay(self, bytes(msg.get_msgbuf()))
+                    # A frame heard twice (an echo through another radio, a duplicate) is relayed once.
+                    ident = (msg.get_srcSystem(), msg.get_seq(), msg.get_msgId())
+                    if ident not in self._relayed:
+                        self._relayed.append(ident)
+                        self.link._relay(self, bytes(msg.get_msgbuf()))
         return bool(chunks)
 
     def fileno(self) -> int | None:
@@ -154,10 +164,14 @@ class Link:
 
     # --- wiring -----------------------------------------------------------------------------
 
-    def add_transport(self, transport: Transport, forward: frozenset[int] = frozenset()) -> None:
+    def add_transport(
+        self, transport: Transport, forward: frozenset[int] = frozenset(), outbound: frozenset[int] | None = None,
+    ) -> None:
         """Read and write `transport`. `forward`: message ids that, received on it and accepted, are
-        relayed to the other transports (a bridge of real aMussels: the aPads dock by their status)."""
-        poller = _TransportPoller(self, transport, forward)
+        relayed to the other transports (a bridge of real aMussels: the aPads dock by their status).
+        `outbound`: the only message ids sent to it (None: everything the GCS sends): a bridge radio
+        gets the commands for its aMussels, not the simulated fleet's traffic."""
+        poller = _TransportPoller(self, transport, forward, outbound)
         if self._signing is not None:
             poller.codec.enable_signing(*self._signing)
         self._pollers.append(poller)
@@ -203,7 +217,13 @@ class Link:
         self._deliver(self.port, msg)
 
     def _out(self, data: bytes) -> None:
+        msg_id = -1
         for poller in self._pollers:
+            if poller.outbound is not None:
+                if msg_id < 0:
+                    msg_id = frame_msg_id(data)
+                if msg_id not in poller.outbound:
+                    continue
             poller.transport.send(data)
 
     def _receive(self, msg: Any) -> bool:

@@ -291,7 +291,8 @@ class LoopActions:
         """As last reported; for a real aMussel out of the water, estimated since (`RealFleet`)."""
         view = self.api.mussels[mussel_id]
         if self.real is not None and not view.simulated and mussel_id in self.real.heard_us:
-            return self.real.estimate(mussel_id, self.clock.now_us).battery_frac
+            on_slot = mussel_id in self._docked().values()
+            return self.real.estimate(mussel_id, self.clock.now_us, on_slot).battery_frac
         return view.battery_frac
 
     def _distance_to(self, mussel_id: int) -> float:

@@ -1,19 +1,25 @@
 """Real aMussels beside simulated ones: what the GCS believes between their sparse reports.
 
 A real agent reports now and then (AMUSSEL_STATUS with `simulated = 0`, on the bridge address).
-Between reports the GCS keeps an estimate: the battery by the fleet's own discharge model (eq. 1,
-the scenario's profile and theta) from the last report, the position at the last fix (the random
-drift has zero mean; an active aMussel sits on the seabed). Every estimate carries its age, and
-nothing shows it as more than that. Simulated aMussels report every second and need none.
+Between reports the GCS keeps an estimate: the battery by the fleet's own models from the last
+report (eq. 1 discharging; eq. 2 charging while it is on one of our slots, which we know from the
+aPad whatever the agent last said), the position at the last fix (the random drift has zero mean;
+an active aMussel sits on the seabed). Every estimate carries its age, and nothing shows it as
+more than that. One silent for longer than MAX_REPORT_AGE_S is not planned for: the aPad would go
+to a unit that may be dead. Simulated aMussels report every second and need none of this.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from gcs.link.fleet_table import MusselTable
-from mussel_sim.battery import DischargeProfile, sim_minutes
+from mussel_sim.battery import ChargeProfile, DischargeProfile, step_battery
 from mussel_sim.vocabulary import MusselState
+
+MAX_REPORT_AGE_S = 600.0  # mission seconds; older, a real aMussel is left out of the plans
 
 
 @dataclass(frozen=True)
@@ -28,21 +34,36 @@ class RealFleet:
     """Estimates for the real aMussels in `table` (those not simulated), from the report times the
     registry keeps (`VehicleRegistry.mussel_heard_us`)."""
 
-    def __init__(self, table: MusselTable, heard_us: dict[int, int], discharge: DischargeProfile, theta: float) -> None:
-        self.table, self.heard_us, self.discharge, self.theta = table, heard_us, discharge, theta
+    def __init__(
+        self, table: MusselTable, heard_us: dict[int, int], discharge: DischargeProfile, charge: ChargeProfile,
+        theta: float,
+    ) -> None:
+        self.table, self.heard_us, self.theta = table, heard_us, theta
+        self.discharge, self.charge = discharge, charge
 
     def ids(self) -> list[int]:
         return sorted(m for m in self.heard_us if m in self.table and not self.table[m].simulated)
 
-    def estimate(self, mussel_id: int, now_us: int) -> Estimate:
+    def estimate(self, mussel_id: int, now_us: int, on_slot: bool = False) -> Estimate:
+        """Its battery now by the models; `on_slot`: the aPad reports it latched on one of its slots."""
         view = self.table[mussel_id]
         age_s = max(now_us - self.heard_us[mussel_id], 0) / 1e6
-        battery = view.battery_frac
-        if view.state in (MusselState.ACTIVE, MusselState.SURFACING, MusselState.FLOATING, MusselState.SINKING):
-            battery = max(0.0, battery - self.discharge.rate_per_min * sim_minutes(self.theta, age_s))
+        charging = on_slot or view.state == MusselState.DOCKED
+        if view.state == MusselState.DEPLETED and not charging:
+            battery = view.battery_frac
+        else:  # eqs. (1)-(2) over the time since the report, in one step (charge: the band it was in)
+            battery = float(step_battery(np.array([view.battery_frac]), np.array([charging]), self.discharge,
+                                         self.charge, self.theta, age_s)[0])
         return Estimate(mussel_id, battery, view.battery_frac, age_s)
 
     def below(self, threshold: float, now_us: int) -> list[int]:
-        """Real aMussels active by their last report whose estimated battery is below `threshold`."""
-        return [m for m in self.ids()
-                if self.table[m].state == MusselState.ACTIVE and self.estimate(m, now_us).battery_frac < threshold]
+        """Real aMussels active by their last report, heard within MAX_REPORT_AGE_S, whose estimated
+        battery is below `threshold`."""
+        out = []
+        for m in self.ids():
+            if self.table[m].state != MusselState.ACTIVE:
+                continue
+            e = self.estimate(m, now_us)
+            if e.age_s <= MAX_REPORT_AGE_S and e.battery_frac < threshold:
+                out.append(m)
+        return out

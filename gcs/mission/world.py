@@ -27,7 +27,7 @@ from gcs.records.events import EventLog
 from mavlink_dialect import Codec, Transport, mavlink, memory_pair, open_transport, signing
 from mavlink_dialect.transport import UdpTransport
 from missiontime import Clock, VirtualClock, seconds_to_us
-from mussel_sim.battery import discharge_profile
+from mussel_sim.battery import charge_profile, discharge_profile
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner
 from mussel_sim.fleet_state import initial_state
 from mussel_sim.geo import LocalFrame
@@ -42,6 +42,9 @@ GCS_SIGNING_LINK_ID = 1
 # What the aPad uses of the fleet's traffic: positions to dock by. Sensor readings and the fleet's
 # warnings are for the GCS alone, so they stay off the aPad link.
 APAD_HEARS_FROM_FLEET = frozenset({mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS})
+# What a bridge of real aMussels is sent: their commands and the GCS heartbeat, nothing of the
+# simulated fleet's traffic or the aPads' (a radio link has little to spare).
+BRIDGE_HEARS = frozenset({mavlink.MAVLINK_MSG_ID_AMUSSEL_COMMAND, mavlink.MAVLINK_MSG_ID_HEARTBEAT})
 
 
 @dataclass(frozen=True)
@@ -186,10 +189,11 @@ def build_world(
     }
     world = World(scenario, clock, link, api, fleet, frame, config, homes, events, geofence_deg=fence)
     world.real = RealFleet(link.registry.mussels, link.registry.mussel_heard_us,
-                           discharge_profile(scenario.fleet.discharge), scenario.mission.theta)
+                           discharge_profile(scenario.fleet.discharge), charge_profile(scenario.fleet.charge),
+                           scenario.mission.theta)
     if options.bridge is not None:
         link.add_transport(open_transport(options.bridge, listen=True),
-                           forward=frozenset({mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS}))
+                           forward=frozenset({mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS}), outbound=BRIDGE_HEARS)
     if options.connect is not None:
         for address in options.connect.split(","):
             link.add_transport(open_transport(address.strip()))

@@ -2,7 +2,8 @@
 
 Reports each aMussel's status (AMUSSEL_STATUS, simulated = 0) every --period seconds of wall time
 to the GCS's bridge address, and obeys AMUSSEL_COMMAND: SURFACE (floating after --surface-s),
-SINK (active again). Prints each command it obeys, one line each, for the test to read.
+SINK (active again). Prints each command it obeys and each kind of message it hears, one line
+each, for the test to read.
 
     python tests/sitl/real_mussel_agent.py --gcs 127.0.0.1:14600 --mussel 101:43.94002,15.43990 ...
 """
@@ -37,6 +38,7 @@ def main() -> int:
         mussels[int(ident)] = (round(lat * 1e7), round(lon * 1e7))
     state = dict.fromkeys(mussels, MusselState.ACTIVE)
     floats_at: dict[int, float] = {}
+    seen: set[str] = set()  # message types heard from the GCS, printed once each
     codec = Codec(args.sysid, 1)
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sock.bind(("127.0.0.1", 0))
@@ -60,6 +62,9 @@ def main() -> int:
         except TimeoutError:
             continue
         for msg in codec.decode(data):
+            if msg.get_type() not in seen:
+                seen.add(msg.get_type())
+                print(f"HEARD {msg.get_type()}", flush=True)
             if msg.get_type() != "AMUSSEL_COMMAND" or msg.mussel_id not in mussels:
                 continue
             if msg.command == MusselCommand.SURFACE and state[msg.mussel_id] == MusselState.ACTIVE:

@@ -15,6 +15,7 @@ from gcs.mission.control import LoopControl
 from gcs.mission.scenario import load_scenario
 from gcs.mission.world import LinkOptions, build_world
 from missiontime import PacedClock
+from mussel_sim.battery import discharge_profile
 
 pytestmark = pytest.mark.sitl
 ROOT = Path(__file__).resolve().parents[2]
@@ -56,7 +57,9 @@ def test_real_amussels_on_the_bridge_are_served_beside_the_simulated_fleet(tmp_p
         # Stop once a real aMussel is on board (or at the mission's end).
         control.before_wait = lambda: any(m in REAL for _, m in loop.status.dockings)
         loop.run()
-        estimate = world.real.estimate(101, world.clock.now_us) if world.real else None
+        assert world.real is not None
+        later_us = world.clock.now_us + 60_000_000  # a minute of mission time without a report
+        off_slot, on_slot = world.real.estimate(101, later_us), world.real.estimate(101, later_us, on_slot=True)
         dropped = dict(world.link.dropped)
         table = world.api.mussels
         simulated_5 = table[5].simulated
@@ -69,12 +72,19 @@ def test_real_amussels_on_the_bridge_are_served_beside_the_simulated_fleet(tmp_p
     route = set(loop.status.route)
     assert route & set(REAL) and route - set(REAL)  # one plan over real and simulated aMussels alike
     assert f"SURFACE {next(m for m in docked if m in REAL)}" in out.splitlines(), out + err
+    # The bridge hears what is for real aMussels (their commands, the GCS alive), not the rest.
+    heard = {line.split()[1] for line in out.splitlines() if line.startswith("HEARD ")}
+    assert heard == {"HEARTBEAT", "AMUSSEL_COMMAND"}, heard
     # One fleet to the planner: the real ones got homes (where they were found) like the simulated.
     assert set(REAL) <= set(loop.homes) and len(loop.homes) == 12 + len(REAL)
     # The real one reporting a simulated aMussel's id was refused, never believed.
     assert dropped.get("AMUSSEL_STATUS.id_collision", 0) >= 1 and simulated_5
-    # Between reports the GCS estimates, and says how old its knowledge is.
-    assert estimate is not None and estimate.age_s >= 0.0 and estimate.battery_frac <= estimate.reported_battery_frac
+    # Between reports the GCS estimates by the fleet's models, and says how old its knowledge is:
+    # 60 s of mission at theta 30 is 30 simulated minutes of eq. (1) off a slot, of eq. (2) on one.
+    assert off_slot.age_s >= 60.0 and off_slot.reported_battery_frac == pytest.approx(0.3)
+    drain = discharge_profile(scenario.fleet.discharge).rate_per_min * off_slot.age_s / 60.0 * scenario.mission.theta
+    assert off_slot.battery_frac == pytest.approx(max(0.0, 0.3 - drain))
+    assert on_slot.battery_frac > 0.3
 
 
 def test_an_id_both_real_and_simulated_is_refused_at_start(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
