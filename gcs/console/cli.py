@@ -54,6 +54,9 @@ def add_gcs_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--signing-key", type=Path, metavar="FILE",
                         help="MAVLink 2 signing with the passphrase in FILE (default: $VIL_SIGNING_KEY if set); "
                              "the aPad's unsigned frames are then refused")
+    parser.add_argument("--bridge", metavar="ADDR",
+                        help="listen here (udp:HOST:PORT or serial:DEV[:BAUD]) for real aMussels' AMUSSEL_STATUS "
+                             "reports; they join the simulated fleet (the scenario's fleet.real_ids)")
 
 
 def run_gcs(args: argparse.Namespace) -> int:
@@ -95,7 +98,7 @@ def run_gcs(args: argparse.Namespace) -> int:
             return 2
     config = ConsoleConfig(
         scenario, connect=args.connect, sitl=args.sitl_link if args.sitl else None, speed=args.speed,
-        out_dir=out, start_paused=args.paused, signing_key=key, epoch_us=epoch_us, resume=resume,
+        out_dir=out, start_paused=args.paused, signing_key=key, epoch_us=epoch_us, resume=resume, bridge=args.bridge,
     )
     try:  # open everything now: what cannot be used is refused before the console starts
         world = open_world(config)

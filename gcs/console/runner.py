@@ -94,6 +94,7 @@ class ConsoleConfig:
     signing_key: bytes | None = None  # MAVLink 2 signing on the aPad link (`vil gcs --signing-key`)
     epoch_us: int | None = None  # Unix time of mission time 0 in the logs (None: now)
     resume: ResumePoint | None = None  # continue this checkpoint's mission (`vil gcs --resume`)
+    bridge: str | None = None  # where real aMussels report (`vil gcs --bridge`)
 
 
 def open_world(config: ConsoleConfig) -> World:
@@ -105,7 +106,8 @@ def open_world(config: ConsoleConfig) -> World:
     saved = config.resume.checkpoint if config.resume is not None else None
     start_us = saved.time_us if saved is not None else 0
     clock: Clock = WallClock(start_us=start_us) if config.speed is None else PacedClock(config.speed, start_us=start_us)
-    options = LinkOptions(connect=config.connect, sitl_medium=config.sitl or "memory", signing_key=config.signing_key)
+    options = LinkOptions(connect=config.connect, sitl_medium=config.sitl or "memory", signing_key=config.signing_key,
+                          bridge=config.bridge)
     epoch_us = unix_time_us() if config.epoch_us is None else config.epoch_us
     world = build_world(config.scenario, clock, config.out_dir, options, epoch_us=epoch_us,
                         mission_start_us=0 if saved is not None else None, append_logs=saved is not None)

@@ -77,7 +77,7 @@ class FleetConfig:
     status_rate_hz: float
     sensors_rate_hz: float
     sensor_field: str  # "anoxic_patch" or "dummy"
-    # Real aMussels expected on the bridge (`--bridge`), beside the simulated ones. An id that is
+    # Real aMussels expected on the bridge (`vil gcs --bridge`), beside the simulated ones. An id that is
     # also simulated is refused at start, unless the real one is to replace the simulated one.
     real_ids: tuple[int, ...] = ()
     real_replaces_simulated: bool = False
