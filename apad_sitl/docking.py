@@ -74,41 +74,18 @@ class MusselTable(Mapping[int, MusselFix]):
         """Take a batch of statuses, each an integer array of shape (n,), in arrival order (a later row
         of the same aMussel wins). Rows failing validation are dropped and counted, by their first
         bad field; returns how many rows were taken. ValueError if the arrays are not (n,) integers."""
-        columns = [np.asarray(a) for a in (ids, lat_e7, lon_e7, state)]
-        n = columns[0].shape[0] if columns[0].ndim == 1 else -1
-        for a in columns:
-            if a.shape != (n,) or not np.issubdtype(a.dtype, np.integer):
-                raise ValueError("update_many takes integer arrays of one shape (n,)")
-        i, la, lo, st = columns
-        ids, lats, lons, states = i.tolist(), la.tolist(), lo.tolist(), st.tolist()
-        # Range checks on the Python lists the dict takes anyway: a fleet's batch is a few dozen rows,
-        # where numpy's cost per call outweighs its speed per row.
-        fine = not n or (
-            min(ids) >= 1 and max(ids) <= MAX_MUSSEL_ID and min(lats) >= -MAX_LAT_E7 and max(lats) <= MAX_LAT_E7
-            and min(lons) >= -MAX_LON_E7 and max(lons) <= MAX_LON_E7
-            and min(states) >= 0 and max(states) < len(MusselState)  # 0..5
-        )
-        if not fine:  # the rare case: count each bad row by its first bad field, keep the rest
-            with np.errstate(over="ignore"):
-                checks = (
-                    ("mussel_id", (i >= 1) & (i <= MAX_MUSSEL_ID)),
-                    ("lat", (la >= -MAX_LAT_E7) & (la <= MAX_LAT_E7)),
-                    ("lon", (lo >= -MAX_LON_E7) & (lo <= MAX_LON_E7)),
-                    ("state", np.isin(st, KNOWN_STATES)),
-                )
-            good = np.ones(n, dtype=bool)
-            for field, ok in checks:
-                bad = int(np.count_nonzero(good & ~ok))
-                if bad:
-                    self.dropped[f"invalid:{STATUS}:{field}"] += bad
-                good &= ok
-            i = i[good]
-            ids, lats, lons, states = i.tolist(), la[good].tolist(), lo[good].tolist(), st[good].tolist()
+        return self.take(checked_statuses(ids, lat_e7, lon_e7, state))
+
+    def take(self, batch: CheckedStatuses) -> int:
+        """Take a batch `checked_statuses` made (one check serves every aPad that heard it)."""
+        rows, drops = batch
+        for reason, count in drops:
+            self.dropped[reason] += count
         # A batch is the whole fleet once a second: take it in one dict update, and let every fix be
         # converted afresh when next asked (only a dock asks, for one aMussel).
-        self._raw.update(zip(ids, zip(lats, lons, states, strict=True), strict=True))
+        self._raw.update(rows)
         self._fixes.clear()
-        return int(i.size)
+        return len(rows)
 
     def _store(self, mussel_id: int, lat_e7: int, lon_e7: int, state: int) -> None:
         raw = (lat_e7, lon_e7, state)
@@ -130,6 +107,50 @@ class MusselTable(Mapping[int, MusselFix]):
 
     def __len__(self) -> int:
         return len(self._raw)
+
+
+# The rows to store, (id, (lat degE7, lon degE7, state)) in arrival order, and what was dropped, by reason.
+CheckedStatuses = tuple[list[tuple[int, tuple[int, int, int]]], list[tuple[str, int]]]
+
+
+def checked_statuses(
+    ids: NDArray[np.integer[Any]],
+    lat_e7: NDArray[np.integer[Any]],
+    lon_e7: NDArray[np.integer[Any]],
+    state: NDArray[np.integer[Any]],
+) -> CheckedStatuses:
+    """`MusselTable.update_many`'s checks, apart from any table."""
+    columns = [np.asarray(a) for a in (ids, lat_e7, lon_e7, state)]
+    n = columns[0].shape[0] if columns[0].ndim == 1 else -1
+    for a in columns:
+        if a.shape != (n,) or not np.issubdtype(a.dtype, np.integer):
+            raise ValueError("update_many takes integer arrays of one shape (n,)")
+    i, la, lo, st = columns
+    idl, lats, lons, states = i.tolist(), la.tolist(), lo.tolist(), st.tolist()
+    # Range checks on the Python lists the table takes anyway: a fleet's batch is a few dozen rows,
+    # where numpy's cost per call outweighs its speed per row.
+    fine = not n or (
+        min(idl) >= 1 and max(idl) <= MAX_MUSSEL_ID and min(lats) >= -MAX_LAT_E7 and max(lats) <= MAX_LAT_E7
+        and min(lons) >= -MAX_LON_E7 and max(lons) <= MAX_LON_E7
+        and min(states) >= 0 and max(states) < len(MusselState)  # 0..5
+    )
+    drops: list[tuple[str, int]] = []
+    if not fine:  # the rare case: count each bad row by its first bad field, keep the rest
+        with np.errstate(over="ignore"):
+            checks = (
+                ("mussel_id", (i >= 1) & (i <= MAX_MUSSEL_ID)),
+                ("lat", (la >= -MAX_LAT_E7) & (la <= MAX_LAT_E7)),
+                ("lon", (lo >= -MAX_LON_E7) & (lo <= MAX_LON_E7)),
+                ("state", np.isin(st, KNOWN_STATES)),
+            )
+        good = np.ones(n, dtype=bool)
+        for field, ok in checks:
+            bad = int(np.count_nonzero(good & ~ok))
+            if bad:
+                drops.append((f"invalid:{STATUS}:{field}", bad))
+            good &= ok
+        idl, lats, lons, states = i[good].tolist(), la[good].tolist(), lo[good].tolist(), st[good].tolist()
+    return list(zip(idl, zip(lats, lons, states, strict=True), strict=True)), drops
 
 
 class Docking:

@@ -31,7 +31,7 @@ from apad_sitl import messages as msgs
 from apad_sitl import primitives as prim
 from apad_sitl import vehicle as veh
 from apad_sitl.commands import Command, CommandTable
-from apad_sitl.docking import Docking, MusselTable
+from apad_sitl.docking import CheckedStatuses, Docking, MusselTable, checked_statuses
 from apad_sitl.geofence import Geofence
 from apad_sitl.logs import VehicleLog
 from apad_sitl.mission_protocol import MissionProtocol
@@ -52,6 +52,17 @@ __all__ = ["DEFAULT_RATES_HZ", "PHYSICS_HZ", "Command", "Geofence", "MusselTable
 PHYSICS_HZ = 10.0
 # One for every vehicle of the process: the aPads of a swarm get the same status datagrams (hot.SharedDecode).
 _STATUS_DECODE = hot.SharedDecode()
+_last_checked: tuple[hot.Split, CheckedStatuses] | None = None
+
+
+def _checked(split: hot.Split) -> CheckedStatuses:
+    """The fix table's checks of a shared split, made once for all the aPads that got it."""
+    global _last_checked
+    last = _last_checked
+    if last is None or last[0] is not split:
+        f = split.hot.fields
+        last = _last_checked = split, checked_statuses(f["mussel_id"], f["lat"], f["lon"], f["state"])
+    return last[1]
 MessageHandler = Callable[[Any], None]  # a decoded pymavlink message in
 
 
@@ -242,8 +253,7 @@ class SitlVehicle:
             keep_raw = self.log is not None
             split = _STATUS_DECODE.decode(datagrams, hot.AMUSSEL_STATUS, self.codec.stats, keep_raw=keep_raw)
             if len(split.hot):
-                f = split.hot.fields
-                self.mussels.update_many(f["mussel_id"], f["lat"], f["lon"], f["state"])
+                self.mussels.take(_checked(split))
                 if self.log is not None and split.hot.raw is not None:
                     self.log.messages(self.now_us, split.hot.raw)
         except Exception as exc:  # the batch path promises not to raise; a promise is not a proof
