@@ -215,6 +215,9 @@ def undock(
     ), None
 
 
+_TIMED = frozenset((Latch.CLOSING, Latch.RELEASING))  # latches whose timers run in `step`
+
+
 def step(
     state: PrimitiveState,
     x_m: float,
@@ -227,6 +230,8 @@ def step(
     kind, progress = state.kind, state.progress
     slots = list(state.slots)
     for i, s in enumerate(slots):
+        if s.latch not in _TIMED:
+            continue  # open or latched: nothing runs (most slots, most steps)
         slot = i + 1
         mine = state.slot == slot and state.mussel_id == s.mussel_id
         if s.latch == Latch.CLOSING:
