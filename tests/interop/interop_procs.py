@@ -11,7 +11,6 @@ import json
 import os
 import re
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -26,12 +25,6 @@ BIN = Path(sys.executable).parent  # the venv's bin/: `vil`, `mavproxy.py`, `mav
 HOME = (43.9400, 15.4400)  # `vil sitl`'s default home, passed explicitly
 STOP_TIMEOUT_S = 5.0
 
-
-def free_udp_port() -> int:
-    """A UDP port nobody on 127.0.0.1 is bound to right now."""
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-        probe.bind(("127.0.0.1", 0))
-        return int(probe.getsockname()[1])
 
 
 def wait_until(predicate: Callable[[], Any], timeout_s: float, what: str, poll_s: float = 0.05) -> Any:

@@ -15,7 +15,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from interop_procs import HOME, Procs, free_udp_port
+from interop_procs import HOME, Procs
+from testkit import free_udp_port
 
 from apad_sitl.vocabulary import Primitive
 from gcs.link.router import Link

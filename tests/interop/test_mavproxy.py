@@ -17,7 +17,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from interop_procs import Procs, free_udp_port, read_events
+from interop_procs import Procs, read_events
+from testkit import free_udp_port
 
 from apad_sitl.params import PARAMS
 from apad_sitl.vocabulary import Primitive

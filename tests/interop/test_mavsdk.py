@@ -21,7 +21,8 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 import pytest
-from interop_procs import HOME, Procs, free_udp_port, read_events
+from interop_procs import HOME, Procs, read_events
+from testkit import free_udp_port
 
 pytest.importorskip("mavsdk", reason="MAVSDK is in the interop extra: pip install -e '.[interop]'")
 

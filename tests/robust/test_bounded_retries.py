@@ -14,6 +14,7 @@ from collections import Counter
 from pathlib import Path
 
 import pytest
+from testkit import read_jsonl, scenario_variant
 
 from gcs.link.faultproxy import LinkFaults
 from gcs.mission.headless import run_mission
@@ -23,11 +24,7 @@ from mavlink_dialect import mavlink
 
 pytestmark = pytest.mark.sitl
 
-MISSIONS = Path(__file__).resolve().parents[2] / "missions"
 
-
-def _events(path: Path) -> list[dict[str, object]]:
-    return [json.loads(line) for line in path.read_text().splitlines()]
 
 
 def test_the_seed_6_livelock_at_40pc_loss_completes_with_nothing_lost(tmp_path: Path) -> None:
@@ -38,24 +35,31 @@ def test_the_seed_6_livelock_at_40pc_loss_completes_with_nothing_lost(tmp_path: 
     assert r.end_reason == "mission time"
     assert len(r.whereabouts) == 12 and r.misplaced == []
     assert r.cycles >= 2  # the mission went on sharing energy, not just survived
-    apad = _events(tmp_path / "apad1.events.jsonl")
-    gcs = _events(tmp_path / "events.jsonl")
+    apad = read_jsonl(tmp_path / "apad1.events.jsonl")
+    gcs = read_jsonl(tmp_path / "events.jsonl")
     # The failsafe took over mid-Go To and the GCS's next Go To was executed, not answered as a duplicate.
     assert any(e["event"] == "failsafe" for e in apad)
     assert any(e["event"] == "goto_resumed" for e in gcs)
-    # Duplicates (the proxy's and the GCS's re-sends) were answered without a second execution.
-    assert any(e["event"] == "command_retry" for e in apad)
+    # Duplicates (the proxy's) and re-sends (the GCS's) were answered, and never executed a second
+    # time while the first was still in force: between two executions of one Go To, something
+    # else (the failsafe, another primitive) changed the aPad's course.
+    kinds = {e["event"] for e in apad}
+    assert {"command_retry", "command_duplicate"} <= kinds
+    in_force = None
+    for e in apad:
+        if e["event"] == "primitive" and e["primitive"] != "GOTO":
+            in_force = None
+        elif e["event"] == "command" and e["name"] == "MAV_CMD_DO_REPOSITION" and e["result"] == "ACCEPTED":
+            assert e["params"] != in_force, f"a Go To executed twice while in force at {e['t_s']} s"
+            in_force = e["params"]
     assert max(float(str(e["t_s"])) for e in gcs) >= s.mission.duration_s  # it ran to the end, not stuck
 
 
 def test_a_current_that_carries_amussels_outside_the_geofence_ends_the_run_with_exit_3(tmp_path: Path) -> None:
     """A strong current against the pool's tight geofence: the aMussels it carries off cannot be
     fetched. The run must not retry them for ever: it ends, says who is where, and exits 3."""
-    text = (MISSIONS / "pool12.toml").read_text()
-    text = text.replace("current_mps = [0.0, 0.0]", "current_mps = [0.02, 0.0]")
-    text = text.replace('"areas/', f'"{MISSIONS}/areas/').replace('"starts/', f'"{MISSIONS}/starts/')
-    scenario = tmp_path / "pool12_current.toml"
-    scenario.write_text(text)
+    scenario = scenario_variant("pool12", tmp_path / "pool12_current.toml",
+                                {"current_mps = [0.0, 0.0]": "current_mps = [0.02, 0.0]"})
     out = tmp_path / "run"
     done = subprocess.run([sys.executable, "-m", "gcs.cli", "run", str(scenario), "--out", str(out),
                            "--json", str(tmp_path / "r.json")], capture_output=True, text=True, timeout=240)
@@ -67,7 +71,7 @@ def test_a_current_that_carries_amussels_outside_the_geofence_ends_the_run_with_
     assert misplaced and len(result["whereabouts"]) == 12
     for w in misplaced:  # the summary names every one, with where it is
         assert any(line.split()[3:4] == [str(w["id"])] for line in done.stdout.splitlines()), w
-    events = _events(next(out.rglob("events.jsonl")))
+    events = read_jsonl(next(out.rglob("events.jsonl")))
     kinds = Counter(str(e["event"]) for e in events)
     assert kinds["unreachable"] >= 1  # logged once per aMussel, never tried
     assert kinds["geofence"] == 0  # no Go To outside the fence was even attempted
@@ -79,7 +83,7 @@ def test_a_link_that_dies_for_good_stops_new_work_and_the_mission_still_ends(tmp
     faults = LinkFaults(outages_s=((500.0, s.mission.duration_s + 60.0),), seed=0)
     r = run_mission(s, tmp_path, options=LinkOptions(faults=faults))
     assert r.end_reason == "mission time"
-    gcs = _events(tmp_path / "events.jsonl")
+    gcs = read_jsonl(tmp_path / "events.jsonl")
     lost_at = next(float(str(e["t_s"])) for e in gcs if e["event"] == "link_lost")
     assert 500.0 <= lost_at < 1000.0
     # After the loss was noticed: bounded retries gave up, and no aMussel was called up again.
@@ -99,5 +103,5 @@ def test_telemetry_rates_the_apad_refuses_are_logged_not_fatal(tmp_path: Path) -
         world.request_telemetry({54321: 1.0})
     finally:
         world.close()
-    failed = [e for e in _events(tmp_path / "events.jsonl") if e["event"] == "telemetry_rate_failed"]
+    failed = [e for e in read_jsonl(tmp_path / "events.jsonl") if e["event"] == "telemetry_rate_failed"]
     assert [e["message"] for e in failed] == [54321] and "DENIED" in str(failed[0]["what"])

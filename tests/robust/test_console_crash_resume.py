@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from testkit import read_jsonl
 
 from gcs.mission.control import Phase
 from gcs.records import checkpoint
@@ -83,10 +84,6 @@ class Console:
         os.close(self.master)
 
 
-def _events(path: Path) -> list[dict[str, Any]]:
-    return [json.loads(line) for line in path.read_text().splitlines()]
-
-
 def _wait(what: str, condition: Any, console: Console) -> None:
     deadline = time.monotonic() + WALL_TIMEOUT_S
     while not condition():
@@ -119,7 +116,7 @@ def test_sigkill_of_the_console_with_amussels_docked_then_resume(tmp_path: Path)
                     if s == MusselState.DOCKED)
     assert docked and KILL_AFTER_S < at_s < 2400
     before = (run / "events.jsonl").read_bytes()
-    apad_before = _events(run / "apad1.events.jsonl")
+    apad_before = read_jsonl(run / "apad1.events.jsonl")
 
     second = Console(tmp_path, "--resume")  # finds runs/console-pool12-run1 by its checkpoint
     try:
@@ -160,7 +157,7 @@ def test_sigkill_of_the_console_with_amussels_docked_then_resume(tmp_path: Path)
     assert any(e["event"] == "call_up" for e in events[resume:])  # and the mission really went on
 
     # The aPad's own log and both .tlogs: cut back to the checkpoint, each record once, in time order.
-    apad = _events(run / "apad1.events.jsonl")
+    apad = read_jsonl(run / "apad1.events.jsonl")
     kept = [e for e in apad_before if e["t_s"] < at_s]
     assert apad[: len(kept)] == kept
     assert apad[len(kept)]["event"] == "start" and apad[len(kept)]["t_s"] == pytest.approx(at_s)

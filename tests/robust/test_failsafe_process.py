@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from testkit import free_udp_port
 
 from apad_sitl.vocabulary import RoverMode
 from mavlink_dialect import Codec, mavlink
@@ -25,11 +26,6 @@ FS_GCS_TIMEOUT_S = 3.0  # the default under test: nothing passed on the command 
 # it may hold that much early) and 3.0 s plus a millisecond or two.
 SLACK_S = 0.25
 
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 class Gcs:

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 from hostile_packets import GCS_ORDERS, MESSAGE_CLASSES, STRANGERS, HostileFrames, senders
+from testkit import free_udp_port
 
 from mavlink_dialect import Codec, mavlink
 
@@ -21,11 +22,6 @@ pytestmark = [pytest.mark.sitl, pytest.mark.slow]
 ROOT = Path(__file__).resolve().parents[2]
 QUIET = [cls for cls in MESSAGE_CLASSES if cls.msgname not in GCS_ORDERS]  # see test_fuzz_hostile_fields
 
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def spray(sock: socket.socket, gen: HostileFrames, ports: list[int], n: int) -> None:

@@ -5,12 +5,12 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import socket
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from testkit import free_udp_port
 
 from gcs.console.cli import add_gcs_arguments, run_gcs
 from gcs.console.runner import ConsoleConfig, open_world
@@ -28,11 +28,6 @@ def parse(*argv: str) -> argparse.Namespace:
     add_gcs_arguments(parser)
     return parser.parse_args(argv)
 
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def test_vil_gcs_has_a_signing_key_option_and_a_bad_file_is_one_line_and_exit_2(

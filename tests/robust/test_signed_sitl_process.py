@@ -12,16 +12,12 @@ import time
 from pathlib import Path
 
 import pytest
+from testkit import free_udp_port
 
 from mavlink_dialect import Codec, mavlink, signing
 
 pytestmark = [pytest.mark.sitl, pytest.mark.slow]
 
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def exchange(sock: socket.socket, codec: Codec, port: int, msg: mavlink.MAVLink_message, seconds: float) -> list:

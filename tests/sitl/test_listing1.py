@@ -2,23 +2,18 @@
 
 from __future__ import annotations
 
-import socket
 import subprocess
 import sys
 import time
 from pathlib import Path
 
 import pytest
+from testkit import free_udp_port
 
 pytestmark = [pytest.mark.sitl, pytest.mark.slow]
 
 ROOT = Path(__file__).resolve().parents[2]
 
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def test_listing1_goes_to_amussel_24_and_docks_it_in_slot_2(tmp_path: Path) -> None:

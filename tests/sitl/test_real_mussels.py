@@ -3,12 +3,12 @@ UDP to the GCS's bridge; the planner serves both; an id that is both real and si
 
 from __future__ import annotations
 
-import socket
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from testkit import free_udp_port, scenario_variant
 
 from gcs.cli import main
 from gcs.mission.control import LoopControl
@@ -19,28 +19,18 @@ from mussel_sim.battery import discharge_profile
 
 pytestmark = pytest.mark.sitl
 ROOT = Path(__file__).resolve().parents[2]
-MISSIONS = ROOT / "missions"
 REAL = {101: (43.94002, 15.43990), 102: (43.93998, 15.43995)}  # in the pool, near the aPad's home
 
 
 def _scenario(tmp_path: Path, extra: str) -> Path:
-    text = (MISSIONS / "pool12.toml").read_text()
-    text = text.replace('"areas/', f'"{MISSIONS}/areas/').replace('"starts/', f'"{MISSIONS}/starts/')
-    text = text.replace("[fleet]\n", f"[fleet]\n{extra}\n").replace('duration = "40m"', 'duration = "15m"')
-    path = tmp_path / "pool12_real.toml"
-    path.write_text(text)
-    return path
+    return scenario_variant("pool12", tmp_path / "pool12_real.toml",
+                            {"[fleet]\n": f"[fleet]\n{extra}\n", 'duration = "40m"': 'duration = "15m"'})
 
-
-def _free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def test_real_amussels_on_the_bridge_are_served_beside_the_simulated_fleet(tmp_path: Path) -> None:
     scenario = load_scenario(_scenario(tmp_path, "real_ids = [101, 102]"))
-    port = _free_udp_port()
+    port = free_udp_port()
     world = build_world(scenario, PacedClock(20.0), tmp_path / "run", LinkOptions(bridge=f"udp:127.0.0.1:{port}"))
     mussels = [f"--mussel={m}:{lat},{lon}" for m, (lat, lon) in REAL.items()] + ["--mussel=5:43.94,15.44"]
     agent = subprocess.Popen([sys.executable, str(ROOT / "tests/sitl/real_mussel_agent.py"), "--gcs",

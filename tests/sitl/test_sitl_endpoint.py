@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import json
 import math
-import socket
 import subprocess
 import sys
 from collections.abc import Callable, Iterator
@@ -17,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from testkit import free_udp_port
 
 from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.params import PARAMS, ApadParams
@@ -554,11 +554,6 @@ def test_tlog_and_event_log_are_written_and_readable(world: World, tmp_path: Pat
 
 # ---------------------------------------------------------------------------- real UDP, wall clock
 
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def test_real_time_over_udp_sockets(tmp_path: Path) -> None:

@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 import pytest
+from testkit import free_udp_port
 
 from apad_sitl.serve import add_arguments, run
 from mavlink_dialect import Codec, mavlink
@@ -18,11 +19,6 @@ from mavlink_dialect import Codec, mavlink
 pytestmark = pytest.mark.sitl
 ROOT = Path(__file__).resolve().parents[2]
 
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def parse(*argv: str) -> argparse.Namespace:

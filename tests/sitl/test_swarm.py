@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import pytest
+from testkit import read_jsonl
 
 from gcs.api import Location
 from gcs.mission.headless import run_mission
@@ -15,10 +15,6 @@ from gcs.mission.swarm import FleetShares, SwarmWatch, route_conflicts
 from gcs.mission.world import LinkOptions, lockstep_world
 
 pytestmark = pytest.mark.sitl
-
-
-def _events(folder: Path) -> list[dict[str, Any]]:
-    return [json.loads(line) for line in (folder / "events.jsonl").read_text().splitlines()]
 
 
 def _call_ups_within_shares(events: list[dict[str, Any]]) -> None:
@@ -43,7 +39,7 @@ def test_two_apads_share_the_pool_fleet_and_each_serves_only_its_share(tmp_path:
     for m in r.mussels:
         for d in m.dockings:
             assert m.id in (share_1 if d["apad"] == 1 else share_2)
-    events = _events(tmp_path)
+    events = read_jsonl(tmp_path / "events.jsonl")
     assert [e["event"] for e in events].count("reshare") == 1
     _call_ups_within_shares(events)
     # Its own two SITL aPads, each with its own logs.
@@ -56,7 +52,7 @@ def test_two_apads_share_the_pool_fleet_and_each_serves_only_its_share(tmp_path:
 def test_a_failed_apad_is_noticed_its_share_is_taken_over_and_nothing_is_lost(tmp_path: Path) -> None:
     s = load_scenario("pool12x2").with_overrides(duration_s=1500.0)
     r = run_mission(s, tmp_path, options=LinkOptions(fail_apads=((2, 300.0),)))
-    events = _events(tmp_path)
+    events = read_jsonl(tmp_path / "events.jsonl")
     reshares = [e for e in events if e["event"] == "reshare"]
     assert len(reshares) == 2
     lost_at = reshares[1]["t_s"]

@@ -3,12 +3,12 @@ and two aPads' scripts taking turns on one link (`missiontime.processes`)."""
 
 from __future__ import annotations
 
-import socket
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from testkit import free_udp_port
 
 from apad_sitl.vocabulary import Progress
 from gcs.api import Location
@@ -23,15 +23,10 @@ pytestmark = pytest.mark.sitl
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
 
 def test_one_gcs_drives_two_sitl_processes_over_udp(tmp_path: Path) -> None:
     scenario = load_scenario("pool12x2").with_overrides(duration_s=1.0)  # the swarm part only starts
-    ports = [_free_udp_port(), _free_udp_port()]
+    ports = [free_udp_port(), free_udp_port()]
     procs = [
         subprocess.Popen(
             [sys.executable, "-m", "apad_sitl", "--listen", f"udp:127.0.0.1:{port}", "--sysid", str(a.system_id),
