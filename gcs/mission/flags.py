@@ -13,19 +13,26 @@ import os
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
+from typing import TypeVar
 
 from gcs.mission.scenario import MAX_DURATION_S, out_of_range, parse_duration_s
 
+N = TypeVar("N", int, float)
 
-def number(text: str, lo: float | None = None, hi: float | None = None) -> float:
+
+def _checked(text: str, convert: Callable[[str], N], what: str, lo: float | None, hi: float | None) -> N:
     try:
-        value = float(text)
+        value = convert(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
     problem = out_of_range(value, lo, hi)
     if problem:
         raise argparse.ArgumentTypeError(problem)
     return value
+
+
+def number(text: str, lo: float | None = None, hi: float | None = None) -> float:
+    return _checked(text, float, "a number", lo, hi)
 
 
 def number_in(lo: float | None, hi: float | None) -> Callable[[str], float]:
@@ -33,17 +40,7 @@ def number_in(lo: float | None, hi: float | None) -> Callable[[str], float]:
 
 
 def integer_in(lo: int, hi: int) -> Callable[[str], int]:
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-        problem = out_of_range(value, lo, hi)
-        if problem:
-            raise argparse.ArgumentTypeError(problem)
-        return value
-
-    return parse
+    return lambda text: _checked(text, int, "an integer", lo, hi)
 
 
 def fraction(text: str) -> float:
