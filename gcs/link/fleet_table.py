@@ -69,6 +69,7 @@ class MusselTable(Mapping[int, MusselView]):
         self._row: dict[int, int] = {}
         self._last_ids: NDArray[np.integer] | None = None  # a batch of the same ids reuses its rows
         self._last_rows = np.zeros(0, np.intp)
+        self._views: dict[int, MusselView] = {}  # built since the last update: a loop reads the same few often
         self.version = 0  # bumped on every update: readers cache what they derive from the table
 
     # --- updates -----------------------------------------------------------------------------
@@ -85,6 +86,7 @@ class MusselTable(Mapping[int, MusselView]):
         self.lat_e7[row], self.lon_e7[row] = r.lat_e7, r.lon_e7
         self.depth_m[row], self.battery_frac[row], self.battery_mv[row] = r.depth_m, r.battery_frac, r.battery_mv
         self.state[row], self.simulated[row], self.time_us[row] = int(r.state), r.simulated, r.time_us
+        self._views.pop(r.mussel_id, None)
         self.version += 1
         return None
 
@@ -103,12 +105,14 @@ class MusselTable(Mapping[int, MusselView]):
         self.lat_e7[rows], self.lon_e7[rows], self.depth_m[rows] = b.lat_e7, b.lon_e7, b.depth_m
         self.battery_frac[rows], self.battery_mv[rows] = b.battery_frac, b.battery_mv
         self.state[rows], self.simulated[rows], self.time_us[rows] = b.state, b.simulated, b.time_us
+        self._views.clear()
         self.version += 1
         return rejected
 
     def load(self, saved: MusselTable) -> None:
         """Take a saved table's contents (a resumed mission); whoever holds this table keeps it."""
         self.__dict__.update(saved.__dict__)
+        self._views = {}  # a table saved before views were kept has none
         self.version += 1
 
     def _rows_of(self, ids: NDArray[np.integer]) -> NDArray[np.intp]:
@@ -134,11 +138,15 @@ class MusselTable(Mapping[int, MusselView]):
     # --- reads -------------------------------------------------------------------------------
 
     def __getitem__(self, mussel_id: int) -> MusselView:
-        k = self._row[mussel_id]  # KeyError: never heard
-        return MusselView(
-            mussel_id, int(self.lat_e7[k]), int(self.lon_e7[k]), float(self.depth_m[k]), float(self.battery_frac[k]),
-            int(self.battery_mv[k]), MusselState(int(self.state[k])), bool(self.simulated[k]), int(self.time_us[k]),
-        )
+        view = self._views.get(mussel_id)
+        if view is None:
+            k = self._row[mussel_id]  # KeyError: never heard
+            view = self._views[mussel_id] = MusselView(
+                mussel_id, int(self.lat_e7[k]), int(self.lon_e7[k]), float(self.depth_m[k]),
+                float(self.battery_frac[k]), int(self.battery_mv[k]), MusselState(int(self.state[k])),
+                bool(self.simulated[k]), int(self.time_us[k]),
+            )
+        return view
 
     def __iter__(self) -> Iterator[int]:
         return iter(self._row)
