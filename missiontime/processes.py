@@ -5,13 +5,14 @@ the energy-sharing loop). One aPad, one script: it drives the clock itself. Seve
 several scripts on the one clock, and the clock's `sleep` runs the whole world, so two scripts
 must never sleep at once. `Processes` gives each script a thread and a `ProcessClock` of its own
 and lets exactly one thread run at any moment (a discrete-event simulation in the manner of
-SimPy's processes): a script that sleeps parks until its wake time, the coordinator moves the
-shared clock on to the earliest wake time of all and resumes that script. Scripts due at the
+SimPy's processes): a script that sleeps parks until its wake time, and its thread, before it
+parks, moves the shared clock on to the earliest wake time of all and resumes that script. Scripts due at the
 same instant resume in the order they went to sleep (spawn order first). So a lockstep swarm
 is as deterministic as a single aPad, and the same code runs on the wall clock in the field.
 
-Bounded: a script that raises ends `run` with that exception (the others are stopped at their
-next sleep with `ProcessStopped`, so they unwind their `finally` blocks).
+Bounded: a script that raises ends `run` with that exception, and so does the world (a task or a
+handler that raises inside the clock's `sleep`); the scripts are stopped at their next sleep
+with `ProcessStopped`, so they unwind their `finally` blocks.
 """
 
 from __future__ import annotations
@@ -60,11 +61,10 @@ class _Process:
     name: str
     order: int
     # A held lock as a one-shot gate: `release` lets the one waiter through. A hand-over is one
-    # futex wake, about half the cost of an Event's set/wait/clear (a swarm makes two per sleep).
+    # futex wake, about half the cost of an Event's set/wait/clear.
     go: threading.Lock = field(default_factory=_closed_gate)
     done: bool = False
     stop: bool = False
-    error: BaseException | None = None
 
 
 @dataclass
@@ -76,13 +76,21 @@ class Handle(Generic[T]):
 
 
 class Processes:
-    """Run scripts `spawn`ed on `clock` until all have returned (`run`, from the clock's thread)."""
+    """Run scripts `spawn`ed on `clock` until all have returned (`run`, from the clock's thread).
+
+    The baton: whichever thread stops running (a script that sleeps or ends) moves the clock on
+    itself and resumes the next script directly, so a sleep costs one hand-over between threads
+    instead of two through a coordinator (and none when the sleeper is next). The order is the
+    coordinator's: the same queue, popped at the same moments. The world thus runs in the script
+    threads, never two at once; the caller's thread waits until every script has returned.
+    """
 
     def __init__(self, clock: Clock) -> None:
         self.clock = clock
         self._queue: list[tuple[int, int, _Process]] = []  # (wake_us, sequence, process)
         self._sequence = 0
-        self._yielded = _closed_gate()  # released when the running script has parked or finished
+        self._finished = _closed_gate()  # released when every script has returned
+        self._error: BaseException | None = None  # the first failure: a script's, or the world's
         self._threads: list[threading.Thread] = []
         self._processes: list[_Process] = []
 
@@ -99,23 +107,22 @@ class Processes:
                     handle.result = script(own_clock)
             except ProcessStopped:
                 pass
-            except BaseException as exc:  # handed to `run`, which raises it in the clock's thread
-                process.error = exc
-            finally:
-                process.done = True
-                self._yielded.release()
+            except BaseException as exc:  # handed to `run`, which raises it in the caller's thread
+                self._fail(exc)
+            process.done = True
+            self._pass_on(None)
 
         self._processes.append(process)
         self._threads.append(threading.Thread(target=body, name=f"process-{name}", daemon=True))
         return handle
 
     def park(self, process: _Process, wake_us: int) -> None:
-        """Called from the running script's thread: hand over to the coordinator until `wake_us`."""
+        """Called from the running script's thread: sleep until `wake_us`, the others running meanwhile."""
         if process.stop:
             raise ProcessStopped(process.name)
         self._push(process, wake_us)
-        self._yielded.release()
-        process.go.acquire()
+        if not self._pass_on(process):
+            process.go.acquire()
         if process.stop:
             raise ProcessStopped(process.name)
 
@@ -123,23 +130,37 @@ class Processes:
         heapq.heappush(self._queue, (wake_us, self._sequence, process))
         self._sequence += 1
 
+    def _fail(self, exc: BaseException) -> None:
+        if self._error is None:
+            self._error = exc  # from now on every script is stopped at its next turn
+
+    def _pass_on(self, current: _Process | None) -> bool:
+        """The baton holder's turn as coordinator: run the world to the earliest wake time and resume
+        that script. True if it is `current` itself (no hand-over); False if another thread now runs."""
+        if not self._queue:
+            self._finished.release()  # nobody left: every script has returned
+            return False
+        wake_us, _, process = heapq.heappop(self._queue)
+        if self._error is None and wake_us > self.clock.now_us:
+            try:
+                self.clock.sleep(us_to_s(wake_us - self.clock.now_us))
+            except BaseException as exc:  # the world failed: stop every script, then raise it in `run`
+                self._fail(exc)
+        process.stop = self._error is not None
+        if process is current:
+            return True
+        process.go.release()
+        return False
+
     def run(self) -> None:
         """Resume the earliest-waking script, one at a time, until every script has returned."""
         for thread in self._threads:
             thread.start()
         for process in self._processes:
             self._push(process, self.clock.now_us)
-        error: BaseException | None = None
-        while self._queue:
-            wake_us, _, process = heapq.heappop(self._queue)
-            if error is None and wake_us > self.clock.now_us:
-                self.clock.sleep(us_to_s(wake_us - self.clock.now_us))
-            process.stop = error is not None
-            process.go.release()
-            self._yielded.acquire()
-            if process.error is not None and error is None:
-                error = process.error
+        self._pass_on(None)
+        self._finished.acquire()
         for thread in self._threads:
             thread.join()
-        if error is not None:
-            raise error
+        if self._error is not None:
+            raise self._error

@@ -77,3 +77,50 @@ def test_a_failing_script_stops_the_others_and_its_error_reaches_the_caller() ->
         procs.run()
     assert unwound.is_set()  # the endless one was stopped at its next sleep, its finally ran
     assert clock.time() == 2.0
+
+
+def test_the_worlds_error_stops_every_script_and_reaches_the_caller() -> None:
+    clock = VirtualClock()
+
+    def broken(now_us: int) -> None:
+        if now_us >= 1_500_000:
+            raise RuntimeError("a task failed")
+
+    clock.scheduler.every(0.5, broken, "broken")
+    unwound: list[str] = []
+
+    def script(name: str) -> object:
+        def body(c: Clock) -> None:
+            try:
+                while True:
+                    c.sleep(1.0)
+            finally:
+                unwound.append(name)
+
+        return body
+
+    procs = Processes(clock)
+    for name in ("a", "b"):
+        procs.spawn(name, script(name))  # type: ignore[arg-type]
+    with pytest.raises(RuntimeError, match="a task failed"):
+        procs.run()
+    assert sorted(unwound) == ["a", "b"]
+
+
+def test_a_sleeper_that_is_next_again_runs_on_without_a_hand_over() -> None:
+    clock = VirtualClock()
+    threads: list[str] = []
+
+    def quick(c: Clock) -> None:
+        for _ in range(3):
+            threads.append(threading.current_thread().name)
+            c.sleep(0.1)
+
+    def slow(c: Clock) -> None:
+        c.sleep(10.0)
+
+    procs = Processes(clock)
+    procs.spawn("quick", quick)
+    procs.spawn("slow", slow)
+    procs.run()
+    assert threads == ["process-quick"] * 3 and clock.time() == 10.0
