@@ -8,12 +8,12 @@ fleet when an aPad is lost or comes back.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from gcs.mission.control import EndReason, Phase
-from gcs.mission.loop import EnergySharingLoop
+from gcs.mission.loop import EnergySharingLoop, LoopControl
 from gcs.mission.swarm import FleetShares, SwarmWatch
 from gcs.mission.world import World
 from missiontime import Clock, seconds_to_us
@@ -44,22 +44,38 @@ class SwarmOutcome:
 
 def run_swarm(world: World, on_start: Callable[[], None] | None = None) -> SwarmOutcome:
     """Wait for every aPad, share the fleet, run every aPad's loop to the mission's end."""
-    s = world.scenario
-    for a in s.apads:
+    for a in world.scenario.apads:
         world.api.wait_apad(timeout_s=APAD_WAIT_S, apad_id=a.system_id)
         world.request_telemetry(apad_id=a.system_id)
+    shares, watch = share_fleet(world)
+    if on_start is not None:
+        on_start()
+    return SwarmOutcome(run_loops(world, shares, watch), shares, watch)
+
+
+def share_fleet(world: World) -> tuple[FleetShares, SwarmWatch]:
+    """The first sharing of the fleet among every aPad heard, and the watch that re-shares it."""
+    s = world.scenario
     shares = FleetShares()
     watch = SwarmWatch(world.link.registry, shares, world.frame, {a.system_id: a.battery_end_v for a in s.apads},
                        world.events, world.clock, seed=s.seed)
-    watch.check(world.clock.now_us)  # the first sharing, among every aPad heard
+    watch.check(world.clock.now_us)
     watch.register(world.clock.now_us + seconds_to_us(1.0))
-    if on_start is not None:
-        on_start()
-    loops: dict[int, EnergySharingLoop] = {}
+    return shares, watch
+
+
+def run_loops(
+    world: World, shares: FleetShares, watch: SwarmWatch, controls: Mapping[int, LoopControl] | None = None,
+    loops: dict[int, EnergySharingLoop] | None = None,
+) -> dict[int, EnergySharingLoop]:
+    """Every aPad's loop as a process on the world's clock, until all have ended. `controls`: each
+    aPad's own (the console's pause, stop and commands); `loops` is filled as each loop starts."""
+    loops = {} if loops is None else loops
     processes = Processes(world.clock)
-    for a in s.apads:
+    for a in world.scenario.apads:
         def script(clock: Clock, sysid: int = a.system_id) -> Any:
-            loop = loops[sysid] = world.mission_loop(apad_id=sysid, shares=shares, clock=clock)
+            control = controls.get(sysid) if controls is not None else None
+            loop = loops[sysid] = world.mission_loop(control, apad_id=sysid, shares=shares, clock=clock)
             end = loop.run()
             if end == EndReason.APAD_BATTERY:  # out for good: its share goes to the others now
                 watch.retire(sysid)
@@ -67,7 +83,7 @@ def run_swarm(world: World, on_start: Callable[[], None] | None = None) -> Swarm
 
         processes.spawn(f"apad{a.system_id}", script)
     processes.run()
-    return SwarmOutcome(loops, shares, watch)
+    return loops
 
 
 def apad_rows(world: World, outcome: SwarmOutcome | None, single: EnergySharingLoop | None) -> list[dict[str, Any]]:
