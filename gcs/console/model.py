@@ -5,10 +5,14 @@ in replay, the recorded .tlog) feeds, takes the mission loop's events, extends t
 second of mission time (`sample(t_s)`), and hands the UI a frozen `Snapshot` it can read from any
 thread. The movement cost is the registry's (aPad-to-setpoint distance per Go To seen on the
 link, the paper's definition), so a replay shows the figure the live run did.
+
+With several aPads it follows each (position, trace, phase, slots, its share of the fleet); the
+snapshot's single-aPad fields are the selected aPad's, so one screen serves one aPad or a swarm.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -16,9 +20,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from apad_sitl.vocabulary import Primitive, RoverMode
-from gcs.link.fleet_table import MusselTable
+from gcs.console.columns import FleetColumns, Growing
 from gcs.link.registry import VehicleRegistry, VehicleView
-from gcs.link.telemetry import DEG_E7, PrimitiveView
+from gcs.link.telemetry import PrimitiveView
 from gcs.records.events import Event
 from missiontime import mm_ss
 from mussel_sim.vocabulary import MusselState
@@ -41,6 +45,28 @@ class SlotSnapshot:
     mussel_id: int
     latch: str
     charging: bool
+
+
+@dataclass(frozen=True)
+class ApadSnapshot:
+    """One aPad as the console shows it; `share`: the aMussels it serves (its owner's share)."""
+
+    system_id: int
+    heard: bool
+    lat_deg: float | None
+    lon_deg: float | None
+    trace_lat_deg: NDArray[np.float64]
+    trace_lon_deg: NDArray[np.float64]
+    battery_v: float | None
+    battery_pct: int
+    mode: str
+    primitive: str
+    slots: tuple[SlotSnapshot, ...]
+    phase: str
+    cycles: int
+    cost_m: float
+    share: tuple[int, ...]
+    ended: str | None
 
 
 @dataclass(frozen=True)
@@ -82,6 +108,9 @@ class Snapshot:
     notice: str = ""
     outline_lat_deg: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     outline_lon_deg: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    apads: tuple[ApadSnapshot, ...] = ()  # every aPad, in the scenario's order
+    selected: int = 0  # the system id of the aPad shown above and commanded
+    owner: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, np.int64))  # (n,) aPad, 0: none
 
     def marker_classes(self) -> NDArray[np.int8]:
         """`MarkerColour` per aMussel `(n,)`."""
@@ -92,34 +121,9 @@ class Snapshot:
         return out
 
 
-class _Growing:
-    """Append-only rows; written rows never change, so views of them are safe to hand out."""
-
-    def __init__(self, width: int, dtype: Any, fill: float = 0.0) -> None:
-        self.fill = fill
-        self.data = np.full((256, width) if width else (256,), fill, dtype)
-        self.n = 0
-
-    def append(self, row: Any) -> None:
-        if self.n == self.data.shape[0]:
-            bigger = np.full((2 * self.n, *self.data.shape[1:]), self.fill, self.data.dtype)
-            bigger[: self.n] = self.data
-            self.data = bigger  # old views keep the old buffer
-        self.data[self.n] = row
-        self.n += 1
-
-    def widen(self, width: int) -> None:
-        grown = np.full((self.data.shape[0], width), self.fill, self.data.dtype)
-        grown[:, : self.data.shape[1]] = self.data
-        self.data = grown
-
-    def rows(self, k: int | None = None) -> NDArray[Any]:
-        return self.data[: self.n if k is None else k]
-
-
 class ConsoleModel:
-    """The console's view of one aPad and the fleet: current state read from the link's registry,
-    history sampled once per second of mission time, the mission loop's events."""
+    """The console's view of the aPads and the fleet: current state read from the link's registry,
+    history sampled once per second of mission time, the mission loops' events."""
 
     def __init__(
         self,
@@ -130,9 +134,12 @@ class ConsoleModel:
         source: str,
         mussel_ids: NDArray[np.int64] | None = None,
         outline: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+        apad_ids: Sequence[int] = (),
     ) -> None:
+        """`apad_ids`: every aPad to follow (default `apad_id` alone), the first one selected."""
         self.registry = registry
         self.apad_id = apad_id
+        self.apad_ids = tuple(apad_ids) or (apad_id,)
         self.pool_threshold = pool_threshold
         self.duration_s = duration_s
         self.source = source
@@ -141,18 +148,17 @@ class ConsoleModel:
         n = self.ids.size
         self.active_samples = np.zeros(n, np.int64)
         self.samples = 0
-        self.phase = "-"
+        m = len(self.apad_ids)
         self.strategy = "-"
-        self.cycles = 0
-        self.ended: str | None = None
         self.log: list[str] = []
-        self._redeploying = False
-        self.hist_t = _Growing(0, np.float64)
-        self.hist_active = _Growing(0, np.int32)
-        self.hist_battery = _Growing(n, np.float32, np.nan)
-        self.hist_apad_v = _Growing(0, np.float64, np.nan)
-        self.trace_lat = _Growing(0, np.float64, np.nan)
-        self.trace_lon = _Growing(0, np.float64, np.nan)
+        self.loops = {a: _LoopTrack() for a in self.apad_ids}  # what each aPad's loop said
+        self.owner: dict[int, int] = {}  # aMussel -> the aPad whose share it is (a swarm's)
+        self.hist_t = Growing(0, np.float64)
+        self.hist_active = Growing(0, np.int32)
+        self.hist_battery = Growing(n, np.float32, np.nan)
+        self.hist_apad_v = Growing(m, np.float64, np.nan)  # (k, m): a column per aPad
+        self.trace_lat = Growing(m, np.float64, np.nan)
+        self.trace_lon = Growing(m, np.float64, np.nan)
         self._own_version = 0
         self._fleet: tuple[int, FleetColumns] | None = None  # (table version, columns) last gathered
 
@@ -180,23 +186,21 @@ class ConsoleModel:
 
     def event(self, ev: Event) -> None:
         f = ev.fields
-        if ev.kind == "phase":
-            self.phase = str(f.get("phase", "-"))
-            # A cycle is complete when the loop is back to idle after a redeployment.
-            if self.phase == "idle wait" and self._redeploying:
-                self.cycles += 1
-                self._redeploying = False
-        elif ev.kind in ("mission_start", "plan_collection") and "strategy" in f:
+        loop = self.loops.get(int(f.get("apad", self.apad_ids[0])))  # a swarm's loops name their aPad
+        if loop is not None:
+            loop.event(ev)
+        if ev.kind in ("mission_start", "plan_collection") and "strategy" in f:
             self.strategy = str(f["strategy"])
         elif ev.kind == "strategy_switch":
             self.strategy = str(f.get("new", self.strategy))
-        elif ev.kind == "plan_redeployment":
-            self._redeploying = True
-        elif ev.kind == "mission_end":
-            self.ended = str(f.get("reason", "ended"))
         if ev.kind != "phase" or f.get("phase") != "idle wait":  # idle wait repeats every cycle
             self.log.append(_event_text(ev))
             del self.log[:-50]
+        self._own_version += 1
+
+    def set_owner(self, owner: Mapping[int, int]) -> None:
+        """A swarm's sharing of the fleet (`FleetShares.owner`), copied."""
+        self.owner = dict(owner)
         self._own_version += 1
 
     def sample(self, t_s: float) -> None:
@@ -205,24 +209,26 @@ class ConsoleModel:
         active = cols.state == MusselState.ACTIVE
         self.active_samples += active
         self.samples += 1
-        view = self.registry.vehicles.get(self.apad_id)
+        views = [self.registry.vehicles.get(a) for a in self.apad_ids]
         self.hist_t.append(t_s)
         self.hist_active.append(int(np.count_nonzero(active)))
         self.hist_battery.append(cols.battery_frac)
-        self.hist_apad_v.append(np.nan if view is None or view.battery_v is None else view.battery_v)
-        self.trace_lat.append(np.nan if view is None or view.lat_deg is None else view.lat_deg)
-        self.trace_lon.append(np.nan if view is None or view.lon_deg is None else view.lon_deg)
+        self.hist_apad_v.append([np.nan if v is None or v.battery_v is None else v.battery_v for v in views])
+        self.trace_lat.append([np.nan if v is None or v.lat_deg is None else v.lat_deg for v in views])
+        self.trace_lon.append([np.nan if v is None or v.lon_deg is None else v.lon_deg for v in views])
         self._own_version += 1
 
     # --- output ------------------------------------------------------------------------------
 
-    def snapshot(self, t_s: float, **extra: Any) -> Snapshot:
-        """A frozen copy of the model; `extra` sets the operator fields (paused, notice, ...)."""
+    def snapshot(self, t_s: float, selected: int | None = None, **extra: Any) -> Snapshot:
+        """A frozen copy of the model, the aPad fields of `selected` (default the first aPad);
+        `extra` sets the operator fields (paused, notice, ...)."""
         cols = self.fleet()
-        view = self.registry.vehicles.get(self.apad_id) or VehicleView(self.apad_id)
-        heard = self.apad_id in self.registry.vehicles
         uptime = 100.0 * self.active_samples / self.samples if self.samples else np.zeros(self.ids.size)
-        k0 = max(self.trace_lat.n - TRACE_SAMPLES, 0)
+        owner = np.array([self.owner.get(int(m), 0) for m in self.ids], np.int64)
+        apads = tuple(self._apad(i, owner) for i in range(len(self.apad_ids)))
+        column = self.apad_ids.index(selected) if selected in self.apad_ids else 0
+        a = apads[column]
         return Snapshot(
             version=self.version,
             t_s=t_s,
@@ -235,55 +241,81 @@ class ConsoleModel:
             battery_frac=cols.battery_frac,
             state=cols.state,
             uptime_pct=np.asarray(uptime, np.float64).copy(),
-            apad_lat_deg=view.lat_deg,
-            apad_lon_deg=view.lon_deg,
-            trace_lat_deg=self.trace_lat.rows()[k0:].copy(),
-            trace_lon_deg=self.trace_lon.rows()[k0:].copy(),
-            apad_battery_v=view.battery_v,
-            apad_battery_pct=view.battery_pct,
-            mode=_mode_name(view.custom_mode) if heard else "-",
-            primitive=_primitive_text(view.primitive) if heard else "-",
-            slots=tuple(SlotSnapshot(s.slot, s.mussel_id, s.latch.name, s.charging) for s in view.slots.values()),
-            phase=self.phase,
+            apad_lat_deg=a.lat_deg,
+            apad_lon_deg=a.lon_deg,
+            trace_lat_deg=a.trace_lat_deg,
+            trace_lon_deg=a.trace_lon_deg,
+            apad_battery_v=a.battery_v,
+            apad_battery_pct=a.battery_pct,
+            mode=a.mode,
+            primitive=a.primitive,
+            slots=a.slots,
+            phase=a.phase,
             strategy=self.strategy,
-            cost_m=view.goto_cost_m,
-            cycles=self.cycles,
+            cost_m=a.cost_m,
+            cycles=a.cycles,
             # History rows are written once and never again: views are as good as copies.
             hist_t_s=self.hist_t.rows(),
             hist_active=self.hist_active.rows(),
             hist_battery=self.hist_battery.rows(),
-            hist_apad_v=self.hist_apad_v.rows(),
+            hist_apad_v=self.hist_apad_v.rows()[:, column],
             log=tuple(self.log[-8:]),
-            ended=self.ended,
+            # The mission has ended when every aPad's loop has.
+            ended=None if any(x.ended is None for x in apads) else a.ended,
             outline_lat_deg=self.outline[0],
             outline_lon_deg=self.outline[1],
+            apads=apads,
+            selected=a.system_id,
+            owner=owner,
             **extra,
         )
 
+    def _apad(self, column: int, owner: NDArray[np.int64]) -> ApadSnapshot:
+        sysid = self.apad_ids[column]
+        view = self.registry.vehicles.get(sysid) or VehicleView(sysid)
+        heard = sysid in self.registry.vehicles
+        loop = self.loops[sysid]
+        k0 = max(self.trace_lat.n - TRACE_SAMPLES, 0)
+        return ApadSnapshot(
+            system_id=sysid,
+            heard=heard,
+            lat_deg=view.lat_deg,
+            lon_deg=view.lon_deg,
+            trace_lat_deg=self.trace_lat.rows()[k0:, column].copy(),
+            trace_lon_deg=self.trace_lon.rows()[k0:, column].copy(),
+            battery_v=view.battery_v,
+            battery_pct=view.battery_pct,
+            mode=_mode_name(view.custom_mode) if heard else "-",
+            primitive=_primitive_text(view.primitive) if heard else "-",
+            slots=tuple(SlotSnapshot(s.slot, s.mussel_id, s.latch.name, s.charging) for s in view.slots.values()),
+            phase=loop.phase,
+            cycles=loop.cycles,
+            cost_m=view.goto_cost_m,
+            share=tuple(int(m) for m in self.ids[owner == sysid]),
+            ended=loop.ended,
+        )
 
-@dataclass(frozen=True)
-class FleetColumns:
-    """The latest report of each aMussel, `(n,)` in a given id order; NaN / ACTIVE where never heard."""
 
-    lat_deg: NDArray[np.float64]
-    lon_deg: NDArray[np.float64]
-    battery_frac: NDArray[np.float64]
-    state: NDArray[np.uint8]
+class _LoopTrack:
+    """What one aPad's loop has said in its events: its phase, its cycles, why it ended."""
 
-    @staticmethod
-    def of(table: MusselTable, ids: NDArray[np.int64]) -> FleetColumns:
-        n = ids.size
-        lat, lon, battery = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
-        state = np.full(n, MusselState.ACTIVE, np.uint8)
-        rows = table.rows(ids)
-        heard = rows >= 0
-        if heard.any():
-            rows = rows[heard]
-            lat[heard] = table.lat_e7[rows] / DEG_E7
-            lon[heard] = table.lon_e7[rows] / DEG_E7
-            battery[heard] = table.battery_frac[rows]
-            state[heard] = table.state[rows]
-        return FleetColumns(lat, lon, battery, state)
+    def __init__(self) -> None:
+        self.phase = "-"
+        self.cycles = 0
+        self.ended: str | None = None
+        self._redeploying = False
+
+    def event(self, ev: Event) -> None:
+        if ev.kind == "phase":
+            self.phase = str(ev.fields.get("phase", "-"))
+            # A cycle is complete when the loop is back to idle after a redeployment.
+            if self.phase == "idle wait" and self._redeploying:
+                self.cycles += 1
+                self._redeploying = False
+        elif ev.kind == "plan_redeployment":
+            self._redeploying = True
+        elif ev.kind == "mission_end":
+            self.ended = str(ev.fields.get("reason", "ended"))
 
 
 def area_outline(geometry: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -312,7 +344,8 @@ def _primitive_text(p: PrimitiveView) -> str:
 
 
 def _event_text(ev: Event) -> str:
-    f = ev.fields
+    f = dict(ev.fields)
+    who = f"aPad {f.pop('apad')}: " if "apad" in f else ""  # a swarm's loops name their aPad
     if ev.kind == "phase":
         body = str(f.get("phase"))
     elif "mussel" in f:
@@ -323,4 +356,4 @@ def _event_text(ev: Event) -> str:
         body = f"{ev.kind} {f.get('strategy', '')} {f['route']}"
     else:
         body = " ".join([ev.kind, *(f"{k}={v}" for k, v in f.items())])
-    return f"{mm_ss(ev.t_s)} {body}"
+    return f"{mm_ss(ev.t_s)} {who}{body}"

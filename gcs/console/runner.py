@@ -1,4 +1,4 @@
-"""The live console's world thread: it owns the link, the fleet, an embedded SITL aPad and the loop.
+"""The live console's world thread: it owns the link, the fleet, the embedded SITL aPads and the loops.
 
 The scheduler and the link are not thread-safe, so everything that touches them runs on the one
 thread that calls `ConsoleRunner.run()` (the console starts it in a Textual worker thread). The UI
@@ -7,7 +7,13 @@ talks to it only through thread-safe doors:
 - `LoopControl` flags (pause, stop, strategy), which the loop reads between waits;
 - `submit(command)`: a queue of operator commands, executed through `ApadApi` *between* the
   loop's waits (never inside another command's ACK wait), or while the loop is not running;
-- `snapshot`: a frozen `Snapshot` (copies) replaced at 10 Hz when something changed.
+- `snapshot`: a frozen `Snapshot` (copies) replaced at 10 Hz when something changed;
+- `select_apad`: which aPad the operator's commands act on.
+
+With several aPads the loops run as processes of one clock (`gcs.mission.swarm_run.run_loops`),
+one at a time; each loop has its own `LoopControl`, which follows the runner's (pause, stop) at
+each of its waits, and serves the commands for its own aPad there, on its own clock, so a command
+never runs inside another command's ACK wait for the same aPad, and never two threads at once.
 
 With an output folder the mission checkpoints itself there every `CHECKPOINT_PERIOD_S` of mission
 time (deleted when the loop ends), so `vil gcs --resume` continues it after a crash: the world is
@@ -19,105 +25,37 @@ Nothing here imports Textual: tests drive a runner directly.
 
 from __future__ import annotations
 
+import functools
 import json
-import queue
 import threading
-from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from apad_sitl.vocabulary import Latch, Primitive, Progress
-from gcs.api import CommandError
+from gcs.api import ApadApi, CommandError
+from gcs.console.config import ConsoleConfig, ResumePoint, open_world
 from gcs.console.model import ConsoleModel, Snapshot, area_outline
+from gcs.console.operator import (
+    DockMussel,
+    GoToMussel,
+    Hold,
+    OperatorCommand,
+    UndockMussel,
+    docking,
+    execute,
+    leave_holding,
+)
 from gcs.mission.accounting import account
 from gcs.mission.loop import EnergySharingLoop, LoopControl
-from gcs.mission.scenario import Scenario
-from gcs.mission.world import LinkOptions, World, build_world
+from gcs.mission.swarm_run import SwarmOutcome, run_loops, share_fleet
+from gcs.mission.world import World
 from gcs.records import checkpoint
 from gcs.records.checkpoint import CHECKPOINT_NAME, CHECKPOINT_PERIOD_S, Checkpoint, CheckpointFiles
 from gcs.records.events import EVENTS_NAME, Event
-from missiontime import Clock, PacedClock, Task, WallClock, seconds_to_us, unix_time_us, us_to_s
+from missiontime import PacedClock, Task, seconds_to_us, us_to_s
 from mussel_sim.placement import load_area
-from mussel_sim.vocabulary import MusselCommand, MusselState
 
 PUBLISH_PERIOD_S = 0.1  # the UI redraws at 10 Hz at most
 SAMPLE_PERIOD_S = 1.0  # one point on the plots per second of mission time
-QUIT_DOCK_WAIT_S = 120.0  # quitting waits this long at most for a dock/undock to finish
-SINK_MARGIN_S = 10.0  # quit-now waits for surfacing aMussels to float (then sinks them), this much extra
-
-
-# --- operator commands: plain values the UI puts on the queue ---------------------------------
-
-
-@dataclass(frozen=True)
-class Hold:
-    """Abort whatever the aPad does: Hold Position."""
-
-
-@dataclass(frozen=True)
-class GoToMussel:
-    mussel_id: int
-
-
-@dataclass(frozen=True)
-class DockMussel:
-    mussel_id: int
-
-
-@dataclass(frozen=True)
-class UndockMussel:
-    mussel_id: int
-
-
-OperatorCommand = Hold | GoToMussel | DockMussel | UndockMussel
-
-
-@dataclass(frozen=True)
-class ResumePoint:
-    """A crashed console mission to continue: its checkpoint's files (the same instance goes on
-    saving, it knows where the side files' valid rows end) and what they held."""
-
-    files: CheckpointFiles
-    checkpoint: Checkpoint
-
-
-@dataclass(frozen=True)
-class ConsoleConfig:
-    scenario: Scenario
-    connect: str | None = None  # udp:HOST:PORT of a real or separate SITL aPad
-    sitl: str | None = None  # embedded SITL aPad: "memory" (in-memory pair) or "udp" (localhost socket)
-    speed: float | None = None  # None: wall clock; else a PacedClock at this speed (SITL only)
-    out_dir: Path | None = None  # gcs.tlog and events.jsonl, replayable with `vil replay`
-    start_paused: bool = False  # connect and show, but start the loop only on resume
-    connect_timeout_s: float = 5.0
-    signing_key: bytes | None = None  # MAVLink 2 signing on the aPad link (`vil gcs --signing-key`)
-    epoch_us: int | None = None  # Unix time of mission time 0 in the logs (None: now)
-    resume: ResumePoint | None = None  # continue this checkpoint's mission (`vil gcs --resume`)
-    bridge: str | None = None  # where real aMussels report (`vil gcs --bridge`)
-
-
-def open_world(config: ConsoleConfig) -> World:
-    """The mission's world on the console's clock, with a remote aPad or the embedded SITL one; a
-    resumed one starts at the checkpoint's time with its state put back (`CheckpointError` if it
-    is another run's)."""
-    if (config.connect is None) == (config.sitl is None):
-        raise ValueError("give exactly one of connect or sitl")
-    saved = config.resume.checkpoint if config.resume is not None else None
-    start_us = saved.time_us if saved is not None else 0
-    clock: Clock = WallClock(start_us=start_us) if config.speed is None else PacedClock(config.speed, start_us=start_us)
-    options = LinkOptions(connect=config.connect, sitl_medium=config.sitl or "memory", signing_key=config.signing_key,
-                          bridge=config.bridge)
-    epoch_us = unix_time_us() if config.epoch_us is None else config.epoch_us
-    world = build_world(config.scenario, clock, config.out_dir, options, epoch_us=epoch_us,
-                        mission_start_us=0 if saved is not None else None, append_logs=saved is not None)
-    if saved is not None:
-        try:
-            checkpoint.restore(world, saved)
-        except checkpoint.CheckpointError:
-            world.close()
-            raise
-    return world
 
 
 class ConsoleRunner:
@@ -128,37 +66,56 @@ class ConsoleRunner:
         self.control = LoopControl(paused=config.start_paused)
         self.snapshot: Snapshot | None = None  # replaced whole; readers never see a half-built one
         self.world: World | None = world
-        self.loop: EnergySharingLoop | None = None
+        self.apad_ids = tuple(a.system_id for a in config.scenario.apads)
+        self.selected = self.apad_ids[0]  # the aPad the operator's commands act on
+        self.loop: EnergySharingLoop | None = None  # with one aPad, its loop
+        self.loops: dict[int, EnergySharingLoop] = {}  # every aPad's loop, as it starts
         self.error: str | None = None
         self.finished = threading.Event()
-        self._commands: queue.SimpleQueue[OperatorCommand] = queue.SimpleQueue()
+        self._controls: dict[int, LoopControl] = {}  # a swarm's loops' own, following `control`
+        self._commands: list[tuple[int, OperatorCommand]] = []  # (target aPad, command)
+        self._commands_lock = threading.Lock()
         self._quit = threading.Event()
         self._quit_now = threading.Event()
         self._notice = "connecting" if config.connect else "starting the SITL aPad"
         self._model: ConsoleModel | None = None
         self._last_event: Event | None = None
-        self._published: tuple[int, bool, str | None, str] = (-1, False, None, "")
+        self._published: tuple[object, ...] = ()
         self._checkpoints: CheckpointFiles | None = config.resume.files if config.resume else None
+
+    @property
+    def swarm(self) -> bool:
+        return len(self.apad_ids) > 1
 
     # --- the UI's doors (any thread) -------------------------------------------------------------
 
     def submit(self, command: OperatorCommand) -> None:
-        """Queue an operator command; a command that moves the aPad pauses the loop first."""
+        """Queue an operator command for the selected aPad; it pauses the loops first."""
         self.control.paused = True
-        self._commands.put(command)
+        with self._commands_lock:
+            self._commands.append((self.selected, command))
+
+    def select_apad(self, sysid: int | None = None) -> int:
+        """Pick the aPad the commands act on (None: the next one); the one picked."""
+        ids = self.apad_ids
+        self.selected = ids[(ids.index(self.selected) + 1) % len(ids)] if sysid is None else sysid
+        if self.selected not in ids:
+            raise ValueError(f"no aPad {sysid}")
+        return self.selected
 
     def set_paused(self, paused: bool) -> None:
         self.control.paused = paused
 
     def switch_strategy(self, name: str) -> None:
-        with self.control.lock:
-            self.control.strategy = name
+        for control in (self.control, *self._controls.values()):  # every loop takes it at its next plan
+            with control.lock:
+                control.strategy = name
 
     def request_quit(self, now: bool = False) -> None:
-        """End the mission, leave the aPad holding, close everything.
+        """End the mission, leave the aPads holding, close everything.
 
-        The loop stops at its next safe point: it finishes a collection it has started (an aMussel
-        called up is docked, not left floating). `now` ends it at the loop's next wait instead,
+        The loops stop at their next safe point: each finishes a collection it has started (an
+        aMussel called up is docked, not left floating). `now` ends them at their next wait instead,
         sends any surfaced aMussel back down, and still never interrupts a dock or undock.
         """
         self._quit.set()
@@ -196,7 +153,7 @@ class ConsoleRunner:
         source = self.config.connect or f"embedded SITL ({self.config.sitl})"
         model = ConsoleModel(
             world.link.registry, s.apad.system_id, s.mission.pool_threshold, s.mission.duration_s, source,
-            world.start.ids.astype(np.int64), area_outline(load_area(s.fleet.area).geometry),
+            world.start.ids.astype(np.int64), area_outline(load_area(s.fleet.area).geometry), apad_ids=self.apad_ids,
         )
         model.strategy = s.mission.collect_strategy  # until the loop says otherwise
         if self.config.resume is not None:
@@ -205,33 +162,65 @@ class ConsoleRunner:
         clock.scheduler.every(PUBLISH_PERIOD_S, self._publish, "console.publish", clock.now_us)
         clock.scheduler.every(SAMPLE_PERIOD_S, lambda now_us: model.sample(us_to_s(now_us)), "console.sample",
                               clock.now_us)
-        if not self._wait_for_apad(world):
+        if not self._wait_for_apads(world):
             return
-        world.request_telemetry()
+        for sysid in self.apad_ids:
+            world.request_telemetry(apad_id=sysid)
         self._notice = "loop paused: press p to start" if self.control.paused else ""
         while self.control.paused and not self._quit.is_set():
-            self._serve()
+            self._serve(world.api, None)
             clock.sleep(PUBLISH_PERIOD_S)
         if not self._quit.is_set():
-            # Operator commands run between the loop's waits; a quit-now ends it at one (never mid-dock).
-            self.control.before_wait = lambda: self._before_wait(world)
-            self.loop = loop = world.mission_loop(self.control)
-            if self.config.resume is not None:
-                loop.status = self.config.resume.checkpoint.loop_status
-            task = self._start_checkpoints(world, loop)
             self._notice = ""
-            end = loop.run(resume=self.config.resume is not None)
-            if task is not None:
-                task.active = False
-            if self._checkpoints is not None:
-                self._checkpoints.remove()  # the mission ended: nothing to resume
-                self._checkpoints = None
+            end = self._run_swarm(world, model) if self.swarm else self._run_one(world)
             self._notice = f"mission ended: {end}"
         while not self._quit.is_set():  # telemetry and manual commands go on until the operator quits
-            self._serve()
+            self._serve(world.api, None)
             clock.sleep(PUBLISH_PERIOD_S)
-        self._leave_holding(world)
+        try:
+            leave_holding(world, self._quit_now.is_set(), self._set_notice)
+        except CommandError as exc:
+            self.error = str(exc)
         self._log_whereabouts(world)
+
+    def _run_one(self, world: World) -> str:
+        """One aPad: its loop on the world's clock, checkpointed; the reason it ended."""
+        sysid = self.apad_ids[0]
+        # Operator commands run between the loop's waits; a quit-now ends it at one (never mid-dock).
+        self.control.before_wait = functools.partial(self._loop_wait, world, sysid)
+        self.loop = self.loops[sysid] = loop = world.mission_loop(self.control)
+        if self.config.resume is not None:
+            loop.status = self.config.resume.checkpoint.loop_status
+        task = self._start_checkpoints(world, loop)
+        end = loop.run(resume=self.config.resume is not None)
+        if task is not None:
+            task.active = False
+        if self._checkpoints is not None:
+            self._checkpoints.remove()  # the mission ended: nothing to resume
+            self._checkpoints = None
+        return str(end)
+
+    def _run_swarm(self, world: World, model: ConsoleModel) -> str:
+        """Several aPads: share the fleet, run every aPad's loop (no checkpoints, as `vil run`)."""
+        shares, watch = share_fleet(world)
+        model.set_owner(shares.owner)
+        watch.on_reshare.append(lambda now: model.set_owner(now.owner))
+        with self.control.lock:
+            strategy, self.control.strategy = self.control.strategy, None
+        for sysid in self.apad_ids:
+            control = self._controls[sysid] = LoopControl(paused=self.control.paused, stop=self.control.stop,
+                                                               strategy=strategy)
+            control.before_wait = functools.partial(self._loop_wait, world, sysid)
+        return SwarmOutcome(run_loops(world, shares, watch, self._controls, self.loops), shares, watch).end_reason
+
+    def _loop_wait(self, world: World, sysid: int) -> bool:
+        """A loop's hook before each of its waits: follow the operator's pause and stop, run the
+        commands queued for its aPad; True ends it here (quit now, its aPad not docking)."""
+        control = self._controls.get(sysid)
+        if control is not None:
+            control.paused, control.stop = self.control.paused, self.control.stop
+        self._serve(self.loops[sysid].api, sysid)
+        return self._quit_now.is_set() and not docking(world, sysid)
 
     def _start_checkpoints(self, world: World, loop: EnergySharingLoop) -> Task | None:
         """Save the mission every `CHECKPOINT_PERIOD_S` of mission time (with an output folder)."""
@@ -268,90 +257,44 @@ class ConsoleRunner:
                           slot=[a.mussel_id for a in accounts if a.where == "slot"],
                           lost={str(a.mussel_id): a.detail for a in accounts if a.lost})
 
-    def _before_wait(self, world: World) -> bool:
-        """The loop's hook: run queued operator commands; True ends the mission (quit now, no dock running)."""
-        self._serve()
-        return self._quit_now.is_set() and not _docking(world)
+    def _wait_for_apads(self, world: World) -> bool:
+        for sysid in self.apad_ids:
+            while True:
+                if self._quit.is_set():
+                    return False
+                try:
+                    world.api.wait_apad(timeout_s=self.config.connect_timeout_s, apad_id=sysid)
+                    break
+                except TimeoutError:
+                    who = f"aPad {sysid}" if self.swarm else "aPad"
+                    self._notice = f"no {who} heard on {self.config.connect or 'the SITL link'}; still listening"
+        return True
 
-    def _wait_for_apad(self, world: World) -> bool:
-        while not self._quit.is_set():
+    def _set_notice(self, text: str) -> None:
+        self._notice = text
+
+    def _running(self, sysid: int) -> bool:
+        loop = self.loops.get(sysid)
+        return loop is not None and loop.status.end_reason is None
+
+    def _serve(self, api: ApadApi, serving: int | None) -> None:
+        """Run queued operator commands through `api` (a world thread only): those for aPad
+        `serving`, and those whose aPad has no loop running to serve them (all when None)."""
+        with self._commands_lock:
+            take = [c for c in self._commands if serving in (None, c[0]) or not self._running(c[0])]
+            self._commands = [c for c in self._commands if not any(c is t for t in take)]
+        for sysid, command in take:
             try:
-                world.api.wait_apad(timeout_s=self.config.connect_timeout_s, apad_id=world.scenario.apad.system_id)
-                return True
-            except TimeoutError:
-                self._notice = f"no aPad heard on {self.config.connect or 'the SITL link'}; still listening"
-        return False
-
-    def _leave_holding(self, world: World) -> None:
-        """Quit: let a dock or undock finish, then hold (the loop already did if it ran)."""
-        api, apad = world.api, world.scenario.apad.system_id
-        if apad not in world.link.vehicles:
-            return
-        deadline = world.clock.time() + QUIT_DOCK_WAIT_S
-        while _docking(world) and world.clock.time() < deadline:
-            self._notice = "quitting: waiting for the dock to finish"
-            world.clock.sleep(0.2)
-        try:
-            api.hold(apad)
-            if self._quit_now.is_set():
-                self._sink_surfaced(world)
-            world.clock.sleep(0.5)  # let the last commands go out before the link closes
-        except CommandError as exc:
-            self.error = str(exc)
-
-    def _sink_surfaced(self, world: World) -> None:
-        """Nothing left floating where it cannot work: a surfacing aMussel is sunk once it floats."""
-        api, apad = world.api, world.scenario.apad.system_id
-        deadline = world.clock.time() + world.scenario.fleet.surfacing_time_s + SINK_MARGIN_S
-        while world.clock.time() < deadline:
-            docked = {s.mussel_id for s in api.slots(apad) if s.mussel_id}
-            up = {m: api.mussels[m].state for m in api.mussels.select((MusselState.SURFACING, MusselState.FLOATING))
-                  if m not in docked}
-            if not up:
-                return
-            self._notice = f"quitting now: sending aMussel {', '.join(map(str, sorted(up)))} back down"
-            for mussel_id, state in up.items():
-                if state == MusselState.FLOATING:
-                    api.command_mussel(mussel_id, MusselCommand.SINK, apad)
-            world.clock.sleep(1.0)
-
-    def _serve(self) -> None:
-        """Run queued operator commands through the aPad API (world thread only)."""
-        world = self.world
-        assert world is not None
-        while True:
-            try:
-                command = self._commands.get_nowait()
-            except queue.Empty:
-                return
-            try:
-                self._notice = self._execute(world, command)
+                self._notice = execute(api, sysid, command, f"aPad {sysid}" if self.swarm else "aPad")
             except (CommandError, LookupError) as exc:
                 self._notice = f"refused: {exc}"
 
-    def _execute(self, world: World, command: OperatorCommand) -> str:
-        api, apad = world.api, world.scenario.apad.system_id
-        match command:
-            case Hold():
-                api.hold(apad)
-                return "override: aPad holding, loop paused"
-            case GoToMussel(mussel_id):
-                api.go_to(api.get_location(mussel_id), apad_id=apad)
-                return f"manual: going to aMussel {mussel_id}, loop paused"
-            case DockMussel(mussel_id):
-                free = api.apad(apad).free_slots()
-                if not free:
-                    return "refused: no free slot"
-                api.command_mussel(mussel_id, MusselCommand.SURFACE, apad)
-                api.docking(True, free[0], mussel_id, apad)
-                return f"manual: docking aMussel {mussel_id} in slot {free[0]}, loop paused"
-            case UndockMussel(mussel_id):
-                slots = [s.slot for s in api.slots(apad) if s.mussel_id == mussel_id and s.latch == Latch.LATCHED]
-                if not slots:
-                    return f"refused: aMussel {mussel_id} is not docked"
-                api.docking(False, slots[0], mussel_id, apad)
-                return f"manual: undocking aMussel {mussel_id} from slot {slots[0]}, loop paused"
-        raise AssertionError(command)
+    def _pending_strategy(self) -> str | None:
+        for control in (self.control, *self._controls.values()):
+            with control.lock:
+                if control.strategy is not None:
+                    return control.strategy
+        return None
 
     def _publish(self, now_us: int) -> None:
         """Pull new mission events into the model; publish a snapshot if anything changed."""
@@ -368,22 +311,14 @@ class ConsoleRunner:
             model.event(ev)
         if events:
             self._last_event = events[-1]
-        with self.control.lock:
-            pending = self.control.strategy
-        key = (model.version, self.control.paused, pending, self._notice + (self.error or ""))
+        pending = self._pending_strategy()
+        key = (model.version, self.control.paused, pending, self._notice + (self.error or ""), self.selected)
         if key == self._published:
             return
         self._published = key
         notice = f"error: {self.error}" if self.error else self._notice
-        self.snapshot = model.snapshot(us_to_s(now_us), paused=self.control.paused, pending_strategy=pending,
-                                       notice=notice)
-
-
-def _docking(world: World) -> bool:
-    view = world.link.vehicles.get(world.scenario.apad.system_id)
-    return view is not None and view.primitive.primitive in (Primitive.DOCK, Primitive.UNDOCK) and (
-        view.primitive.progress == Progress.IN_PROGRESS
-    )
+        self.snapshot = model.snapshot(us_to_s(now_us), selected=self.selected, paused=self.control.paused,
+                                       pending_strategy=pending, notice=notice)
 
 
 __all__ = [
@@ -393,6 +328,7 @@ __all__ = [
     "GoToMussel",
     "Hold",
     "OperatorCommand",
+    "PacedClock",
     "ResumePoint",
     "UndockMussel",
 ]
