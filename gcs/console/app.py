@@ -84,14 +84,17 @@ class ConsoleApp(App[None]):
             chart.show(snap)
 
     def action_help(self) -> None:
-        self.push_screen(HelpScreen([b for b in self.BINDINGS if isinstance(b, Binding)], self.HELP_INTRO))
+        shown = [b for b in self.BINDINGS if isinstance(b, Binding) and self.check_action(b.action, ()) is not False]
+        self.push_screen(HelpScreen(shown, self.HELP_INTRO))
 
 
 class LiveConsole(ConsoleApp):
     TITLE = "vil gcs"
     HELP_INTRO = ("Live console. Override, go-to, dock and undock pause the scenario loop first; "
                   "p resumes it. q ends the mission once the collection in progress is done; Q ends it at once "
-                  "(surfaced aMussels sink). Either way the aPad is left holding, never mid-dock.")
+                  "(surfaced aMussels sink). Either way the aPad is left holding, never mid-dock. With several aPads, "
+                  "a picks the aPad these keys act on (highlighted on the map, detailed in the panel); on the map "
+                  "each aMussel shows the number of the aPad whose share it is.")
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("p", "toggle_pause", "Pause/resume"),
         Binding("o", "override", "Override: hold"),
@@ -99,6 +102,7 @@ class LiveConsole(ConsoleApp):
         Binding("g", "goto", "Go to selected"),
         Binding("d", "dock", "Dock selected"),
         Binding("u", "undock", "Undock selected"),
+        Binding("a", "next_apad", "Next aPad"),
         Binding("question_mark", "help", "Help", key_display="?"),
         Binding("q", "quit_console", "Quit"),
         Binding("Q", "quit_console(True)", "Quit now", show=False),
@@ -129,6 +133,14 @@ class LiveConsole(ConsoleApp):
 
     def watch_paused(self, paused: bool) -> None:
         self.runner.set_paused(paused)
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        """One aPad: no aPad to pick (the footer and help do not offer it)."""
+        return self.runner.swarm or action != "next_apad"
+
+    def action_next_apad(self) -> None:
+        sysid = self.runner.select_apad()
+        self.notify(f"the override keys act on aPad {sysid}")
 
     def action_toggle_pause(self) -> None:
         self.paused = not self.runner.control.paused

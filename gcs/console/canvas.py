@@ -19,8 +19,8 @@ _DOT_BITS = np.array([[0x01, 0x08], [0x02, 0x10], [0x04, 0x20], [0x40, 0x80]], n
 
 
 @lru_cache(maxsize=256)
-def _style(colour: str, bold: bool = False) -> Style:
-    return Style(color=colour, bold=bold)
+def _style(colour: str, strong: bool = False) -> Style:
+    return Style(color=colour, bold=strong, reverse=True if strong else None)
 
 
 class BrailleCanvas:
@@ -33,6 +33,7 @@ class BrailleCanvas:
         self.colour = np.zeros((self.height, self.width), np.int16)
         self.glyph = np.full((self.height, self.width), "", object)
         self.glyph_colour = np.zeros((self.height, self.width), np.int16)
+        self.strong = np.zeros((self.height, self.width), bool)  # glyphs drawn bold and reversed
 
     @property
     def dots_x(self) -> int:
@@ -70,22 +71,27 @@ class BrailleCanvas:
         self.dots(x0[seg] + frac * (x1 - x0)[seg], y0[seg] + frac * (y1 - y0)[seg], colour)
         self.dots(xs[-1:], ys[-1:], colour)
 
-    def glyphs(self, x: ArrayLike, y: ArrayLike, char: str, colours: ArrayLike) -> None:
-        """Put `char` in the cells holding dot coordinates (x, y); later points win a shared cell."""
+    def glyphs(self, x: ArrayLike, y: ArrayLike, char: str | ArrayLike, colours: ArrayLike,
+               strong: bool = False) -> None:
+        """Put `char` (one, or one per point) in the cells holding dot coordinates (x, y); later
+        points win a shared cell. `strong`: highlighted (the selected aPad)."""
         xf, yf = np.asarray(x, np.float64).ravel(), np.asarray(y, np.float64).ravel()
         col = np.broadcast_to(np.asarray(colours, np.int16), xf.shape)
+        chars = np.broadcast_to(np.asarray(char, object), xf.shape)
         ok = np.isfinite(xf) & np.isfinite(yf)
         cx, cy = np.floor(xf[ok] / 2).astype(np.int64), np.floor(yf[ok] / 4).astype(np.int64)
         inside = (cx >= 0) & (cx < self.width) & (cy >= 0) & (cy < self.height)
         cx, cy, col = cx[inside], cy[inside], col[ok][inside]
-        self.glyph[cy, cx] = char
+        self.glyph[cy, cx] = chars[ok][inside]
         self.glyph_colour[cy, cx] = col
+        self.strong[cy, cx] = strong
 
     def text(self, cx: int, cy: int, text: str, colour: int) -> None:
         for i, ch in enumerate(text):
             if 0 <= cx + i < self.width and 0 <= cy < self.height:
                 self.glyph[cy, cx + i] = ch
                 self.glyph_colour[cy, cx + i] = colour
+                self.strong[cy, cx + i] = False
 
     def strips(self) -> list[Strip]:
         chars = np.vectorize(chr, otypes=[object])(0x2800 + self.bits.astype(np.int32))
@@ -93,15 +99,18 @@ class BrailleCanvas:
         has_glyph = self.glyph != ""
         chars[has_glyph] = self.glyph[has_glyph]
         colours = np.where(has_glyph, self.glyph_colour, self.colour)
+        strong = has_glyph & self.strong
         out = []
         for row in range(self.height):
             segments = []
             run_start = 0
-            line_chars, line_cols = chars[row], colours[row]
+            line_chars, line_cols, line_strong = chars[row], colours[row], strong[row]
             for col in range(1, self.width + 1):
-                if col == self.width or line_cols[col] != line_cols[run_start]:
+                if col == self.width or line_cols[col] != line_cols[run_start] or (
+                        line_strong[col] != line_strong[run_start]):
                     colour = self.palette[int(line_cols[run_start])]
-                    segments.append(Segment("".join(line_chars[run_start:col]), _style(colour)))
+                    style = _style(colour, bool(line_strong[run_start]))
+                    segments.append(Segment("".join(line_chars[run_start:col]), style))
                     run_start = col
             out.append(Strip(segments, self.width))
         return out

@@ -12,7 +12,7 @@ from textual.widget import Widget
 from textual.widgets import DataTable, Static
 
 from gcs.console.canvas import BrailleCanvas, scale_to
-from gcs.console.model import MarkerColour, Snapshot
+from gcs.console.model import ApadSnapshot, MarkerColour, Snapshot
 from missiontime import mm_ss
 from mussel_sim.geo import flat_m
 from mussel_sim.vocabulary import MusselState
@@ -22,11 +22,21 @@ GREEN, RED, GREY, PURPLE = "#22c55e", "#ef4444", "#9ca3af", "#c026d3"
 OUTLINE, APAD, TRACE, AXIS, BLUE = "#64748b", "#facc15", "#38bdf8", "#94a3b8", "#60a5fa"
 MARKER_COLOURS = {MarkerColour.CHARGED: GREEN, MarkerColour.CANDIDATE: RED,
                   MarkerColour.DEPLETED: GREY, MarkerColour.DOCKED: PURPLE}
-PALETTE = [AXIS, GREEN, RED, GREY, PURPLE, OUTLINE, APAD, TRACE, BLUE]
+# A swarm's aPads, in the scenario's order (the first is the one aPad's colour); none is a marker's.
+APAD_COLOURS = [APAD, "#fb923c", "#2dd4bf", "#f472b6", "#a3e635", "#e2e8f0", "#818cf8", "#fda4af", "#0ea5e9"]
+PALETTE = [AXIS, GREEN, RED, GREY, PURPLE, OUTLINE, APAD, TRACE, BLUE, *APAD_COLOURS[1:]]
 _MARKER_INDEX = {k: PALETTE.index(v) for k, v in MARKER_COLOURS.items()}
 LEGEND = (f"[{GREEN}]●[/] charged  [{RED}]●[/] pool  [{PURPLE}]●[/] docked  [{GREY}]●[/] depleted  "
           f"[{APAD}]◆[/] aPad")
+SWARM_LEGEND = (f"[{GREEN}]●[/] charged  [{RED}]●[/] pool  [{PURPLE}]●[/] docked  [{GREY}]●[/] depleted  "
+                f"2: aPad 2's  [{APAD}]◆[/][{APAD_COLOURS[1]}]◆[/] aPads")
 AXIS_STYLE = Style(color=AXIS)
+
+
+def apad_colour(snap: Snapshot, sysid: int) -> str:
+    """An aPad's own colour: by its place in the scenario."""
+    place = next((i for i, a in enumerate(snap.apads) if a.system_id == sysid), 0)
+    return APAD_COLOURS[place % len(APAD_COLOURS)]
 
 
 class CachedLines(Widget):
@@ -55,16 +65,23 @@ class CachedLines(Widget):
 
 
 class MapView(CachedLines):
-    """The area in local metres, north up: outline, aMussels by class, the aPad and its trace."""
+    """The area in local metres, north up: outline, aMussels by class, the aPads and their traces.
+
+    With several aPads each has its own colour, its trace drawn in it and the selected one
+    highlighted; an aMussel shows the number of the aPad whose share it is, in its class colour."""
 
     def draw(self, width: int, height: int) -> list[Strip]:
         snap = self.snapshot
         assert snap is not None
         canvas = BrailleCanvas(width, height, PALETTE)
+        swarm = len(snap.apads) > 1
+        apads = snap.apads if swarm else ()
         lat = np.concatenate([snap.outline_lat_deg, snap.lat_deg, snap.trace_lat_deg,
-                              [snap.apad_lat_deg if snap.apad_lat_deg is not None else np.nan]])
+                              [snap.apad_lat_deg if snap.apad_lat_deg is not None else np.nan],
+                              *[_apad_points(a)[0] for a in apads]])
         lon = np.concatenate([snap.outline_lon_deg, snap.lon_deg, snap.trace_lon_deg,
-                              [snap.apad_lon_deg if snap.apad_lon_deg is not None else np.nan]])
+                              [snap.apad_lon_deg if snap.apad_lon_deg is not None else np.nan],
+                              *[_apad_points(a)[1] for a in apads]])
         if not np.isfinite(lat).any():
             canvas.text(1, 0, "waiting for positions", 0)
             return canvas.strips()
@@ -84,17 +101,39 @@ class MapView(CachedLines):
             return (x - cx) / m_per_dot + canvas.dots_x / 2, (cy - y) / m_per_dot + canvas.dots_y / 2
 
         canvas.polyline(*dots(snap.outline_lat_deg, snap.outline_lon_deg), PALETTE.index(OUTLINE))
-        canvas.polyline(*dots(snap.trace_lat_deg, snap.trace_lon_deg), PALETTE.index(TRACE))
+        if swarm:  # the selected aPad's trace last, on top
+            for a in sorted(apads, key=lambda a: a.system_id == snap.selected):
+                canvas.polyline(*dots(a.trace_lat_deg, a.trace_lon_deg), PALETTE.index(apad_colour(snap, a.system_id)))
+        else:
+            canvas.polyline(*dots(snap.trace_lat_deg, snap.trace_lon_deg), PALETTE.index(TRACE))
         classes = snap.marker_classes()
         order = np.argsort(classes, kind="stable")  # docked and pool candidates drawn last, on top
         colours = np.array([_MARKER_INDEX[int(c)] for c in classes[order]], np.int16)
         mx, my = dots(snap.lat_deg[order], snap.lon_deg[order])
-        canvas.glyphs(mx, my, "●", colours)
-        if snap.apad_lat_deg is not None and snap.apad_lon_deg is not None:
+        if swarm and snap.owner.size == snap.mussel_ids.size:
+            owners = snap.owner[order]
+            canvas.glyphs(mx, my, np.array([str(o % 10) if o else "●" for o in owners], object), colours)
+        else:
+            canvas.glyphs(mx, my, "●", colours)
+        if swarm:
+            for a in sorted(apads, key=lambda a: a.system_id == snap.selected):
+                if a.lat_deg is not None and a.lon_deg is not None:
+                    ax, ay = dots(np.array([a.lat_deg]), np.array([a.lon_deg]))
+                    canvas.glyphs(ax, ay, "◆", PALETTE.index(apad_colour(snap, a.system_id)),
+                                  strong=a.system_id == snap.selected)
+            self.border_subtitle = SWARM_LEGEND
+        elif snap.apad_lat_deg is not None and snap.apad_lon_deg is not None:
             ax, ay = dots(np.array([snap.apad_lat_deg]), np.array([snap.apad_lon_deg]))
             canvas.glyphs(ax, ay, "◆", PALETTE.index(APAD))
         self.border_title = f"Map  {2 * m_per_dot:.2g} m per column"
         return canvas.strips()
+
+
+def _apad_points(a: ApadSnapshot) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """An aPad's trace and position, for the map's extent."""
+    here_lat = np.array([np.nan if a.lat_deg is None else a.lat_deg])
+    here_lon = np.array([np.nan if a.lon_deg is None else a.lon_deg])
+    return np.concatenate([a.trace_lat_deg, here_lat]), np.concatenate([a.trace_lon_deg, here_lon])
 
 
 class Chart(CachedLines):
@@ -155,7 +194,8 @@ class Chart(CachedLines):
             return str(n), "0"
         v = snap.hist_apad_v[sel]
         lo, hi = 10.5, 16.0  # the aPad pack, empty to full
-        canvas.polyline(x[sel], scale_to(v, lo, hi, canvas.dots_y, True), PALETTE.index(APAD))
+        colour = apad_colour(snap, snap.selected)  # the selected aPad's
+        canvas.polyline(x[sel], scale_to(v, lo, hi, canvas.dots_y, True), PALETTE.index(colour))
         return f"{hi:g}V", f"{lo:g}V"
 
 
@@ -203,7 +243,8 @@ class FleetTable(DataTable[Text | str]):
 
 
 class StatusPanel(Static):
-    """Mission time, phase, primitive, strategy, cost, aPad battery and slots, the last notice."""
+    """Mission time, phase, primitive, strategy, cost, aPad battery and slots, the last notice; with
+    several aPads those of the selected one, its share, and a line for each other aPad."""
 
     def show(self, snap: Snapshot, header: str) -> None:
         t = Text()
@@ -211,6 +252,10 @@ class StatusPanel(Static):
         t.append(header)
         if snap.paused:
             t.append("  PAUSED", style=f"bold {RED}")
+        swarm = len(snap.apads) > 1
+        if swarm:
+            t.append(f"\n◆ aPad {snap.selected}", style=f"bold {apad_colour(snap, snap.selected)}")
+            t.append(f"  selected of {len(snap.apads)} (a: next)", style=AXIS)
         t.append("\nphase     ", style=AXIS).append(snap.phase, style="bold")
         t.append("   strategy ", style=AXIS).append(snap.strategy, style="bold")
         if snap.pending_strategy and snap.pending_strategy != snap.strategy:
@@ -225,11 +270,25 @@ class StatusPanel(Static):
         for s in snap.slots:
             body = f"{s.slot}:{s.mussel_id or '-'}{'⚡' if s.charging else ''}"
             t.append(f" {body:<6}", style=PURPLE if s.mussel_id else AXIS)
+        if swarm:
+            share = next(a.share for a in snap.apads if a.system_id == snap.selected)
+            t.append("\nshare     ", style=AXIS).append(" ".join(map(str, share)) or "-")
+            for a in snap.apads:
+                if a.system_id != snap.selected:
+                    t.append("\n").append_text(_apad_line(snap, a))
         if snap.ended:
             t.append(f"\nmission ended: {snap.ended}", style=f"bold {APAD}")
         if snap.notice:
             t.append(f"\n{snap.notice}", style=APAD)
         self.update(t)
+
+
+def _apad_line(snap: Snapshot, a: ApadSnapshot) -> Text:
+    """One other aPad on one line: phase, mode, battery, slots in use, the size of its share."""
+    volts = "-" if a.battery_v is None else f"{a.battery_v:.1f} V"
+    used = sum(1 for s in a.slots if s.mussel_id)
+    line = Text(f"◆ aPad {a.system_id} ", style=f"bold {apad_colour(snap, a.system_id)}")
+    return line.append(f"{a.ended or a.phase}, {a.mode}, {volts}, slots {used}/{len(a.slots)}, share {len(a.share)}")
 
 
 class EventLog(Static):
