@@ -107,9 +107,8 @@ class ConsoleRunner:
         self.control.paused = paused
 
     def switch_strategy(self, name: str) -> None:
-        for control in (self.control, *self._controls.values()):  # every loop takes it at its next plan
-            with control.lock:
-                control.strategy = name
+        with self.control.lock:  # one loop takes it from here; a swarm's each get it at their waits
+            self.control.strategy = name
 
     def request_quit(self, now: bool = False) -> None:
         """End the mission, leave the aPads holding, close everything.
@@ -205,21 +204,22 @@ class ConsoleRunner:
         shares, watch = share_fleet(world)
         model.set_owner(shares.owner)
         watch.on_reshare.append(lambda now: model.set_owner(now.owner))
-        with self.control.lock:
-            strategy, self.control.strategy = self.control.strategy, None
         for sysid in self.apad_ids:
-            control = self._controls[sysid] = LoopControl(paused=self.control.paused, stop=self.control.stop,
-                                                               strategy=strategy)
+            control = self._controls[sysid] = LoopControl(paused=self.control.paused, stop=self.control.stop)
             control.before_wait = functools.partial(self._loop_wait, world, sysid)
         return SwarmOutcome(run_loops(world, shares, watch, self._controls, self.loops), shares, watch).end_reason
 
     def _loop_wait(self, world: World, sysid: int) -> bool:
-        """A loop's hook before each of its waits: follow the operator's pause and stop, run the
-        commands queued for its aPad; True ends it here (quit now, its aPad not docking)."""
-        control = self._controls.get(sysid)
+        """A loop's hook before each of its waits: follow the operator's pause, stop and strategy,
+        run the commands queued for its aPad; True ends it here (quit now, its aPad not docking)."""
+        control, loop = self._controls.get(sysid), self.loops[sysid]
         if control is not None:
             control.paused, control.stop = self.control.paused, self.control.stop
-        self._serve(self.loops[sysid].api, sysid)
+            wanted = self._swarm_strategy()
+            if wanted is not None and wanted != loop.status.strategy:
+                with control.lock:
+                    control.strategy = wanted  # taken at its next planning step
+        self._serve(loop.api, sysid)
         return self._quit_now.is_set() and not docking(world, sysid)
 
     def _start_checkpoints(self, world: World, loop: EnergySharingLoop) -> Task | None:
@@ -289,12 +289,17 @@ class ConsoleRunner:
             except (CommandError, LookupError) as exc:
                 self._notice = f"refused: {exc}"
 
+    def _swarm_strategy(self) -> str | None:
+        """A swarm's loops do not take the operator's strategy: each is handed it until it has it."""
+        with self.control.lock:
+            return self.control.strategy
+
     def _pending_strategy(self) -> str | None:
-        for control in (self.control, *self._controls.values()):
-            with control.lock:
-                if control.strategy is not None:
-                    return control.strategy
-        return None
+        wanted = self._swarm_strategy()
+        if not self._controls:
+            return wanted
+        running = [loop for loop in list(self.loops.values()) if loop.status.end_reason is None]
+        return wanted if any(loop.status.strategy != wanted for loop in running) else None
 
     def _publish(self, now_us: int) -> None:
         """Pull new mission events into the model; publish a snapshot if anything changed."""

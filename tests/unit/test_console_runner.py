@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -194,3 +195,64 @@ def test_a_vehicle_that_answers_in_progress_forever_fails_the_command_at_the_bou
         link.commands.send_long(1, mavlink.MAV_CMD_DO_SET_MODE, (1, 4))
     assert err.value.result == mavlink.MAV_RESULT_IN_PROGRESS
     assert IN_PROGRESS_MAX_S <= clock.time() < IN_PROGRESS_MAX_S + 2.0  # bounded, not forever
+
+
+POOL12X2 = POOL12.with_name("pool12x2.toml")
+
+
+def test_the_model_follows_every_apad_and_shows_the_selected_one() -> None:
+    registry = VehicleRegistry()
+    model = ConsoleModel(registry, 1, 0.8, 60.0, "test", np.array([1, 2, 3, 4]), apad_ids=(1, 2))
+    model.set_owner({1: 1, 2: 2, 3: 2, 4: 1})
+    for apad, phase in ((1, "collect"), (2, "idle wait"), (2, "charging wait")):
+        model.event(Event(1.0, "phase", {"apad": apad, "phase": phase}))
+    model.event(Event(2.0, "mission_end", {"apad": 1, "reason": "apad battery"}))
+    model.sample(0.0)
+    snap = model.snapshot(2.0, selected=2)
+    assert snap.selected == 2 and snap.phase == "charging wait" and snap.ended is None  # aPad 2 still runs
+    assert [(a.system_id, a.phase, a.share, a.ended) for a in snap.apads] == [
+        (1, "collect", (1, 4), "apad battery"), (2, "charging wait", (2, 3), None)]
+    assert list(snap.owner) == [1, 2, 2, 1]
+    assert snap.log[-1] == "00:02 aPad 1: mission_end reason=apad battery"
+    model.event(Event(3.0, "mission_end", {"apad": 2, "reason": "operator stop"}))
+    assert model.snapshot(3.0).ended == "apad battery" and model.snapshot(3.0).phase == "collect"  # aPad 1's
+
+
+@pytest.mark.sitl
+def test_a_swarm_runner_pauses_hands_the_strategy_to_and_stops_every_loop() -> None:
+    runner = ConsoleRunner(ConsoleConfig(load_scenario(POOL12X2), sitl="memory", speed=40.0))
+    thread = threading.Thread(target=runner.run)
+    thread.start()
+
+    def loop_events() -> list[Event]:
+        assert runner.world is not None
+        return [e for e in list(runner.world.events.events) if "apad" in e.fields and e.kind != "mission_end"]
+
+    def until(condition: Callable[[], bool]) -> None:
+        deadline = time.monotonic() + 20
+        while not condition():
+            assert time.monotonic() < deadline
+            time.sleep(0.02)
+
+    try:
+        until(lambda: runner.world is not None and {e.fields["apad"] for e in loop_events()} == {1, 2})
+        runner.set_paused(True)
+        until(lambda: runner.snapshot is not None and runner.snapshot.paused)
+        t0 = runner.snapshot.t_s
+        until(lambda: runner.snapshot is not None and runner.snapshot.t_s > t0 + 10)  # every loop at a wait
+        n, t1 = len(loop_events()), runner.snapshot.t_s
+        until(lambda: runner.snapshot is not None and runner.snapshot.t_s > t1 + 30)
+        assert len(loop_events()) == n  # neither loop did anything while paused
+        other = "greedy" if runner.loops[1].status.strategy != "greedy" else "cautious"
+        runner.switch_strategy(other)
+        runner.set_paused(False)
+        until(lambda: all(runner._controls[a].strategy == other or runner.loops[a].status.strategy == other
+                          for a in (1, 2)))  # each loop is handed it, and takes it at its next plan
+        assert runner.snapshot is not None
+    finally:
+        runner.request_quit()
+        thread.join(60)
+    assert not thread.is_alive() and runner.error is None
+    assert runner.world is not None
+    ends = {e.fields["apad"]: e.fields["reason"] for e in runner.world.events.events if e.kind == "mission_end"}
+    assert ends == {1: "operator stop", 2: "operator stop"}
