@@ -223,6 +223,8 @@ def test_a_checkpoint_of_another_run_or_without_its_epoch_is_refused_and_the_log
     assert (folder / "events.jsonl").read_bytes() == events  # nothing cut for a resume that did not happen
 
 
-def test_a_scenario_of_several_apads_is_refused(tmp_path: Path) -> None:
-    _refused(_gcs(tmp_path, "--scenario", str(ROOT / "missions" / "pool12x2.toml")), "one aPad", "vil run")
+def test_resuming_a_scenario_of_several_apads_is_refused(tmp_path: Path) -> None:
+    """A swarm's loops are not checkpointed (as in `vil run`): nothing to resume them from."""
+    _refused(_gcs(tmp_path, "--resume", "--scenario", str(ROOT / "missions" / "pool12x2.toml")), "--resume",
+             "one aPad")
     assert not (tmp_path / "runs").exists()
