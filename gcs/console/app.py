@@ -92,9 +92,9 @@ class LiveConsole(ConsoleApp):
     TITLE = "vil gcs"
     HELP_INTRO = ("Live console. Override, go-to, dock and undock pause the scenario loop first; "
                   "p resumes it. q ends the mission once the collection in progress is done; Q ends it at once "
-                  "(surfaced aMussels sink). Either way the aPad is left holding, never mid-dock. With several aPads, "
-                  "a picks the aPad these keys act on (highlighted on the map, detailed in the panel); on the map "
-                  "each aMussel shows the number of the aPad whose share it is.")
+                  "(surfaced aMussels sink). Either way the aPad is left holding, never mid-dock.")
+    SWARM_HELP = (" With several aPads, a picks the aPad these keys act on (highlighted on the map, detailed in the "
+                  "panel); on the map each aMussel shows the number of the aPad whose share it is.")
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("p", "toggle_pause", "Pause/resume"),
         Binding("o", "override", "Override: hold"),
@@ -113,6 +113,8 @@ class LiveConsole(ConsoleApp):
     def __init__(self, runner: ConsoleRunner) -> None:
         super().__init__()
         self.runner = runner
+        if runner.swarm:
+            self.HELP_INTRO = LiveConsole.HELP_INTRO + self.SWARM_HELP
         self.set_reactive(LiveConsole.paused, runner.control.paused)
         self.quitting = False
 
