@@ -189,6 +189,10 @@ class ConsoleModel:
         loop = self.loops.get(int(f.get("apad", self.apad_ids[0])))  # a swarm's loops name their aPad
         if loop is not None:
             loop.event(ev)
+        if ev.kind == "reshare" and isinstance(f.get("shares"), dict):  # replay learns the sharing here
+            owner = {m: int(a) for a, ids in f["shares"].items() if str(a).isdigit() and isinstance(ids, list)
+                     for m in ids if type(m) is int}
+            self.set_owner(owner)
         if ev.kind in ("mission_start", "plan_collection") and "strategy" in f:
             self.strategy = str(f["strategy"])
         elif ev.kind == "strategy_switch":

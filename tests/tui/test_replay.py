@@ -86,3 +86,16 @@ def test_replay_keys_play_pause_speed_seek(recorded_run: Path) -> None:
             assert app.position_s == 0.0
 
     asyncio.run(scenario())
+
+
+def test_a_swarm_run_replays_with_every_apad_and_its_share(tmp_path: Path) -> None:
+    from gcs.mission.headless import run_mission
+    from gcs.mission.scenario import load_scenario
+
+    run = tmp_path / "run"
+    result = run_mission(load_scenario("pool12x2").with_overrides(duration_s=360.0), run)
+    last = load_replay(run).frames[-1]
+    assert [a.system_id for a in last.apads] == [1, 2]
+    shares = {a.system_id: set(a.share) for a in last.apads}
+    assert shares == {row["sysid"]: set(row["share_at_end"]) for row in result.apads}  # as the run shared it
+    assert all(a.lat_deg is not None for a in last.apads)  # each aPad's own telemetry, from the .tlog
