@@ -28,8 +28,10 @@ from missiontime.clocks import Clock, Scheduler, seconds_to_us, us_to_s
 T = TypeVar("T")
 
 
-class ProcessStopped(Exception):
-    """Raised inside a script's sleep when the coordinator stops it (another script failed)."""
+class ProcessStopped(BaseException):
+    """Raised inside a script's sleep when the coordinator stops it (another script or the world
+    failed). A BaseException, as GeneratorExit is: a script's `except Exception` must not swallow
+    it and sleep again (it would be stopped again at once, for ever)."""
 
 
 class ProcessClock:
@@ -141,9 +143,9 @@ class Processes:
             self._finished.release()  # nobody left: every script has returned
             return False
         wake_us, _, process = heapq.heappop(self._queue)
-        if self._error is None and wake_us > self.clock.now_us:
-            try:
-                self.clock.sleep(us_to_s(wake_us - self.clock.now_us))
+        if self._error is None:
+            try:  # a zero sleep too delivers what is due now, as the clock's own sleep(0) does
+                self.clock.sleep(us_to_s(max(wake_us - self.clock.now_us, 0)))
             except BaseException as exc:  # the world failed: stop every script, then raise it in `run`
                 self._fail(exc)
         process.stop = self._error is not None

@@ -124,3 +124,58 @@ def test_a_sleeper_that_is_next_again_runs_on_without_a_hand_over() -> None:
     procs.spawn("slow", slow)
     procs.run()
     assert threads == ["process-quick"] * 3 and clock.time() == 10.0
+
+
+def test_a_script_catching_exception_around_its_sleep_is_still_stopped() -> None:
+    clock = VirtualClock()
+    tries: list[int] = []
+
+    def failing(c: Clock) -> None:
+        c.sleep(1.0)
+        raise RuntimeError("boom")
+
+    def stubborn(c: Clock) -> None:
+        while len(tries) < 1000:
+            try:
+                c.sleep(0.5)
+            except Exception:  # a broad handler must not keep a stopped script alive
+                tries.append(1)
+
+    procs = Processes(clock)
+    procs.spawn("failing", failing)
+    procs.spawn("stubborn", stubborn)
+    with pytest.raises(RuntimeError, match="boom"):
+        procs.run()
+    assert tries == []
+
+
+def test_a_zero_sleep_delivers_what_is_due_now() -> None:
+    clock = VirtualClock()
+    delivered: list[int] = []
+
+    class Inbox:
+        pending = 0
+
+        def poll(self) -> bool:
+            if self.pending:
+                delivered.append(self.pending)
+                self.pending = 0
+                return True
+            return False
+
+        def fileno(self) -> int | None:
+            return None
+
+    inbox = Inbox()
+    clock.scheduler.add_poller(inbox)
+
+    def sender(c: Clock) -> None:
+        inbox.pending = 7  # a message put on the wire ...
+        c.sleep(0)  # ... is delivered by a zero sleep, as on one aPad's own clock
+        assert delivered == [7]
+
+    procs = Processes(clock)
+    procs.spawn("sender", sender)
+    procs.spawn("other", lambda c: c.sleep(1.0))
+    procs.run()
+    assert delivered == [7]
