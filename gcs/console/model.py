@@ -106,6 +106,8 @@ class Snapshot:
     pending_strategy: str | None = None
     ended: str | None = None
     notice: str = ""
+    dropped: int = 0  # received messages the link refused so far (validation, spoofs, strangers)
+    dropped_top: str = ""  # the commonest reason, "REASON ×N"
     outline_lat_deg: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     outline_lon_deg: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     apads: tuple[ApadSnapshot, ...] = ()  # every aPad, in the scenario's order

@@ -317,13 +317,16 @@ class ConsoleRunner:
         if events:
             self._last_event = events[-1]
         pending = self._pending_strategy()
-        key = (model.version, self.control.paused, pending, self._notice + (self.error or ""), self.selected)
+        refused = world.link.dropped
+        dropped = sum(refused.values())
+        key = (model.version, self.control.paused, pending, self._notice + (self.error or ""), self.selected, dropped)
         if key == self._published:
             return
         self._published = key
         notice = f"error: {self.error}" if self.error else self._notice
+        top = "".join(f"{reason} ×{n}" for reason, n in refused.most_common(1))
         self.snapshot = model.snapshot(us_to_s(now_us), selected=self.selected, paused=self.control.paused,
-                                       pending_strategy=pending, notice=notice)
+                                       pending_strategy=pending, notice=notice, dropped=dropped, dropped_top=top)
 
 
 __all__ = [

@@ -276,6 +276,9 @@ class StatusPanel(Static):
             for a in snap.apads:
                 if a.system_id != snap.selected:
                     t.append("\n").append_text(_apad_line(snap, a))
+        if snap.dropped:  # what the link refused: a stranger, a spoof or a broken sender is on the network
+            t.append("\nrefused   ", style=AXIS).append(f"{snap.dropped} messages", style=f"bold {APAD}")
+            t.append(f" (most: {snap.dropped_top})", style=AXIS)
         if snap.ended:
             t.append(f"\nmission ended: {snap.ended}", style=f"bold {APAD}")
         if snap.notice:

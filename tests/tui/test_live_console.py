@@ -175,3 +175,27 @@ def test_manual_go_to_dock_and_undock_of_the_selected_amussel() -> None:
         assert runner.error is None and runner.world.vehicle.mode == HOLD_MODE
 
     asyncio.run(scenario())
+
+
+def test_messages_the_link_refuses_are_counted_on_screen() -> None:
+    """Someone on the aPad's network speaking as this GCS: refused, and the operator sees it."""
+    from mavlink_dialect import Codec, mavlink
+
+    async def scenario() -> None:
+        app, runner = make_app(start_paused=True)
+        async with app.run_test(size=SIZE) as pilot:
+            await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.apad_lat_deg is not None)
+            assert "refused" not in screen_text(app)
+            assert runner.world is not None and runner.world.vehicle is not None
+            spoof = Codec(250, 190).encode(mavlink.MAVLink_heartbeat_message(
+                mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0, 3))
+            for _ in range(3):
+                runner.world.vehicle.transport.send(spoof)  # arrives at the GCS from the aPad's side
+            await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.dropped >= 3)
+            await pilot.pause(0.3)
+            text = screen_text(app)
+            assert "refused" in text and "spoofed_source:HEARTBEAT" in text
+            await pilot.press("q")
+            await wait_for(pilot, runner.finished.is_set)
+
+    asyncio.run(scenario())
