@@ -43,19 +43,19 @@ from apad_sitl.primitives import PrimitiveState
 from apad_sitl.streams import DEFAULT_RATES_HZ, Streams
 from apad_sitl.vehicle import VehicleState
 from apad_sitl.vocabulary import RoverMode
-from mavlink_dialect import Codec, Transport, hot, mavlink, signing
+from mavlink_dialect import Codec, Transport, hot, hot_decode, mavlink, signing
 from missiontime import US_PER_S, Scheduler, Task
 from mussel_sim.geo import LocalFrame
 
 __all__ = ["DEFAULT_RATES_HZ", "PHYSICS_HZ", "Command", "Geofence", "MusselTable", "SitlVehicle"]
 
 PHYSICS_HZ = 10.0
-# One for every vehicle of the process: the aPads of a swarm get the same status datagrams (hot.SharedDecode).
-_STATUS_DECODE = hot.SharedDecode()
-_last_checked: tuple[hot.Split, CheckedStatuses] | None = None
+# One for every vehicle of the process: the aPads of a swarm get the same status datagrams (hot_decode.SharedDecode).
+_STATUS_DECODE = hot_decode.SharedDecode()
+_last_checked: tuple[hot_decode.Split, CheckedStatuses] | None = None
 
 
-def _checked(split: hot.Split) -> CheckedStatuses:
+def _checked(split: hot_decode.Split) -> CheckedStatuses:
     """The fix table's checks of a shared split, made once for all the aPads that got it."""
     global _last_checked
     last = _last_checked

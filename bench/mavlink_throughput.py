@@ -26,7 +26,8 @@ from rich.console import Console
 from rich.table import Table
 
 from mavlink_dialect import Codec, mavlink, memory_pair, open_transport
-from mavlink_dialect.hot import AMUSSEL_STATUS, decode_datagram, decode_datagrams, encode_batch, pack_datagrams
+from mavlink_dialect.hot import AMUSSEL_STATUS, encode_batch, pack_datagrams
+from mavlink_dialect.hot_decode import decode_datagram, decode_datagrams
 from mavlink_dialect.transport import Transport
 from mussel_sim.vocabulary import MusselState
 

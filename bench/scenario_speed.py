@@ -27,10 +27,10 @@ from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
 
 # label -> (file suffix, function name) entry points whose cumulative times do not overlap:
-# one message at a time (codec.py) and the bulk messages' batch path (hot.py) together.
+# one message at a time (codec.py) and the bulk messages' batch path (hot.py, hot_decode.py) together.
 PARTS: dict[str, tuple[tuple[str, str], ...]] = {
     "MAVLink encode": (("mavlink_dialect/codec.py", "encode"), ("mavlink_dialect/hot.py", "encode_batch")),
-    "MAVLink parse": (("mavlink_dialect/codec.py", "decode"), ("mavlink_dialect/hot.py", "decode_datagrams")),
+    "MAVLink parse": (("mavlink_dialect/codec.py", "decode"), ("mavlink_dialect/hot_decode.py", "decode_datagrams")),
     "fleet step": (("mussel_sim/fleet.py", "step"),),
     "planner": (("gcs/mission/planner.py", "plan"),),
     "SITL physics": (("apad_sitl/endpoint.py", "_physics"),),

@@ -1,4 +1,4 @@
-"""hot.decode_datagrams checks few hot frames in Python and many with numpy: both give the same split."""
+"""hot_decode.decode_datagrams checks few hot frames in Python and many with numpy: both give the same split."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mavlink_dialect import Codec, hot, mavlink
+from mavlink_dialect import Codec, hot, hot_decode, mavlink
 
 
 def _statuses(n: int, seed: int) -> list[bytes]:
@@ -21,14 +21,14 @@ def _statuses(n: int, seed: int) -> list[bytes]:
     })
 
 
-def _both(grams: list[bytes], keep_raw: bool) -> tuple[hot.Split, hot.Split]:
+def _both(grams: list[bytes], keep_raw: bool) -> tuple[hot_decode.Split, hot_decode.Split]:
     splits = []
     for few in (0, 10**9):  # every batch the numpy way, then every batch the Python way
-        old, hot.FEW_FRAMES = hot.FEW_FRAMES, few
+        old, hot_decode.FEW_FRAMES = hot_decode.FEW_FRAMES, few
         try:
-            splits.append(hot.decode_datagrams(grams, keep_raw=keep_raw))
+            splits.append(hot_decode.decode_datagrams(grams, keep_raw=keep_raw))
         finally:
-            hot.FEW_FRAMES = old
+            hot_decode.FEW_FRAMES = old
     return splits[0], splits[1]
 
 

@@ -13,16 +13,8 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from mavlink_dialect import Codec, hot, mavlink
-from mavlink_dialect.hot import (
-    AMUSSEL_SENSORS,
-    AMUSSEL_STATUS,
-    HotFrames,
-    HotSpec,
-    decode_datagram,
-    decode_datagrams,
-    encode_batch,
-    pack_datagrams,
-)
+from mavlink_dialect.hot import AMUSSEL_SENSORS, AMUSSEL_STATUS, HotSpec, encode_batch, pack_datagrams
+from mavlink_dialect.hot_decode import HotFrames, decode_datagram, decode_datagrams
 from mavlink_dialect.tlog import TlogWriter, frames
 
 SPECS = [AMUSSEL_STATUS, AMUSSEL_SENSORS]

@@ -1,11 +1,11 @@
-"""hot.SharedDecode: the same datagram objects are decoded once; every party still counts them."""
+"""hot_decode.SharedDecode: the same datagram objects are decoded once; every party still counts them."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from mavlink_dialect import Codec, hot
+from mavlink_dialect import Codec, hot, hot_decode
 
 
 def _datagrams(n: int = 30) -> list[bytes]:
@@ -18,13 +18,13 @@ def _datagrams(n: int = 30) -> list[bytes]:
 
 
 def test_same_objects_decoded_once_and_counted_per_party() -> None:
-    shared, grams = hot.SharedDecode(), _datagrams()
+    shared, grams = hot_decode.SharedDecode(), _datagrams()
     a, b = Codec(1, 1), Codec(3, 1)
     first = shared.decode(grams, stats=a.stats)
     second = shared.decode(list(grams), stats=b.stats)  # another list of the very same objects
     assert second is first
     assert a.stats.received == b.stats.received == 30 and a.stats.bad_data == b.stats.bad_data == 1
-    plain = hot.decode_datagrams(grams)
+    plain = hot_decode.decode_datagrams(grams)
     for name, column in plain.hot.fields.items():
         assert np.array_equal(first.hot.fields[name], column)
     with pytest.raises(ValueError):
@@ -32,7 +32,7 @@ def test_same_objects_decoded_once_and_counted_per_party() -> None:
 
 
 def test_equal_but_new_objects_and_raw_requests_decode_again() -> None:
-    shared, grams = hot.SharedDecode(), _datagrams()
+    shared, grams = hot_decode.SharedDecode(), _datagrams()
     first = shared.decode(grams)
     assert shared.decode([bytes(bytearray(g)) for g in grams]) is not first
     again = shared.decode(grams)
