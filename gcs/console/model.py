@@ -84,23 +84,13 @@ class Snapshot:
     battery_frac: NDArray[np.float64]
     state: NDArray[np.uint8]  # MusselState
     uptime_pct: NDArray[np.float64]
-    apad_lat_deg: float | None
-    apad_lon_deg: float | None
-    trace_lat_deg: NDArray[np.float64]
-    trace_lon_deg: NDArray[np.float64]
-    apad_battery_v: float | None
-    apad_battery_pct: int
-    mode: str
-    primitive: str
-    slots: tuple[SlotSnapshot, ...]
-    phase: str
     strategy: str
-    cost_m: float
-    cycles: int
     hist_t_s: NDArray[np.float64]  # (k,) sample times
     hist_active: NDArray[np.int32]  # (k,) active aMussels per sample
     hist_battery: NDArray[np.float32]  # (k, n) battery fraction, NaN before first heard
-    hist_apad_v: NDArray[np.float64]  # (k,) aPad battery volts, NaN unknown
+    hist_apad_v: NDArray[np.float64]  # (k,) the selected aPad's battery volts, NaN unknown
+    apads: tuple[ApadSnapshot, ...]  # every aPad, in the scenario's order
+    selected: int  # the system id of the aPad shown in detail and commanded
     log: tuple[str, ...] = ()
     paused: bool = False
     pending_strategy: str | None = None
@@ -110,9 +100,60 @@ class Snapshot:
     dropped_top: str = ""  # the commonest reason, "REASON ×N"
     outline_lat_deg: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     outline_lon_deg: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
-    apads: tuple[ApadSnapshot, ...] = ()  # every aPad, in the scenario's order
-    selected: int = 0  # the system id of the aPad shown above and commanded
     owner: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, np.int64))  # (n,) aPad, 0: none
+
+    # The selected aPad, as the one-aPad screens read it (one record per aPad: `apads`).
+    @property
+    def apad(self) -> ApadSnapshot:
+        return next(a for a in self.apads if a.system_id == self.selected)
+
+    @property
+    def apad_lat_deg(self) -> float | None:
+        return self.apad.lat_deg
+
+    @property
+    def apad_lon_deg(self) -> float | None:
+        return self.apad.lon_deg
+
+    @property
+    def trace_lat_deg(self) -> NDArray[np.float64]:
+        return self.apad.trace_lat_deg
+
+    @property
+    def trace_lon_deg(self) -> NDArray[np.float64]:
+        return self.apad.trace_lon_deg
+
+    @property
+    def apad_battery_v(self) -> float | None:
+        return self.apad.battery_v
+
+    @property
+    def apad_battery_pct(self) -> int:
+        return self.apad.battery_pct
+
+    @property
+    def mode(self) -> str:
+        return self.apad.mode
+
+    @property
+    def primitive(self) -> str:
+        return self.apad.primitive
+
+    @property
+    def slots(self) -> tuple[SlotSnapshot, ...]:
+        return self.apad.slots
+
+    @property
+    def phase(self) -> str:
+        return self.apad.phase
+
+    @property
+    def cost_m(self) -> float:
+        return self.apad.cost_m
+
+    @property
+    def cycles(self) -> int:
+        return self.apad.cycles
 
     def marker_classes(self) -> NDArray[np.int8]:
         """`MarkerColour` per aMussel `(n,)`."""
@@ -247,19 +288,7 @@ class ConsoleModel:
             battery_frac=cols.battery_frac,
             state=cols.state,
             uptime_pct=np.asarray(uptime, np.float64).copy(),
-            apad_lat_deg=a.lat_deg,
-            apad_lon_deg=a.lon_deg,
-            trace_lat_deg=a.trace_lat_deg,
-            trace_lon_deg=a.trace_lon_deg,
-            apad_battery_v=a.battery_v,
-            apad_battery_pct=a.battery_pct,
-            mode=a.mode,
-            primitive=a.primitive,
-            slots=a.slots,
-            phase=a.phase,
             strategy=self.strategy,
-            cost_m=a.cost_m,
-            cycles=a.cycles,
             # History rows are written once and never again: views are as good as copies.
             hist_t_s=self.hist_t.rows(),
             hist_active=self.hist_active.rows(),
