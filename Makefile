@@ -21,6 +21,9 @@ run: $(STAMP)
 test: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/mypy
+# The browser tests (tests/browser) need the system's Chromium; without it they are skipped.
+	@command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || [ -n "$$VIL_CHROMIUM" ] || \
+	  echo "make test: Chromium is not installed, so the browser tests are skipped; install it with: apt-get install chromium"
 # Two workers, a test file each at a time (module fixtures stay shared): many tests wait on real
 # processes and sockets in real time, and overlap well on 2 cores.
 	$(BIN)/pytest -q -n 2 --dist loadfile
