@@ -275,7 +275,11 @@ def load_scenario(path: str | Path) -> Scenario:
         raise ScenarioError(f"{path}: cannot read: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
+    return scenario_from_data(path, data)
 
+
+def scenario_from_data(path: Path, data: dict[str, Any]) -> Scenario:
+    """Validate a scenario's parsed TOML (`vil sweep` patches fields into it); paths are relative to `path`."""
     root = _Table(path, data, "")
     top = root.sub("scenario")
     name = top.text("name", path.stem)
