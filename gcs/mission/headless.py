@@ -26,6 +26,7 @@ from mavlink_dialect.transport import UdpTransport
 from missiontime import seconds_to_us, us_to_s
 
 ProgressFn = Callable[[float], None]  # receives mission time done, seconds
+WorldFn = Callable[[World], None]  # reads the world when the mission has ended (`vil sweep`: the active counts)
 
 
 def run_stem(scenario: Scenario) -> str:
@@ -36,7 +37,7 @@ def run_stem(scenario: Scenario) -> str:
 def run_mission(
     scenario: Scenario, out_dir: Path | None = None, progress: ProgressFn | None = None,
     options: LinkOptions | None = None,
-    resume: bool = False,
+    resume: bool = False, on_end: WorldFn | None = None,
 ) -> RunResult:
     """Run one mission in lockstep to its end; write its folder if `out_dir` is given.
 
@@ -47,7 +48,7 @@ def run_mission(
     if len(scenario.apads) > 1:
         if resume:
             raise checkpoint.CheckpointError("resuming a mission of several aPads is not supported yet")
-        return _run_swarm(scenario, out_dir, progress, options, wall_start)
+        return _run_swarm(scenario, out_dir, progress, options, wall_start, on_end)
     ckpt_files = checkpoint.CheckpointFiles(out_dir / checkpoint.CHECKPOINT_NAME) if out_dir is not None else None
     saved = None
     if resume:
@@ -77,6 +78,8 @@ def run_mission(
                 "checkpoint", world.clock.now_us + seconds_to_us(checkpoint.CHECKPOINT_PERIOD_S),
             )
         end = loop.run(resume=saved is not None)
+        if on_end is not None:
+            on_end(world)
         result = _result(world, loop.status.cost_m, loop.status.cycles, str(end), time.perf_counter() - wall_start,
                          out_dir, {loop.apad_id: loop}, apad_rows(world, None, loop))
         if out_dir is not None:
@@ -92,7 +95,7 @@ def run_mission(
 
 def _run_swarm(
     scenario: Scenario, out_dir: Path | None, progress: ProgressFn | None, options: LinkOptions | None,
-    wall_start: float,
+    wall_start: float, on_end: WorldFn | None = None,
 ) -> RunResult:
     """Several aPads (`gcs.mission.swarm_run`); no checkpoints yet."""
     world = lockstep_world(scenario, out_dir, options)
@@ -100,6 +103,8 @@ def _run_swarm(
         if progress is not None:
             world.clock.scheduler.every(10.0, lambda now_us: progress(us_to_s(now_us)), "progress", world.clock.now_us)
         outcome = run_swarm(world)
+        if on_end is not None:
+            on_end(world)
         result = _result(world, outcome.cost_m, outcome.cycles, outcome.end_reason, time.perf_counter() - wall_start,
                          out_dir, outcome.loops, apad_rows(world, outcome, None))
         if out_dir is not None:
