@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Iterator, Mapping
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -22,7 +23,7 @@ from numpy.typing import NDArray
 from apad_sitl import primitives as prim
 from apad_sitl.commands import ACCEPT, DENIED, Command, Reply, whole
 from apad_sitl.primitives import REFUSAL_TEXT, MusselFix, PrimitiveState, Refusal
-from apad_sitl.vocabulary import N_SLOTS, Latch
+from apad_sitl.vocabulary import N_SLOTS, Latch, Primitive, Progress
 from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
 from mussel_sim.geo import LocalFrame
 from mussel_sim.vocabulary import MusselState
@@ -181,8 +182,30 @@ class Docking:
             return checked
         slot, mussel_id = checked
         v = self._v
+        held = v.primitive.slot_state(slot)
+        if held.mussel_id == mussel_id and held.latch in (Latch.CLOSING, Latch.LATCHED) and not self._docking(
+                slot, mussel_id):
+            return self._redock(slot, mussel_id, held.latch)
         new, refusal = prim.dock(v.primitive, slot, mussel_id, v.state.x_m, v.state.y_m, self.mussels, v.params)
         return self._result("Dock", slot, mussel_id, new, refusal)
+
+    def _docking(self, slot: int, mussel_id: int) -> bool:
+        """Whether the Dock of this aMussel into this slot is the primitive in force (a repeat changes nothing)."""
+        p = self._v.primitive
+        return p.kind == Primitive.DOCK and (p.slot, p.mussel_id) == (slot, mussel_id)
+
+    def _redock(self, slot: int, mussel_id: int, latch: Latch) -> Reply:
+        """A Dock of what the slot already holds, once the aPad has moved on to another primitive: a
+        latch still closing is a Dock to follow again (its report ends it, done or failed); a latched one
+        is refused, "slot occupied" (the slot holds it from before: e.g. a script run twice), so the
+        Dock is never accepted with nothing to report on it."""
+        v = self._v
+        if latch == Latch.LATCHED:
+            return self._result("Dock", slot, mussel_id, v.primitive, Refusal.SLOT_OCCUPIED)
+        hx, hy = prim.hold_point(v.primitive, v.state.x_m, v.state.y_m)
+        v.set_primitive(replace(v.primitive, kind=Primitive.DOCK, progress=Progress.IN_PROGRESS, target_x_m=hx,
+                                target_y_m=hy, speed_mps=0.0, radius_m=0.0, slot=slot, mussel_id=mussel_id))
+        return ACCEPT
 
     def _cmd_undock(self, cmd: Command) -> Reply:
         checked = self._slot_and_mussel("Undock", cmd, lowest_id=0)  # 0: whatever the slot holds

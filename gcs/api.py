@@ -15,7 +15,8 @@ state it reads is the link's one registry (`gcs.link.registry`).
 from __future__ import annotations
 
 import copy
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 
 from apad_sitl.geofence import Geofence
 from apad_sitl.vocabulary import N_SLOTS, Primitive, Progress, RoverMode
@@ -37,7 +38,7 @@ class GeofenceError(CommandError):
 
     def __init__(self, system_id: int, lat: float, lon: float) -> None:
         super().__init__(system_id, mavlink.MAV_CMD_DO_REPOSITION, mavlink.MAV_RESULT_DENIED,
-                         f"target {lat:.7f}, {lon:.7f} outside the geofence; not sent")
+                         f"target {lat:.7f}, {lon:.7f}; not sent", words="outside geofence")
 
 
 class UnknownMussel(KeyError):
@@ -162,31 +163,42 @@ class ApadApi:
         if not self.inside_geofence(latlon):
             raise GeofenceError(sysid, latlon[0], latlon[1])
         lat_e7, lon_e7 = round(latlon[0] * DEG_E7), round(latlon[1] * DEG_E7)
-        self.link.registry.expect(sysid, Primitive.GOTO, lat_e7, lon_e7)
-        self.link.commands.send_int(
-            sysid, mavlink.MAV_CMD_DO_REPOSITION, mavlink.MAV_FRAME_GLOBAL_INT,
-            (speed, float(mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE), radius, float("nan")),
-            lat_e7, lon_e7, clock=self.clock,
-        )
+        with self._expecting(sysid, Primitive.GOTO, lat_e7, lon_e7):
+            self.link.commands.send_int(
+                sysid, mavlink.MAV_CMD_DO_REPOSITION, mavlink.MAV_FRAME_GLOBAL_INT,
+                (speed, float(mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE), radius, float("nan")),
+                lat_e7, lon_e7, clock=self.clock,
+            )
 
     def hold(self, apad_id: int | None = None) -> None:
         """Hold Position (dynamic positioning) where the aPad is now."""
         sysid = self.apad(apad_id).system_id
-        self.link.registry.expect(sysid, Primitive.HOLD)
-        self.link.commands.send_long(
-            sysid, mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, RoverMode.HOLD),
-            clock=self.clock,
-        )
+        with self._expecting(sysid, Primitive.HOLD):
+            self.link.commands.send_long(
+                sysid, mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, RoverMode.HOLD),
+                clock=self.clock,
+            )
 
     def docking(self, dock: bool, slot: int, mussel_id: int = 0, apad_id: int | None = None) -> None:
         """Dock `mussel_id` into `slot` (1..4), or undock the slot (mussel_id 0: whatever is there)."""
         sysid = self.apad(apad_id).system_id
-        if dock:
-            self.link.registry.expect(sysid, Primitive.DOCK, slot, mussel_id)
-            self.link.commands.send_long(sysid, MAV_CMD_APAD_DOCK, (slot, mussel_id), clock=self.clock)
-        else:
-            self.link.registry.expect(sysid, Primitive.UNDOCK, slot)
-            self.link.commands.send_long(sysid, MAV_CMD_APAD_UNDOCK, (slot, mussel_id), clock=self.clock)
+        kind, command = (Primitive.DOCK, MAV_CMD_APAD_DOCK) if dock else (Primitive.UNDOCK, MAV_CMD_APAD_UNDOCK)
+        with self._expecting(sysid, kind, slot, mussel_id if dock else 0):
+            self.link.commands.send_long(sysid, command, (slot, mussel_id), clock=self.clock)
+
+    @contextmanager
+    def _expecting(self, sysid: int, kind: Primitive, a: int = 0, b: int = 0) -> Iterator[None]:
+        """Expect the primitive about to be commanded; a refusal puts back the one expected before
+        (nothing changed on the aPad, so whoever waits on that one goes on waiting on it)."""
+        view = self.link.vehicles[sysid]
+        before = view.expected
+        self.link.registry.expect(sysid, kind, a, b)
+        try:
+            yield
+        except CommandError as exc:
+            if exc.result is not None:
+                view.expected = before
+            raise
 
     def fresh_slot(self, slot: int, apad_id: int | None = None, timeout_s: float = 2.0, attempts: int = 5) -> SlotView:
         """The slot as the aPad reports it in answer to a request now (REQUEST_MESSAGE), not a report

@@ -16,7 +16,7 @@ import sys
 import numpy as np
 
 from apad_sitl.vocabulary import Progress
-from gcs.api import ApadApi
+from gcs.api import ApadApi, CommandError
 from gcs.link.router import Link
 from mavlink_dialect import AddressError, Codec, open_transport
 from missiontime import WallClock
@@ -77,7 +77,12 @@ def main(argv: list[str] | None = None) -> int:
             print("listing1: timed out", file=sys.stderr)
             return 1
     print("Goal reached. Docking start.")
-    api.docking(True, SLOT, MUSSEL_ID)
+    try:
+        api.docking(True, SLOT, MUSSEL_ID)
+    except CommandError as exc:  # refused (e.g. slot 2 still holds aMussel 24 from a run before) or unanswered
+        print(f"listing1: {exc.words} ({exc})", file=sys.stderr)
+        link.close()
+        return 1
     # ----------------------------------------------------------------------------------------
 
     while api.docking_status(id_self) == Progress.IN_PROGRESS:

@@ -5,6 +5,10 @@ Every wait is bounded: `retries + 1` attempts, the first waiting `timeout_s` and
 `BACKOFF` times the one before (1 + 1.5 + 2.25 + 3.375 s by default); at the bound a
 `CommandError` with `result=None`. A vehicle that answers IN_PROGRESS gets at most
 `IN_PROGRESS_MAX_S` in all before the command fails with that result.
+
+`refusal_words` is the one place a MAV_RESULT, and our dialect's refusal reason for Dock and Undock
+(COMMAND_ACK.result_param2, `apad_sitl.primitives.Refusal`), become the words an operator reads
+("slot 2 occupied"); `CommandError.words` carries them.
 """
 
 from __future__ import annotations
@@ -13,8 +17,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from apad_sitl.primitives import Refusal
 from gcs.link.telemetry import CommandAck
-from mavlink_dialect import mavlink
+from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
 from missiontime import Clock, seconds_to_us
 
 Send = Callable[[Any], None]  # encode a message as the GCS and send it to the vehicles
@@ -30,14 +35,69 @@ def _enum_name(enum: str, value: int, prefix: str = "") -> str:
     return entry.name.removeprefix(prefix) if entry is not None else str(value)
 
 
-class CommandError(Exception):
-    """A command the vehicle refused or never acknowledged; `result` is the MAV_RESULT (None: no ACK)."""
+# What each MAV_RESULT means to the operator, when the command's own reason says no more.
+RESULT_WORDS: dict[int, str] = {
+    mavlink.MAV_RESULT_TEMPORARILY_REJECTED: "busy, try again",
+    mavlink.MAV_RESULT_DENIED: "refused by the aPad",
+    mavlink.MAV_RESULT_UNSUPPORTED: "not supported by the aPad",
+    mavlink.MAV_RESULT_FAILED: "failed on the aPad",
+    mavlink.MAV_RESULT_IN_PROGRESS: "still in progress at the time limit",
+    mavlink.MAV_RESULT_COMMAND_LONG_ONLY: "the aPad takes it only as COMMAND_LONG",
+    mavlink.MAV_RESULT_COMMAND_INT_ONLY: "the aPad takes it only as COMMAND_INT",
+}
+# Why a Dock or Undock was refused (the aPad's reason in result_param2), with its slot and aMussel.
+REFUSAL_WORDS: dict[Refusal, str] = {
+    Refusal.BAD_SLOT: "no slot {slot} (slots are 1..4)",
+    Refusal.BAD_MUSSEL_ID: "{mussel} is no aMussel id",
+    Refusal.UNKNOWN_MUSSEL: "the aPad has not heard aMussel {mussel}",
+    Refusal.OUT_OF_REACH: "aMussel {mussel} out of docking reach",
+    Refusal.SLOT_OCCUPIED: "slot {slot} occupied",
+    Refusal.ALREADY_DOCKED: "aMussel {mussel} already docked",
+    Refusal.SLOT_EMPTY: "slot {slot} empty",
+    Refusal.WRONG_MUSSEL: "another aMussel in slot {slot}",
+    Refusal.SLOT_BUSY: "slot {slot} busy releasing",
+}
+COMMAND_WORDS: dict[int, str] = {
+    MAV_CMD_APAD_DOCK: "dock",
+    MAV_CMD_APAD_UNDOCK: "undock",
+    mavlink.MAV_CMD_DO_REPOSITION: "go to",
+    mavlink.MAV_CMD_DO_SET_MODE: "mode change",
+    mavlink.MAV_CMD_SET_MESSAGE_INTERVAL: "telemetry rate",
+    mavlink.MAV_CMD_REQUEST_MESSAGE: "status request",
+}
+_REFUSALS = frozenset(int(r) for r in Refusal)
 
-    def __init__(self, system_id: int, command: int, result: int | None, detail: str = "") -> None:
-        self.system_id, self.command, self.result = system_id, command, result
+
+def refusal_words(command: int, result: int | None, reason: int = 0, params: tuple[float, ...] = ()) -> str:
+    """Why `command` (sent with `params`) did not happen, in words: "slot 2 occupied"."""
+    if result is None:
+        return "no answer from the aPad"
+    if command in (MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK) and reason in _REFUSALS:
+        slot, mussel = (_shown(params[i]) if len(params) > i else "?" for i in (0, 1))
+        return REFUSAL_WORDS[Refusal(reason)].format(slot=slot, mussel=mussel)
+    return RESULT_WORDS.get(result, f"result {result}")
+
+
+def command_words(command: int) -> str:
+    """The command as the operator calls it ("dock"); its MAVLink name if it has no other."""
+    return COMMAND_WORDS.get(command) or _enum_name("MAV_CMD", command, "MAV_CMD_").lower()
+
+
+def _shown(value: float) -> str:
+    return str(int(value)) if value == value and abs(value) < 2**31 and value == int(value) else repr(value)
+
+
+class CommandError(Exception):
+    """A command the vehicle refused or never acknowledged; `result` is the MAV_RESULT (None: no ACK),
+    `reason` the dialect's refusal reason (result_param2), `words` why, as the operator reads it."""
+
+    def __init__(self, system_id: int, command: int, result: int | None, detail: str = "", *, reason: int = 0,
+                 params: tuple[float, ...] = (), words: str | None = None) -> None:
+        self.system_id, self.command, self.result, self.reason = system_id, command, result, reason
+        self.words = words or refusal_words(command, result, reason, params)
         what = "no COMMAND_ACK" if result is None else _enum_name("MAV_RESULT", result)
-        name = _enum_name("MAV_CMD", command)
-        super().__init__(f"aPad {system_id}: {name} failed: {what}{f' ({detail})' if detail else ''}")
+        raw = ", ".join(x for x in (what, f"reason {reason}" if reason else "", detail) if x)
+        super().__init__(f"aPad {system_id}: {command_words(command)} failed: {self.words} ({raw})")
 
 
 @dataclass
@@ -72,7 +132,7 @@ class CommandClient:
         def build(confirmation: int) -> Any:
             return mavlink.MAVLink_command_long_message(system_id, component_id, command, confirmation, *p)
 
-        return self._run(system_id, command, build, timeout_s, retries, clock or self._clock)
+        return self._run(system_id, command, build, timeout_s, retries, clock or self._clock, p)
 
     def send_int(
         self, system_id: int, command: int, frame: int, params: tuple[float, float, float, float], x: int, y: int,
@@ -85,10 +145,11 @@ class CommandClient:
             # COMMAND_INT has no confirmation field: a retransmission is byte-identical but for its seq.
             return mavlink.MAVLink_command_int_message(system_id, component_id, frame, command, 0, 0, *params, x, y, z)
 
-        return self._run(system_id, command, build, timeout_s, retries, clock or self._clock)
+        return self._run(system_id, command, build, timeout_s, retries, clock or self._clock, params)
 
     def _run(
-        self, system_id: int, command: int, build: Callable[[int], Any], timeout_s: float, retries: int, clock: Clock
+        self, system_id: int, command: int, build: Callable[[int], Any], timeout_s: float, retries: int, clock: Clock,
+        params: tuple[float, ...],
     ) -> CommandAck:
         pending = _Pending(system_id, command)
         self._pending.append(pending)
@@ -104,18 +165,20 @@ class CommandClient:
                     ack = pending.ack
                     if ack is not None and ack.result == mavlink.MAV_RESULT_IN_PROGRESS:
                         if clock.now_us >= give_up_us:
-                            raise CommandError(system_id, command, ack.result, f"over {IN_PROGRESS_MAX_S:g} s")
+                            raise CommandError(system_id, command, ack.result, f"over {IN_PROGRESS_MAX_S:g} s",
+                                               params=params)
                         pending.ack = None  # keep waiting for the final result
                         deadline = clock.now_us + seconds_to_us(wait_s)
                     elif ack is not None:
                         if ack.result != mavlink.MAV_RESULT_ACCEPTED:
-                            detail = f"reason {ack.result_param2}" if ack.result_param2 else ""
-                            raise CommandError(system_id, command, ack.result, detail)
+                            raise CommandError(system_id, command, ack.result, reason=ack.result_param2,
+                                               params=params)
                         return ack
                     if clock.now_us >= deadline:
                         break
                     clock.sleep(min(POLL_S, wait_s))
                 wait_s *= BACKOFF
-            raise CommandError(system_id, command, None, f"{retries + 1} attempts, {timeout_s:g} s and up")
+            raise CommandError(system_id, command, None, f"{retries + 1} attempts, {timeout_s:g} s and up",
+                               params=params)
         finally:
             self._pending.remove(pending)
