@@ -1,69 +1,168 @@
-"""`vil report`: PNGs, the HTML page with the Table II indices, GeoJSON, from a recorded run."""
+"""`vil report`: figures, a page that reads on its own, RFC 7946 GeoJSON, and runs compared.
+
+The runs are real: the live-console recording (pool12, 240 s, no result.json: indices from the
+replay), a headless pool12 run with no collection that runs aMussels flat, and a two-aPad run
+with one aPad lost (re-shares).
+"""
 
 from __future__ import annotations
 
 import json
+import shutil
+from datetime import datetime
+from html.parser import HTMLParser
 from pathlib import Path
+from urllib.parse import urlsplit
 
 import pytest
+from shapely.geometry import LinearRing
 
 from gcs.cli import main
+from gcs.mission.headless import run_mission
+from gcs.mission.scenario import load_scenario
+from gcs.mission.world import LinkOptions
 
 pytestmark = pytest.mark.tui
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+SINGLE_FIGURES = ("uptime.png", "active.png", "battery.png", "battery_map.png", "states.png", "track.png")
 
 
-def test_report_writes_plots_page_and_geojson(recorded_run: Path, tmp_path: Path) -> None:
-    out = tmp_path / "report"
-    assert main(["report", str(recorded_run), "-o", str(out)]) == 0
-    for name in ("battery.png", "active.png", "uptime.png", "track.png"):
-        data = (out / name).read_bytes()
-        assert data.startswith(PNG_MAGIC) and len(data) > 20_000, name
-    page = (out / "index.html").read_text()
-    for text in ("avg uptime %", "cost m", "active aMussels (mean)", "33.4", "battery.png", "run.geojson"):
-        assert text in page
-    geo = json.loads((out / "run.geojson").read_text())
-    kinds = [f["geometry"]["type"] for f in geo["features"]]
-    assert kinds[0] == "LineString" and kinds.count("Point") == 24  # 12 aMussels, start and end
-    track = geo["features"][0]["geometry"]["coordinates"]
-    assert len(track) > 200 and all(15.43 < lon < 15.45 and 43.93 < lat < 43.95 for lon, lat in track)
+class Links(HTMLParser):
+    """Every src and href of a page, and the text of its table headers."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.urls: list[str] = []
+        self.headers: list[str] = []
+        self._in_th = False
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        self.urls += [v for k, v in attrs if k in ("src", "href") and v is not None]
+        self._in_th = tag == "th"
+
+    def handle_data(self, data: str) -> None:
+        if self._in_th:
+            self.headers.append(data)
+            self._in_th = False
 
 
-def test_report_of_a_missing_run_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["report", str(tmp_path / "nope"), "-o", str(tmp_path / "out")]) == 2
-    assert capsys.readouterr().err.startswith("vil report:")
+def links(page: Path) -> Links:
+    parser = Links()
+    parser.feed(page.read_text(encoding="utf-8"))
+    return parser
 
 
-def test_report_takes_the_indices_from_result_json(recorded_run: Path, tmp_path: Path) -> None:
-    run = tmp_path / "run"
+def assert_local_page(page: Path) -> None:
+    """Every asset of the page is a file beside it: no scheme, no host, and the file is there."""
+    for url in links(page).urls:
+        parts = urlsplit(url)
+        assert not parts.scheme and not parts.netloc, url
+        if parts.path:
+            assert (page.parent / parts.path).is_file(), url
+
+
+@pytest.fixture(scope="module")
+def single(recorded_run: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The console recording's report, written where `vil report RUN` puts it by default."""
+    run = tmp_path_factory.mktemp("single") / "pool12-console"
     run.mkdir()
     for name in ("gcs.tlog", "events.jsonl", "console.json"):
-        (run / name).write_bytes((recorded_run / name).read_bytes())
-    result = {"scenario": "pool12", "strategy": "cautious", "seed": 1, "uptime": {"avg": 70.5, "max": 90.0,
-              "min": 50.25}, "cost_m": 123.4, "active_avg": 8.5, "end_reason": "mission time"}
-    (run / "result.json").write_text(json.dumps(result))
-    out = tmp_path / "report"
-    assert main(["report", str(run), "-o", str(out)]) == 0
-    page = (out / "index.html").read_text()
-    assert "pool12 cautious seed 1" in page and "<td>70.50</td>" in page and "<td>123.4</td>" in page
-    assert "paper (Table II)" in page and "<td>74.37</td>" in page  # the paper's row beside ours
+        shutil.copy(recorded_run / name, run / name)
+    assert main(["report", str(run)]) == 0
+    return run / "report"
 
 
-def test_a_swarm_run_report_draws_the_partition_and_a_single_run_does_not(
-        recorded_run: Path, tmp_path: Path) -> None:
-    from gcs.mission.headless import run_mission
-    from gcs.mission.scenario import load_scenario
-    from gcs.mission.world import LinkOptions
-
-    run = tmp_path / "run"
-    run_mission(load_scenario("pool12x2").with_overrides(duration_s=420.0), run,
+@pytest.fixture(scope="module")
+def compared(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A pool12 run with no collection (aMussels run flat) beside a pool12x2 run that loses aPad 2."""
+    root = tmp_path_factory.mktemp("compare")
+    flat = root / "pool12-none"
+    run_mission(load_scenario("pool12").with_overrides(strategy="none", duration_s=720.0, theta=60.0), flat)
+    swarm = root / "pool12x2"
+    run_mission(load_scenario("pool12x2").with_overrides(duration_s=420.0), swarm,
                 options=LinkOptions(fail_apads=((2, 200.0),)))
-    out = tmp_path / "report"
-    assert main(["report", str(run), "-o", str(out)]) == 0
-    data = (out / "partition.png").read_bytes()
-    assert data.startswith(PNG_MAGIC) and len(data) > 20_000
-    assert 'src="partition.png"' in (out / "index.html").read_text()
-    single = tmp_path / "single"
-    assert main(["report", str(recorded_run), "-o", str(single)]) == 0
-    assert not (single / "partition.png").exists() and "partition.png" not in (single / "index.html").read_text()
+    out = root / "report"
+    assert main(["report", str(flat), str(swarm), "-o", str(out)]) == 0
+    return out
+
+
+def test_one_run_writes_figures_a_self_contained_page_and_geojson(single: Path) -> None:
+    for name in SINGLE_FIGURES:
+        data = (single / name).read_bytes()
+        assert data.startswith(PNG_MAGIC) and len(data) > 20_000, name
+    assert not (single / "partition.png").exists()  # one aPad: no sharing to draw
+    page = single / "index.html"
+    text = page.read_text(encoding="utf-8")
+    headers = links(page).headers
+    for header in ("avg uptime %", "cost m", "active aMussels (mean)", "dockings", "state at the end", "event"):
+        assert header in headers, header
+    assert "Indices from replay" in text  # no result.json: the figures come from the log itself
+    assert "aPad 1 home, 43.940000° N 15.439838° E" in text  # the maps' origin, stated
+    assert "never collected" in text  # 4 of 12 docked in 240 s: the others are flagged
+    assert text.count("<img ") == len(SINGLE_FIGURES)
+    assert "docked" in text and "call up" in text  # the event timeline
+    assert_local_page(page)
+
+
+def test_geojson_is_rfc7946_with_area_timed_track_and_a_point_per_amussel(single: Path) -> None:
+    geo = json.loads((single / "run.geojson").read_text(), parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
+    assert geo["type"] == "FeatureCollection"
+    kinds = [f["properties"]["kind"] for f in geo["features"]]
+    assert kinds == ["area", "apad_track"] + ["amussel"] * 12
+    area = geo["features"][0]["geometry"]
+    assert area["type"] == "Polygon"
+    ring = area["coordinates"][0]
+    assert ring[0] == ring[-1] and LinearRing(ring).is_ccw  # closed; exterior counterclockwise (§3.1.6)
+    track = geo["features"][1]
+    coords, times = track["geometry"]["coordinates"], track["properties"]["times"]
+    assert track["geometry"]["type"] == "LineString" and len(coords) > 200
+    assert len(times) == len(coords) == len(track["properties"]["mission_times_s"])
+    assert all(15.43 < lon < 15.45 and 43.93 < lat < 43.95 for lon, lat in coords)  # [lon, lat]
+    stamps = [datetime.fromisoformat(t) for t in times]
+    assert stamps == sorted(stamps) and stamps[0].tzinfo is not None
+    points = geo["features"][2:]
+    assert sorted(p["properties"]["amussel_id"] for p in points) == list(range(1, 13))
+    for p in points:
+        lon, lat = p["geometry"]["coordinates"]
+        assert p["geometry"]["type"] == "Point" and 15.43 < lon < 15.45 and 43.93 < lat < 43.95
+        assert {"uptime_pct", "dockings", "never_collected", "depleted_s", "state_s"} <= set(p["properties"])
+    docked = {p["properties"]["amussel_id"] for p in points if p["properties"]["dockings"]}
+    assert docked == {3, 6, 8, 11}  # the first collection round, as the events say
+
+
+def test_several_runs_are_compared_each_with_its_own_report(compared: Path) -> None:
+    for name in ("compare_active.png", "compare_cost.png", "compare_uptime.png"):
+        assert (compared / name).read_bytes().startswith(PNG_MAGIC), name
+    page = compared / "index.html"
+    text = page.read_text(encoding="utf-8")
+    assert "Comparison of 2 runs" in text and "pool12 none seed 1" in text and "pool12x2 cautious seed 1" in text
+    assert_local_page(page)
+    assert {"pool12-none/index.html", "pool12x2/index.html"} <= set(links(page).urls)
+    swarm = compared / "pool12x2"
+    assert (swarm / "partition.png").read_bytes().startswith(PNG_MAGIC)
+    geo = json.loads((swarm / "run.geojson").read_text())
+    tracks = [f for f in geo["features"] if f["properties"]["kind"] == "apad_track"]
+    assert [t["properties"]["apad"] for t in tracks] == [1, 2]
+    assert all(len(t["properties"]["times"]) == len(t["geometry"]["coordinates"]) for t in tracks)
+
+
+def test_depleted_and_never_collected_amussels_are_marked(compared: Path) -> None:
+    flat = compared / "pool12-none"
+    text = (flat / "index.html").read_text(encoding="utf-8")
+    assert "Indices from result.json" in text and "paper (Table II)" in text
+    points = [f["properties"] for f in json.loads((flat / "run.geojson").read_text())["features"]
+              if f["properties"]["kind"] == "amussel"]
+    assert all(p["never_collected"] for p in points)  # strategy none collects nobody
+    depleted = [p["amussel_id"] for p in points if p["depleted_s"] > 0]
+    assert depleted and all(p["end_state"] == "depleted" for p in points if p["amussel_id"] in depleted)
+    assert f'<tr class="flag"><td class="text">{depleted[0]}</td>' in text
+    assert "never collected, depleted" in text
+
+
+def test_bad_input_is_one_line(recorded_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["report", str(tmp_path / "nope"), "-o", str(tmp_path / "out")]) == 2
+    assert capsys.readouterr().err.startswith("vil report:")
+    assert main(["report", str(recorded_run), str(recorded_run)]) == 2  # several runs, no -o
+    err = capsys.readouterr().err
+    assert err.startswith("vil report:") and "-o" in err and err.count("\n") == 1

@@ -1,0 +1,197 @@
+"""One run's figures over mission time and per aMussel: battery, states, active count, uptime,
+and where each aPad's time went. Each function draws one PNG and returns its path."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from gcs.records.report_data import UNHEARD, RunData, as_list
+from gcs.records.report_style import (
+    BLACK,
+    GREY,
+    MAX_DISTINCT,
+    SEQUENTIAL_MAP,
+    STATE_ORDER,
+    apad_colour,
+    figure,
+    grid,
+    palette,
+    save,
+    series_style,
+    state_colours,
+)
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
+    from matplotlib.axes import Axes
+
+
+def minutes(data: RunData) -> np.ndarray:
+    return data.t_s / 60.0
+
+
+def battery_png(data: RunData, path: Path) -> Path:
+    """Every aMussel's battery, a (colour, line style, marker) each; past MAX_DISTINCT the spread."""
+    fig, ax = figure(8.5, 4.2)
+    grid(ax)
+    t = minutes(data)
+    pct = 100.0 * data.battery.astype(np.float64)
+    n = data.ids.size
+    if n <= MAX_DISTINCT:
+        every = max(t.size // 6, 1)
+        for c, mussel in enumerate(data.ids):
+            s = series_style(c)
+            ax.plot(t, pct[:, c], color=s.colour, ls=s.line, marker=s.marker, ms=4, lw=1.3,
+                    markevery=(c * every // max(n, 1), every), label=str(mussel))
+        ax.legend(title="aMussel", ncols=2, fontsize=7, loc="center left", bbox_to_anchor=(1.0, 0.5))
+    elif pct.size:
+        heard = np.asarray(np.isfinite(pct).any(axis=1))
+        lo, mid, hi = (np.full(t.size, np.nan) for _ in range(3))
+        lo[heard], mid[heard], hi[heard] = np.nanpercentile(pct[heard], [10, 50, 90], axis=1)
+        ax.fill_between(t, lo, hi, color=palette()[0], alpha=0.3, lw=0, label="10th-90th percentile")
+        ax.plot(t, mid, color=palette()[0], lw=1.5, label="median")
+        ax.plot(t, np.nanmin(np.where(heard[:, None], pct, 100.0), axis=1), color=palette()[2], lw=1, ls=":",
+                label="lowest")
+        ax.legend(fontsize=8, loc="lower left")
+    ax.axhline(100 * data.pool_threshold, color=GREY, ls="--", lw=1, label="pool threshold")
+    ax.text(0, 100 * data.pool_threshold + 1, f"pool threshold {100 * data.pool_threshold:.0f} %", fontsize=7,
+            color=GREY)
+    ax.set(xlabel="mission time [min]", ylabel="battery [% of the 3.6-4.2 V range]", ylim=(0, 102),
+           title=f"aMussel battery levels — {data.title}")
+    return save(fig, path)
+
+
+def battery_map_png(data: RunData, path: Path) -> Path:
+    """Battery as a colour map, a row per aMussel: readable for any fleet size."""
+    fig, ax = figure(8.5, max(2.5, min(0.22 * data.ids.size + 1.2, 9.0)))
+    t_end = float(data.t_s[-1]) / 60.0 if data.t_s.size else 0.0
+    image = ax.imshow(100.0 * data.battery.T.astype(np.float64), aspect="auto", interpolation="nearest",
+                      cmap=SEQUENTIAL_MAP, vmin=0, vmax=100, extent=(0, max(t_end, 1 / 60), data.ids.size - 0.5, -0.5))
+    _mussel_ticks(ax, data)
+    ax.set(xlabel="mission time [min]", ylabel="aMussel id", title=f"Battery per aMussel over time — {data.title}")
+    fig.colorbar(image, ax=ax, label="battery [%]", pad=0.01)
+    return save(fig, path)
+
+
+def states_png(data: RunData, path: Path) -> Path:
+    """Left: each aMussel's state over time; right: its mission time per state, stacked."""
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    colours = state_colours()
+    n = data.ids.size
+    fig, (line, bars) = figure(10.0, max(3.0, min(0.25 * n + 1.6, 10.0)), ncols=2, sharey=True,
+                               gridspec_kw={"width_ratios": (3, 1)})
+    lut = [(1.0, 1.0, 1.0)] * 256  # unheard: white
+    for state, colour in colours.items():
+        lut[int(state)] = colour
+    t_end = float(data.t_s[-1]) / 60.0 if data.t_s.size else 0.0
+    line.imshow(data.state.T, aspect="auto", interpolation="nearest", cmap=ListedColormap(lut), vmin=0,
+                vmax=UNHEARD, extent=(0, max(t_end, 1 / 60), n - 0.5, -0.5))
+    line.set(xlabel="mission time [min]", ylabel="aMussel id", title="State over time")
+    _mussel_ticks(line, data)
+    left = np.zeros(n)
+    rows = np.arange(n)
+    for state in STATE_ORDER:
+        width = np.array([m.state_s.get(state.name.lower(), 0.0) for m in data.mussels]) / 60.0
+        bars.barh(rows, width, left=left, color=colours[state], height=0.8)
+        left += width
+    bars.set(xlabel="time in state [min]", title="Time per state")
+    grid(bars)
+    handles = [Patch(color=colours[s], label=s.name.lower()) for s in STATE_ORDER]
+    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), fontsize=8)
+    fig.suptitle(f"aMussel states — {data.title}")
+    return save(fig, path)
+
+
+def active_png(data: RunData, path: Path) -> Path:
+    fig, ax = figure()
+    grid(ax)
+    c = palette()
+    ax.step(minutes(data), data.active, where="post", color=c[0], lw=1.5, label="active aMussels")
+    if data.active.size:
+        mean = float(data.active.mean())
+        ax.axhline(mean, color=c[6], ls="--", lw=1.2, label=f"mean {mean:.2f}")
+    ax.set(xlabel="mission time [min]", ylabel="active aMussels [count]", ylim=(0, data.ids.size + 0.5),
+           title=f"Active aMussels over time — {data.title}")
+    ax.yaxis.get_major_locator().set_params(integer=True)
+    ax.legend(loc="lower left")
+    return save(fig, path)
+
+
+def uptime_png(data: RunData, path: Path) -> Path:
+    """Uptime per aMussel (eq. 3); hatched: never collected; a cross above: depleted for a while."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    fig, ax = figure(max(8.0, 0.35 * data.ids.size), 4.4)
+    grid(ax)
+    x = np.arange(data.ids.size)
+    apads = sorted({m.apad for m in data.mussels})
+    colour_of = {a: apad_colour(a) if data.swarm else palette()[0] for a in apads}
+    for k, m in enumerate(data.mussels):
+        colour = colour_of[m.apad]
+        if m.never_collected:
+            ax.bar(k, m.uptime_pct, color="white", edgecolor=colour, hatch="///", lw=1.2)
+        else:
+            ax.bar(k, m.uptime_pct, color=colour)
+        if m.depleted:
+            ax.plot(k, m.uptime_pct + 5, "X", color=BLACK, ms=8)
+            ax.annotate(f"{m.depleted_s / 60:.0f} min", (k, m.uptime_pct + 9), ha="center", fontsize=6)
+        ax.annotate(f"{m.dockings}", (k, 2), ha="center", fontsize=8, fontweight="bold",
+                    color="white" if not m.never_collected else BLACK)
+    avg = float(np.mean([m.uptime_pct for m in data.mussels])) if data.mussels else 0.0
+    ax.axhline(avg, color=palette()[6], ls="--", lw=1.2)
+    handles: list[Artist] = [Patch(color=colour_of[a], label=f"aPad {a}'s share" if data.swarm else "collected")
+                             for a in apads]
+    handles += [Patch(facecolor="white", edgecolor=BLACK, hatch="///", label="never collected"),
+                Line2D([], [], color=BLACK, marker="X", ls="", label="depleted (minutes)"),
+                Line2D([], [], color=palette()[6], ls="--", label=f"average {avg:.1f} %")]
+    ax.legend(handles=handles, fontsize=7, loc="center left", bbox_to_anchor=(1.0, 0.5))
+    ax.set_xticks(x, [str(i) for i in data.ids], fontsize=7 if data.ids.size > 30 else 9)
+    never = [m.id for m in data.mussels if m.never_collected]
+    flat = [m.id for m in data.mussels if m.depleted]
+    ax.set(xlabel="aMussel id (number in the bar: dockings)", ylabel="uptime [% of mission steps active]",
+           ylim=(0, 118), title=f"Uptime per aMussel (eq. 3) — {data.title}")
+    ax.text(0.01, 0.98, f"never collected: {_ids(never)}    depleted: {_ids(flat)}", transform=ax.transAxes,
+            va="top", fontsize=8)
+    return save(fig, path)
+
+
+def phases_png(data: RunData, path: Path) -> Path | None:
+    """Where each aPad's time went (result.json's per-aPad `phase_s`); None when the run has none."""
+    apads = [a for a in as_list(data.result.get("apads")) if isinstance(a, dict) and isinstance(a.get("phase_s"), dict)]
+    if not apads:
+        return None
+    phases = list(dict.fromkeys(p for a in apads for p in a["phase_s"]))
+    fig, ax = figure(8.0, 1.4 + 0.5 * len(apads))
+    grid(ax)
+    left = np.zeros(len(apads))
+    rows = np.arange(len(apads))
+    drawn = 0
+    for phase in phases:
+        width = np.array([float(a["phase_s"].get(phase, 0.0)) for a in apads]) / 60.0
+        if width.any():  # the loop's instant phases (planning) take no time
+            bars = ax.barh(rows, width, left=left, color=series_style(drawn).colour, height=0.6, label=phase)
+            ax.bar_label(bars, [f"{w:.0f}" if w >= 2 else "" for w in width], label_type="center", fontsize=8,
+                         color="white")
+            drawn += 1
+        left += width
+    ax.set_yticks(rows, [f"aPad {a.get('sysid', k + 1)}" for k, a in enumerate(apads)])
+    ax.invert_yaxis()
+    ax.set(xlabel="minutes (the numbers in the bars)", title=f"Each aPad's time per phase — {data.title}")
+    ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.0, 0.5))
+    return save(fig, path)
+
+
+def _ids(ids: list[int]) -> str:
+    return "none" if not ids else ", ".join(map(str, ids[:12])) + (f" (+{len(ids) - 12})" if len(ids) > 12 else "")
+
+
+def _mussel_ticks(ax: Axes, data: RunData) -> None:
+    step = max(data.ids.size // 30, 1)
+    rows = np.arange(0, data.ids.size, step)
+    ax.set_yticks(rows, [str(data.ids[r]) for r in rows], fontsize=7)
