@@ -5,6 +5,10 @@
     vil sitl --listen tcp:0.0.0.0:5760 --home 45.43,12.33 --current 0.1,0 --log-dir runs/sitl
     vil sitl --count 3                           # aPads 1, 2, 3 on udp ports 14550, 14551, 14552, 5 m apart
 
+Without --home the aPad starts at pool12's home (the scenario `vil gcs` opens by default) and says
+so. Durations take their unit: --duration 90s, 40min, 1h. `vil sitl --scenario` (gcs.mission.sitl_cli)
+serves a scenario's aPads through `serve`.
+
 This is the edge: it opens the transport, reads the wall clock and handles Ctrl-C; the vehicle
 itself stays clock-free. With signing on and a log folder, it also keeps the signing timestamps
 there across restarts (`mavlink_dialect.signing_state`), so frames recorded before a restart are
@@ -17,7 +21,7 @@ import argparse
 import signal
 import sys
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from types import FrameType
 from typing import Any
@@ -28,10 +32,12 @@ from mavlink_dialect import AddressError, Transport, mavlink, open_transport, si
 from mavlink_dialect.signing import SigningKeyError, load_key
 from mavlink_dialect.signing_state import SAVE_PERIOD_S, SigningKeeper
 from missiontime import Scheduler, WallClock
+from missiontime.durations import WEEK_S, parse_duration_s
 from mussel_sim.geo import LocalFrame
 
 DEFAULT_LISTEN = "udp:127.0.0.1:14550"
-DEFAULT_HOME = (43.9400, 15.4400)  # off Biograd na Moru
+DEFAULT_HOME = (43.9400000, 15.4398381)  # pool12's (missions/pool12.toml; a test keeps them equal)
+DEFAULT_HOME_NOTE = " (the default, pool12's: --home LAT,LON or --scenario NAME to choose)"
 # Stock consoles draw their HUD from these; in real time the extra bytes cost nothing.
 REALTIME_RATES_HZ = {mavlink.MAVLINK_MSG_ID_ATTITUDE: 4.0, mavlink.MAVLINK_MSG_ID_VFR_HUD: 2.0}
 
@@ -86,18 +92,11 @@ def _sysid(text: str) -> int:
     return int(text)
 
 
-MAX_DURATION_S = 7 * 86400.0  # longer: leave --duration out and stop it with Ctrl-C
-
-
 def _duration(text: str) -> float:
     try:
-        value = float(text)
-    except ValueError:
-        value = -1.0
-    if not 0.0 < value <= MAX_DURATION_S:  # NaN and inf too
-        raise argparse.ArgumentTypeError(
-            f"--duration must be a positive number of seconds up to {MAX_DURATION_S:.0f}, got {text!r}")
-    return value
+        return parse_duration_s(text, WEEK_S)  # longer: leave --duration out and stop it with Ctrl-C
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def _param(text: str) -> tuple[str, float]:
@@ -117,18 +116,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                       help=f"serve whoever talks to us: udp:HOST:PORT, tcp:HOST:PORT, serial:DEV[:BAUD] "
                            f"(default {DEFAULT_LISTEN})")
     link.add_argument("--connect", metavar="ADDR", help="send to a listening GCS at udp:HOST:PORT or tcp:HOST:PORT")
-    parser.add_argument("--home", type=_home, default=DEFAULT_HOME, metavar="LAT,LON",
-                        help="home and start position in degrees (default 43.9400,15.4400)")
-    parser.add_argument("--sysid", type=_sysid, default=1, help="MAVLink system id, 1..255 (default 1)")
-    parser.add_argument("--count", type=_count, default=1, metavar="N",
+    parser.add_argument("--home", type=_home, metavar="LAT,LON",
+                        help="home and start position in degrees (default: pool12's home, "
+                             f"{DEFAULT_HOME[0]:.7f},{DEFAULT_HOME[1]:.7f})")
+    parser.add_argument("--sysid", type=_sysid, help="MAVLink system id, 1..255 (default 1)")
+    parser.add_argument("--count", type=_count, metavar="N",
                         help=f"serve N aPads (up to {MAX_COUNT}): system ids SYSID.., each on the next port "
                              f"(one link each), homes {COUNT_SPACING_M:g} m apart eastwards (default 1)")
-    parser.add_argument("--current", type=_current, default=(0.0, 0.0), metavar="E,N",
+    parser.add_argument("--current", type=_current, metavar="E,N",
                         help="water current east,north in m/s (default 0,0)")
     parser.add_argument("--param", type=_param, action="append", default=[], metavar="NAME=VALUE",
                         help="set an aPad parameter at start, e.g. SPEED_MAX=0.3 (repeatable)")
     parser.add_argument("--log-dir", metavar="DIR", help="write the aPad's .tlog and event log here")
-    parser.add_argument("--duration", type=_duration, metavar="S", help="stop after S seconds (default: until Ctrl-C)")
+    parser.add_argument("--duration", type=_duration, metavar="T",
+                        help="stop after this long, with its unit: 90s, 40min, 1h (default: until Ctrl-C)")
     parser.add_argument("--signing-key", type=Path, metavar="FILE",
                         help="MAVLink 2 signing with the passphrase in FILE (default: $VIL_SIGNING_KEY if set); "
                              "unsigned commands are then refused")
@@ -157,18 +158,49 @@ def _stop(signum: int, frame: FrameType | None) -> None:
     raise KeyboardInterrupt
 
 
-def run(args: argparse.Namespace) -> int:
-    listen = args.connect is None
-    address = args.listen or args.connect or DEFAULT_LISTEN
-    params = ApadParams()
+@dataclass(frozen=True)
+class ApadSpec:
+    """One aPad to serve: its system id, home and parameters."""
+
+    system_id: int
+    home_lat_deg: float
+    home_lon_deg: float
+    params: ApadParams
+    note: str = ""  # said after its home on the start line: where the home comes from
+
+
+def with_params(params: ApadParams, args: argparse.Namespace) -> ApadParams:
+    """`params` with the --param settings on top."""
     for name, value in args.param:
         params = with_param(params, name, value)
-    if args.sysid + args.count - 1 > 255:
-        print(f"vil sitl: --sysid {args.sysid} --count {args.count} runs past system id 255", file=sys.stderr)
+    return params
+
+
+def run(args: argparse.Namespace) -> int:
+    """--count aPads from --sysid, the first at --home, the others COUNT_SPACING_M apart eastwards."""
+    sysid, count = args.sysid or 1, args.count or 1
+    if sysid + count - 1 > 255:
+        print(f"vil sitl: --sysid {sysid} --count {count} runs past system id 255", file=sys.stderr)
         return 2
+    frame = LocalFrame(*(args.home or DEFAULT_HOME))
+    params = with_params(ApadParams(), args)
+    apads = []
+    for k in range(count):
+        lat, lon = (float(v) for v in frame.to_geodetic(COUNT_SPACING_M * k, 0.0))
+        apads.append(ApadSpec(sysid + k, lat, lon, replace(params, sysid_thismav=sysid + k),
+                              "" if args.home else DEFAULT_HOME_NOTE))
+    return serve(args, apads, args.current or (0.0, 0.0))
+
+
+def serve(args: argparse.Namespace, apads: list[ApadSpec], current: tuple[float, float],
+          fence: list[tuple[float, float]] | None = None) -> int:
+    """Serve `apads` in real time, each on its own link (the address's port + k) until --duration
+    or Ctrl-C; `fence` is the geofence ring unless --geofence gives one."""
+    listen = args.connect is None
+    address = args.listen or args.connect or DEFAULT_LISTEN
     transports: list[Transport] = []
     try:
-        for k in range(args.count):
+        for k in range(len(apads)):
             transports.append(open_transport(_nth_address(address, k), listen=listen))
     except AddressError as exc:
         for t in transports:
@@ -179,20 +211,18 @@ def run(args: argparse.Namespace) -> int:
     epoch_us = int(time.time() * 1e6)
     try:
         key = load_key(args.signing_key)
-        fence = _fence(args.geofence) if args.geofence else None
+        fence = _fence(args.geofence) if args.geofence else fence
     except (SigningKeyError, OSError, ValueError, KeyError) as exc:
         for t in transports:
             t.close()
         print(f"vil sitl: {exc}", file=sys.stderr)
         return 2
-    frame = LocalFrame(*args.home)
     vehicles: list[SitlVehicle] = []
     try:
-        for k, transport in enumerate(transports):
-            lat, lon = (float(v) for v in frame.to_geodetic(COUNT_SPACING_M * k, 0.0))
+        for a, transport in zip(apads, transports, strict=True):
             vehicles.append(SitlVehicle(
-                transport, replace(params, sysid_thismav=args.sysid + k), lat, lon, system_id=args.sysid + k,
-                current_mps=args.current, log_dir=args.log_dir, rates_hz=REALTIME_RATES_HZ, log_epoch_us=epoch_us,
+                transport, a.params, a.home_lat_deg, a.home_lon_deg, system_id=a.system_id,
+                current_mps=current, log_dir=args.log_dir, rates_hz=REALTIME_RATES_HZ, log_epoch_us=epoch_us,
                 signing_key=key, geofence_deg=fence,
             ))
     except OSError as exc:
@@ -211,11 +241,11 @@ def run(args: argparse.Namespace) -> int:
         pass  # not the main thread: the embedder handles signals
     keepers = [_keep_signing_state(v, clock, epoch_us) if key is not None else None for v in vehicles]
     verb = "listening on" if listen else "connecting to"
-    east, north = args.current
-    for k, vehicle in enumerate(vehicles):
+    east, north = current
+    for k, (vehicle, a) in enumerate(zip(vehicles, apads, strict=True)):
         vehicle.attach(clock.scheduler, clock.now_us)
         print(f"vil sitl: aPad sysid {vehicle.system_id} {verb} {_nth_address(address, k)}, "
-              f"home {vehicle.home_lat_deg:.6f},{vehicle.home_lon_deg:.6f}, current {east:g},{north:g} m/s"
+              f"home {vehicle.home_lat_deg:.6f},{vehicle.home_lon_deg:.6f}{a.note}, current {east:g},{north:g} m/s"
               + (f", logs in {args.log_dir}" if args.log_dir else ""), flush=True)
     try:
         if args.duration is not None:

@@ -27,13 +27,16 @@ class Command(NamedTuple):
 COMMANDS = (
     Command("run", "headless mission(s) in lockstep; no scenario: the paper's Table II reproduction",
             "gcs.mission.run_cli", "add_arguments", "run"),
-    Command("sitl", "the SITL aPad alone, in real time, on UDP/TCP/serial", "apad_sitl.serve", "add_arguments", "run"),
+    Command("sitl", "the SITL aPad alone, in real time, on UDP/TCP/serial (--scenario: its aPads)",
+            "gcs.mission.sitl_cli", "add_arguments", "run"),
     Command("gcs", "the operator console, live against an aPad (--sitl embeds one)",
             "gcs.console.cli", "add_gcs_arguments", "run_gcs"),
     Command("replay", "the console driven from a recorded run", "gcs.console.cli", "add_replay_arguments",
             "run_replay"),
     Command("report", "plots, HTML summary and GeoJSON of a recorded run", "gcs.records.report", "add_arguments",
             "run"),
+    Command("sweep", "many headless missions over strategies, seeds and scenario fields, on Dask", "gcs.sweep.cli",
+            "add_arguments", "run"),
 )
 
 

@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from gcs.mission import flags
-from gcs.mission.scenario import MAX_DURATION_S, MISSIONS_DIR, Scenario, ScenarioError, load_scenario
+from gcs.mission.scenario import MISSIONS_DIR, Scenario, ScenarioError, load_scenario, resolve_scenario
 from gcs.records import rundirs
 from mavlink_dialect.signing import SigningKeyError, load_key
 from missiontime import unix_time_us
@@ -61,13 +61,13 @@ def add_gcs_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run_gcs(args: argparse.Namespace) -> int:
-    from gcs.console.app import LiveConsole
+    from gcs.console.app import QUIT_BOUND_S, LiveConsole
     from gcs.console.runner import ConsoleConfig, ConsoleRunner, open_world
     from gcs.mission.scenario_models import check_inputs
     from gcs.records.checkpoint import CheckpointError
 
-    path = Path(args.scenario) if args.scenario else DEFAULT_SCENARIO
     try:
+        path = resolve_scenario(args.scenario or DEFAULT_SCENARIO)
         scenario = load_scenario(path)
         check_inputs(scenario)
         key = load_key(args.signing_key)
@@ -114,16 +114,16 @@ def run_gcs(args: argparse.Namespace) -> int:
         rundirs.point_latest(out)
     runner = ConsoleRunner(config, world)
     LiveConsole(runner).run()
-    runner.request_quit()
-    runner.finished.wait(timeout=QUIT_TIMEOUT_S)
+    runner.request_quit(now=True)  # the app has already waited for the world, at most QUIT_BOUND_S
+    if not runner.finished.wait(timeout=0.1):
+        print(f"vil gcs: the world did not stop within {QUIT_BOUND_S:g} s: the aPads hold by their own failsafe;"
+              f" the last events may be missing from {out}", file=sys.stderr)
     if runner.error:
         print(f"vil gcs: {runner.error}", file=sys.stderr)
         return 1
     print(f"vil gcs: logs in {out} (replay: vil replay {out})")
     return 0
 
-
-QUIT_TIMEOUT_S = 150.0
 CONSOLE_JSON = "console.json"  # in a console's run folder: its scenario, and the Unix time of mission time 0
 
 
@@ -158,8 +158,8 @@ def add_replay_arguments(parser: argparse.ArgumentParser) -> None:
                                                            "(default: the one the run names)")
     parser.add_argument("--speed", type=flags.number_in(*SPEED_RANGE), default=8.0,
                         help=f"playback speed, x real time ({SPEED_RANGE[0]:g} to {SPEED_RANGE[1]:g}, default 8)")
-    parser.add_argument("--start", type=flags.number_in(0.0, MAX_DURATION_S), default=0.0, metavar="S",
-                        help="start at this mission time")
+    parser.add_argument("--start", type=flags.mission_time, default=0.0, metavar="T",
+                        help="start at this mission time, with its unit: 90s, 12min")
     parser.add_argument("--paused", action="store_true", help="start paused")
 
 

@@ -15,7 +15,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TypeVar
 
-from gcs.mission.scenario import MAX_DURATION_S, out_of_range, parse_duration_s
+from gcs.mission.scenario import MAX_DURATION_S, out_of_range
+from missiontime.durations import parse_duration_s
 
 N = TypeVar("N", int, float)
 
@@ -51,36 +52,50 @@ def fraction(text: str) -> float:
 
 
 def duration(text: str) -> float:
+    """A length of mission time with its unit ("90s", "40min", "1h"), up to a week."""
+    return _seconds(text, MAX_DURATION_S, allow_zero=False)
+
+
+def duration_up_to(max_s: float) -> Callable[[str], float]:
+    """A length of time with its unit ("0.2s", "200ms"), 0 to `max_s` seconds."""
+    return lambda text: _seconds(text, max_s, allow_zero=True)
+
+
+def mission_time(text: str) -> float:
+    """A moment of the mission, as the time since its start with a unit ("90s", "12min"), up to a week."""
+    return _seconds(text, MAX_DURATION_S, allow_zero=True)
+
+
+def _seconds(text: str, max_s: float, allow_zero: bool) -> float:
     try:
-        return parse_duration_s(text)
+        return parse_duration_s(text, max_s, allow_zero=allow_zero)
     except ValueError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def window(text: str) -> tuple[float, float]:
-    """START:END in mission seconds, 0 <= START < END <= a week."""
+    """START:END, two mission times with their units ("92s:112s"), START < END."""
     start, sep, end = text.partition(":")
+    if not sep:
+        raise argparse.ArgumentTypeError(f"expected START:END with units, e.g. 92s:112s, got {text!r}")
     try:
-        span = (float(start), float(end))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected START:END in mission seconds, got {text!r}") from None
-    if not sep or any(out_of_range(t, 0.0, MAX_DURATION_S) for t in span) or not span[0] < span[1]:
-        raise argparse.ArgumentTypeError(
-            f"expected START:END with 0 <= START < END <= {MAX_DURATION_S:.0f}, got {text!r}")
+        span = (mission_time(start), mission_time(end))
+    except argparse.ArgumentTypeError as exc:
+        raise argparse.ArgumentTypeError(f"START:END {text}: {exc}") from None
+    if not span[0] < span[1]:
+        raise argparse.ArgumentTypeError(f"expected START:END with START before END, got {text!r}")
     return span
 
 
 def apad_at(text: str) -> tuple[int, float]:
-    """SYSID:T: an aPad system id (1..249) and a mission time in seconds (0 <= T <= a week)."""
+    """SYSID:T: an aPad system id (1..249) and a mission time with its unit ("3:10min")."""
     sysid, sep, at = text.partition(":")
+    if not sep or not sysid.isdigit() or not 1 <= int(sysid) <= 249:
+        raise argparse.ArgumentTypeError(f"expected SYSID:T with 1 <= SYSID <= 249, e.g. 3:600s, got {text!r}")
     try:
-        pair = (int(sysid), float(at))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected SYSID:T (an aPad id, mission seconds), got {text!r}") from None
-    if not sep or not 1 <= pair[0] <= 249 or out_of_range(pair[1], 0.0, MAX_DURATION_S):
-        raise argparse.ArgumentTypeError(
-            f"expected SYSID:T with 1 <= SYSID <= 249 and 0 <= T <= {MAX_DURATION_S:.0f}, got {text!r}")
-    return pair
+        return int(sysid), mission_time(at)
+    except argparse.ArgumentTypeError as exc:
+        raise argparse.ArgumentTypeError(f"SYSID:T {text}: {exc}") from None
 
 
 def writable_file(text: str) -> Path:

@@ -71,14 +71,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"collection strategy or a comma list of them ({', '.join(COLLECT)}); "
                              "default: the scenario's")
     parser.add_argument("--seed", type=flags.integer_in(0, SEED_MAX),
-                        help="seed of the run's random draws (default: the scenario's)")
+                        help="seed of the run's random draws (default: the scenario's); with a saved start "
+                             "configuration the fleet stays the saved one: the seed then draws the drift only")
     parser.add_argument("--seeds", type=flags.integer_in(1, MAX_SEEDS), metavar="N",
                         help=f"run seeds 1..N (N <= {MAX_SEEDS}), each on a fleet drawn from its seed; "
                              "print mean and spread")
     parser.add_argument("--draw-fleet", action="store_true",
                         help="draw the fleet from the seed instead of the scenario's saved start configuration")
     parser.add_argument("--duration", type=flags.duration,
-                        help='mission time up to a week, e.g. 2400, "40m", "1h" (default: 40m)')
+                        help="mission time with its unit, up to a week: 90s, 40min, 1h (default: the scenario's)")
     parser.add_argument("--theta", type=flags.number_in(*THETA_RANGE),
                         help=f"aMussel time scale in [{THETA_RANGE[0]:g}, {THETA_RANGE[1]:g}] "
                              "(default: the scenario's, 30)")
@@ -89,17 +90,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     faults = parser.add_argument_group("link faults and security (the aPad link over real UDP through a seeded proxy)")
     faults.add_argument("--loss", type=flags.fraction, default=0.0, metavar="FRAC",
                         help="drop this fraction of datagrams")
-    faults.add_argument("--latency", type=flags.number_in(0.0, MAX_DELAY_S), default=0.0, metavar="S",
-                        help=f"one-way delay, mission seconds (at most {MAX_DELAY_S:g})")
-    faults.add_argument("--jitter", type=flags.number_in(0.0, MAX_DELAY_S), default=0.0, metavar="S",
-                        help="extra delay uniform in [0, S]; reorders datagrams")
+    faults.add_argument("--latency", type=flags.duration_up_to(MAX_DELAY_S), default=0.0, metavar="T",
+                        help=f"one-way delay in mission time, with its unit: 200ms, 0.2s (at most {MAX_DELAY_S:g}s)")
+    faults.add_argument("--jitter", type=flags.duration_up_to(MAX_DELAY_S), default=0.0, metavar="T",
+                        help="extra delay uniform in [0, T], with its unit; reorders datagrams")
     faults.add_argument("--duplicate", type=flags.fraction, default=0.0, metavar="FRAC",
                         help="send this fraction of datagrams twice")
     faults.add_argument("--outage", type=flags.window, action="append", default=[], metavar="START:END",
-                        help="total link loss between these mission times (s); repeatable")
+                        help="total link loss between these mission times, with units: 92s:112s; repeatable")
     faults.add_argument("--fail-apad", type=flags.apad_at, action="append", default=[], metavar="SYSID:T",
-                        help="that aPad goes silent for good at mission time T (s): the swarm re-shares its "
-                             "aMussels; repeatable")
+                        help="that aPad goes silent for good at mission time T, with its unit (3:10min): the "
+                             "swarm re-shares its aMussels; repeatable")
     faults.add_argument("--proxy", action="store_true", help="route through the proxy even with no faults")
     faults.add_argument("--signing-key", type=Path, metavar="FILE",
                         help="MAVLink 2 signing with the passphrase in FILE (default: $VIL_SIGNING_KEY if set)")
@@ -152,7 +153,12 @@ def _jobs(args: argparse.Namespace) -> list[Job]:
     for name, _ in pairs:
         if name not in cache:
             cache[name] = load_scenario(name)
+            if args.seeds or args.draw_fleet:  # before the check: a saved start of another size is not used
+                cache[name] = replace(cache[name], fleet=replace(cache[name].fleet, start_config=None))
             check_inputs(cache[name])
+            notice = seed_notice(cache[name], args.seed, faults=options is not None and options.faults is not None)
+            if notice:
+                print(f"vil run: {notice}", file=sys.stderr)
             ids = {a.system_id for a in cache[name].apads}
             for sysid, _ in args.fail_apad:
                 if sysid not in ids:
@@ -163,10 +169,24 @@ def _jobs(args: argparse.Namespace) -> list[Job]:
         base = cache.setdefault(name, load_scenario(name))
         for seed in seeds:
             s = base.with_overrides(strategy=strategy, seed=seed, duration_s=args.duration, theta=args.theta)
-            if args.seeds or args.draw_fleet:
-                s = replace(s, fleet=replace(s.fleet, start_config=None))
             jobs.append(Job(s, args.out, options, args.resume))
     return jobs
+
+
+def seed_notice(scenario: Scenario, seed: int | None, faults: bool) -> str | None:
+    """What `--seed` changes when the scenario's fleet comes from its saved start configuration
+    (the seed feeds the world's one rng, the swarm's k-means start and the fault proxy), or None."""
+    start = scenario.fleet.start_config
+    if seed is None or start is None:
+        return None
+    drift_cm = scenario.fleet.drift_cm
+    drawn = [f"the aMussels' random drift (up to {drift_cm:g} cm a step)"] if drift_cm else []
+    drawn += ["where the swarm's k-means sharing starts"] if len(scenario.apads) > 1 else []
+    drawn += ["the link faults' draws"] if faults else []
+    listed = f"{', '.join(drawn[:-1])} and {drawn[-1]}" if len(drawn) > 1 else "".join(drawn)
+    what = f"changes only {listed}" if drawn else "changes nothing in this run"
+    return (f"{scenario.name}'s fleet is its saved start configuration ({start.name}): --seed {seed} {what}; "
+            "add --draw-fleet to draw the fleet from the seed too")
 
 
 def _place(jobs: list[Job]) -> list[Job]:

@@ -1,26 +1,25 @@
 """Scenario files (TOML): what a mission run is, validated into frozen dataclasses.
 
 A bad file gets one `ScenarioError` line naming the file, the field and what is wrong.
-Paths inside a scenario are relative to the scenario file. Durations are numbers of seconds
-or strings with a unit: "90s", "40m", "1.5h".
+Paths inside a scenario are relative to the scenario file. Durations are strings with their
+unit: "90s", "40min", "1.5h" (`missiontime.durations`). A scenario named on the command line is
+looked for in the working directory first, then among the shipped missions/ (`resolve_scenario`).
 """
 
 from __future__ import annotations
 
 import math
-import re
 import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 from gcs.mission.planner import COLLECT, REDEPLOY, CollectStrategy, RedeployStrategy
+from missiontime.durations import WEEK_S, parse_duration_s
 from mussel_sim.battery import CHARGE_PROFILES, DISCHARGE_PROFILES
 
 MISSIONS_DIR = Path(__file__).resolve().parents[2] / "missions"
-_DURATION = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*(s|m|min|h)?\s*$")
-_UNIT_S = {None: 1.0, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0}
-MAX_DURATION_S = 7 * 86400.0  # a week at sea; longer is a typo that would run for hours of CPU
+MAX_DURATION_S = WEEK_S  # a week at sea; longer is a typo that would run for hours of CPU
 THETA_RANGE = (1e-3, 1e4)  # aMussel time scale, for the file and `--theta`
 SEED_MAX = 2**63 - 1  # seeds are int64 in results and folder names
 MAX_CURRENT_MPS = 5.0  # per component: more is not a sea we work in (as `vil sitl --current`)
@@ -41,24 +40,6 @@ def out_of_range(value: float, lo: float | None = None, hi: float | None = None)
     if hi is not None and value > hi:
         return f"{value} is above {hi}"
     return None
-
-
-def parse_duration_s(text: str | float | int) -> float:
-    """Seconds from 2400, "2400s", "40m", "40min" or "0.5h", up to a week; ValueError otherwise."""
-    if isinstance(text, bool):
-        raise ValueError("expected a duration")
-    if isinstance(text, int | float):
-        seconds = float(text)
-    else:
-        match = _DURATION.match(text)
-        if not match:
-            raise ValueError(f"{text!r} is not a duration (use e.g. 2400, \"40m\", \"90s\", \"1h\")")
-        seconds = float(match.group(1)) * _UNIT_S[match.group(2)]
-    if not math.isfinite(seconds) or seconds <= 0:
-        raise ValueError(f"duration must be a positive number of seconds, got {text!r}")
-    if seconds > MAX_DURATION_S:
-        raise ValueError(f"{text!r} is more than a week ({MAX_DURATION_S:.0f} s)")
-    return seconds
 
 
 @dataclass(frozen=True)
@@ -262,11 +243,30 @@ class _Table:
 _REQUIRED = object()
 
 
+def shipped_scenarios() -> list[str]:
+    """The names of the scenarios in missions/."""
+    return sorted(p.stem for p in MISSIONS_DIR.glob("*.toml"))
+
+
+def resolve_scenario(name: str | Path) -> Path:
+    """The scenario file `name` stands for: the path from the working directory first (with .toml
+    added if it has no suffix), then the same in the shipped missions/ (a leading "missions/" taken
+    off); `ScenarioError` (one line listing the shipped ones) if neither holds it."""
+    path = Path(name)
+    inner = Path(*path.parts[1:]) if len(path.parts) > 1 and path.parts[0] == MISSIONS_DIR.name else path
+    tries = [path, MISSIONS_DIR / path, MISSIONS_DIR / inner]
+    if path.suffix == "":
+        tries = [t.with_name(f"{t.name}.toml") if k % 2 else t for t in tries for k in (0, 1)]
+    for candidate in tries:
+        if candidate.is_file():
+            return candidate
+    raise ScenarioError(f"{name}: no such scenario file, here or in {MISSIONS_DIR} "
+                        f"(shipped: {', '.join(shipped_scenarios())})")
+
+
 def load_scenario(path: str | Path) -> Scenario:
-    """Read and validate a scenario file; a bare name like "pool12" is looked up in missions/."""
-    path = Path(path)
-    if not path.exists() and path.suffix == "" and (MISSIONS_DIR / f"{path}.toml").exists():
-        path = MISSIONS_DIR / f"{path}.toml"
+    """Read and validate a scenario file, found by `resolve_scenario` ("pool12" is missions/pool12.toml)."""
+    path = resolve_scenario(path)
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:

@@ -34,7 +34,9 @@ def check_inputs(scenario: Scenario) -> None:
             path, what = scenario.fleet.start_config, "start configuration"
             config = load_start_config(path)  # checks ids, positions, batteries
             if config.n != scenario.fleet.count:
-                raise ValueError(f"holds {config.n} aMussels, the scenario says {scenario.fleet.count}")
+                n = scenario.fleet.count
+                raise ValueError(f"holds {config.n} aMussels, the scenario says {n} (to draw {n} from the seed: "
+                                 "vil run --draw-fleet, or no fleet.start_config)")
             _check_inside(config, area)
             simulated = config.ids.tolist()
     except OSError as exc:

@@ -103,9 +103,9 @@ def run_files(path: str | Path) -> RunFiles:
 
 def find_scenario(files: RunFiles, explicit: str | Path | None = None) -> Scenario | None:
     """The run's scenario: given, named in console.json, or missions/NAME.toml by result.json's name."""
-    candidates: list[Path] = []
     if explicit is not None:
-        candidates.append(Path(explicit))
+        return load_scenario(explicit)  # found as every command finds a scenario; a bad one is refused
+    candidates: list[Path] = []
     if isinstance(files.result.get("scenario_path"), str):
         candidates.append(Path(str(files.result["scenario_path"])))
     name = files.result.get("scenario")
@@ -116,10 +116,7 @@ def find_scenario(files: RunFiles, explicit: str | Path | None = None) -> Scenar
             try:
                 return load_scenario(path)
             except ScenarioError:
-                if explicit is not None:
-                    raise
-    if explicit is not None:
-        raise ReplayError(f"{explicit}: no such scenario file")
+                pass
     return None
 
 

@@ -114,7 +114,7 @@ def test_a_1_us_message_interval_is_clamped_to_20_ms() -> None:
 def test_a_real_sitl_process_clamps_a_1_us_interval(tmp_path: Path) -> None:
     port = free_port()
     proc = subprocess.Popen([sys.executable, "-m", "gcs.cli", "sitl", "--listen", f"udp:127.0.0.1:{port}",
-                             "--duration", "30"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+                             "--duration", "30s"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     codec = Codec(250, 190)
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sock.bind(("127.0.0.1", 0))

@@ -80,7 +80,7 @@ def is_goto_ack(msg: Any) -> bool:
 
 def test_a_real_sitl_process_holds_within_3_s_of_the_last_gcs_heartbeat(tmp_path: Path) -> None:
     port = free_udp_port()
-    cmd = [sys.executable, "-m", "gcs.cli", "sitl", "--listen", f"udp:127.0.0.1:{port}", "--duration", "60",
+    cmd = [sys.executable, "-m", "gcs.cli", "sitl", "--listen", f"udp:127.0.0.1:{port}", "--duration", "60s",
            "--home", f"{HOME[0]},{HOME[1]}", "--log-dir", str(tmp_path)]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     gcs = Gcs(port)

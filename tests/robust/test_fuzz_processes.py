@@ -38,7 +38,7 @@ def spray(sock: socket.socket, gen: HostileFrames, ports: list[int], n: int) -> 
 def test_vil_sitl_survives_a_spray_and_still_answers_a_gcs(tmp_path: Path) -> None:
     port = free_udp_port()
     proc = subprocess.Popen([sys.executable, "-m", "gcs.cli", "sitl", "--listen", f"udp:127.0.0.1:{port}",
-                             "--duration", "30", "--log-dir", str(tmp_path)], cwd=ROOT,
+                             "--duration", "30s", "--log-dir", str(tmp_path)], cwd=ROOT,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         assert proc.stdout is not None and "listening on" in proc.stdout.readline()

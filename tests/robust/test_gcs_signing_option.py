@@ -56,7 +56,7 @@ def test_the_console_signs_its_link_to_a_signing_sitl_process(tmp_path: Path) ->
     port = free_udp_port()
     env = {**os.environ, signing.KEY_ENV: PASSPHRASE}
     proc = subprocess.Popen([sys.executable, "-m", "gcs.cli", "sitl", "--listen", f"udp:127.0.0.1:{port}",
-                             "--log-dir", str(tmp_path / "apad"), "--duration", "60"],
+                             "--log-dir", str(tmp_path / "apad"), "--duration", "60s"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, text=True)
     try:
         assert proc.stdout is not None and "listening on" in proc.stdout.readline()

@@ -123,7 +123,7 @@ def scenario_with(tmp_path: Path, area: str | None = None, start: str | None = N
 ])
 def test_a_bad_area_file_is_one_line_and_exit_2(tmp_path: Path, area_text: str, expect: str) -> None:
     (tmp_path / "a.geojson").write_text(area_text)
-    done = vil_run(str(scenario_with(tmp_path, area=str(tmp_path / "a.geojson"))), "--duration", "60")
+    done = vil_run(str(scenario_with(tmp_path, area=str(tmp_path / "a.geojson"))), "--duration", "60s")
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert done.stderr.count("\n") == 1 and expect in done.stderr, done.stderr
 
@@ -137,7 +137,7 @@ def test_bad_start_configs_are_one_line_and_exit_2(tmp_path: Path) -> None:
     for name, text in cases.items():
         if text is not None:
             (tmp_path / name).write_text(text)
-        done = vil_run(str(scenario_with(tmp_path, start=str(tmp_path / name))), "--duration", "60")
+        done = vil_run(str(scenario_with(tmp_path, start=str(tmp_path / name))), "--duration", "60s")
         assert done.returncode == 2 and "Traceback" not in done.stderr, (name, done.stderr)
         assert done.stderr.count("\n") == 1, (name, done.stderr)
     assert "duplicate aMussel ids" in vil_run(str(scenario_with(tmp_path, start=str(tmp_path / "dup.geojson")))).stderr

@@ -34,7 +34,7 @@ def test_a_signing_sitl_process_ignores_a_stray_unsigned_gcs(tmp_path: Path) -> 
     port = free_udp_port()
     env = {**os.environ, signing.KEY_ENV: "biograd 2020"}
     proc = subprocess.Popen([sys.executable, "-m", "gcs.cli", "sitl", "--listen", f"udp:127.0.0.1:{port}",
-                             "--duration", "30"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=env, text=True)
+                             "--duration", "30s"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=env, text=True)
     try:
         assert proc.stdout is not None and "listening on" in proc.stdout.readline()
         arm = mavlink.MAVLink_command_long_message(1, 1, mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 0, 0, 0, 0, 0, 0, 0, 0)
@@ -66,7 +66,7 @@ KEY = signing.key_from_passphrase("biograd 2020")
 def start_sitl(port: int, log_dir: Path) -> subprocess.Popen[str]:
     env = {**os.environ, signing.KEY_ENV: "biograd 2020"}
     proc = subprocess.Popen([sys.executable, "-m", "gcs.cli", "sitl", "--listen", f"udp:127.0.0.1:{port}",
-                             "--log-dir", str(log_dir), "--duration", "60"],
+                             "--log-dir", str(log_dir), "--duration", "60s"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, text=True)
     assert proc.stdout is not None and "listening on" in proc.stdout.readline()
     return proc

@@ -29,7 +29,7 @@ def parse(*argv: str) -> argparse.Namespace:
 
 def test_the_server_subprocess_serves_heartbeats_over_udp_and_stops_cleanly_on_ctrl_c(tmp_path: Path) -> None:
     port = free_udp_port()
-    cmd = [sys.executable, "-m", "apad_sitl", "--listen", f"udp:127.0.0.1:{port}", "--duration", "5",
+    cmd = [sys.executable, "-m", "apad_sitl", "--listen", f"udp:127.0.0.1:{port}", "--duration", "5s",
            "--sysid", "7", "--log-dir", str(tmp_path)]
     with subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) as proc, \
             socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
@@ -53,8 +53,8 @@ def test_the_server_subprocess_serves_heartbeats_over_udp_and_stops_cleanly_on_c
     assert proc.returncode == 0, err
     assert err == ""
     assert out.splitlines() == [
-        f"vil sitl: aPad sysid 7 listening on udp:127.0.0.1:{port}, home 43.940000,15.440000, "
-        f"current 0,0 m/s, logs in {tmp_path}"
+        f"vil sitl: aPad sysid 7 listening on udp:127.0.0.1:{port}, home 43.940000,15.439838 (the default, "
+        f"pool12's: --home LAT,LON or --scenario NAME to choose), current 0,0 m/s, logs in {tmp_path}"
     ]
     events = (tmp_path / "apad7.events.jsonl").read_text().splitlines()
     assert '"event":"close"' in events[-1]
@@ -71,7 +71,7 @@ def test_port_in_use_is_one_line_and_exit_code_2(capsys: pytest.CaptureFixture[s
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as busy:
         busy.bind(("127.0.0.1", 0))
         port = busy.getsockname()[1]
-        assert run(parse("--listen", f"udp:127.0.0.1:{port}", "--duration", "0.1")) == 2
+        assert run(parse("--listen", f"udp:127.0.0.1:{port}", "--duration", "0.1s")) == 2
     err = capsys.readouterr().err
     assert err == f"vil sitl: cannot open udp:127.0.0.1:{port}: Address already in use\n"
 
@@ -81,7 +81,7 @@ def test_connect_runs_for_the_duration_and_sends_to_the_gcs(capsys: pytest.Captu
         gcs.bind(("127.0.0.1", 0))
         port = gcs.getsockname()[1]
         start = time.monotonic()
-        args = parse("--connect", f"udp:127.0.0.1:{port}", "--duration", "0.5", "--home", "45.43,12.33",
+        args = parse("--connect", f"udp:127.0.0.1:{port}", "--duration", "0.5s", "--home", "45.43,12.33",
                      "--current", "0.1,-0.05", "--param", "speed_max=0.3")
         assert run(args) == 0
         assert time.monotonic() - start >= 0.5  # it ran for the whole duration, not less

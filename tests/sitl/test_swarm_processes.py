@@ -30,7 +30,7 @@ def test_one_gcs_drives_two_sitl_processes_over_udp(tmp_path: Path) -> None:
     procs = [
         subprocess.Popen(
             [sys.executable, "-m", "apad_sitl", "--listen", f"udp:127.0.0.1:{port}", "--sysid", str(a.system_id),
-             "--home", f"{a.home_lat_deg},{a.home_lon_deg}", "--duration", "60", "--log-dir", str(tmp_path)],
+             "--home", f"{a.home_lat_deg},{a.home_lon_deg}", "--duration", "60s", "--log-dir", str(tmp_path)],
             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         for port, a in zip(ports, scenario.apads, strict=True)
     ]
