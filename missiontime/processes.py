@@ -3,12 +3,17 @@
 A mission script is ordinary blocking code that waits with `clock.sleep` (the paper's Listing 1,
 the energy-sharing loop). One aPad, one script: it drives the clock itself. Several aPads need
 several scripts on the one clock, and the clock's `sleep` runs the whole world, so two scripts
-must never sleep at once. `Processes` gives each script a thread and a `ProcessClock` of its own
-and lets exactly one thread run at any moment (a discrete-event simulation in the manner of
-SimPy's processes): a script that sleeps parks until its wake time, and its thread, before it
-parks, moves the shared clock on to the earliest wake time of all and resumes that script. Scripts due at the
-same instant resume in the order they went to sleep (spawn order first). So a lockstep swarm
-is as deterministic as a single aPad, and the same code runs on the wall clock in the field.
+must never sleep at once. `Processes` gives each script a greenlet (a coroutine with its own stack,
+so the script stays plain blocking code) and a `ProcessClock` of its own, and lets exactly one run
+at any moment (a discrete-event simulation in the manner of SimPy's processes): a script that
+sleeps parks until its wake time and, before it parks, moves the shared clock on to the earliest
+wake time of all and switches to that script. Scripts due at the same instant resume in the
+order they went to sleep (spawn order first). So a lockstep swarm is as deterministic as a single
+aPad, and the same code runs on the wall clock in the field.
+
+Greenlets, not threads: the scripts never run at once anyway, and a switch between greenlets is
+about a microsecond in the one thread that called `run`, where a hand-over between OS threads
+(a futex wake, then the GIL) cost a fifth of a bay120 run.
 
 Bounded: a script that raises ends `run` with that exception, and so does the world (a task or a
 handler that raises inside the clock's `sleep`); the scripts are stopped at their next sleep
@@ -18,10 +23,11 @@ with `ProcessStopped`, so they unwind their `finally` blocks.
 from __future__ import annotations
 
 import heapq
-import threading
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Generic, TypeVar
+
+from greenlet import greenlet
 
 from missiontime.clocks import Clock, Scheduler, seconds_to_us, us_to_s
 
@@ -52,19 +58,11 @@ class ProcessClock:
         self._coordinator.park(self._process, self.now_us + seconds_to_us(max(dt_s, 0.0)))
 
 
-def _closed_gate() -> threading.Lock:
-    gate = threading.Lock()
-    gate.acquire()
-    return gate
-
-
 @dataclass(eq=False)
 class _Process:
     name: str
     order: int
-    # A held lock as a one-shot gate: `release` lets the one waiter through. A hand-over is one
-    # futex wake, about half the cost of an Event's set/wait/clear.
-    go: threading.Lock = field(default_factory=_closed_gate)
+    body: greenlet | None = None  # made at `run`, child of the greenlet that runs `run`
     done: bool = False
     stop: bool = False
 
@@ -78,23 +76,22 @@ class Handle(Generic[T]):
 
 
 class Processes:
-    """Run scripts `spawn`ed on `clock` until all have returned (`run`, from the clock's thread).
+    """Run scripts `spawn`ed on `clock` until all have returned (`run`).
 
-    The baton: whichever thread stops running (a script that sleeps or ends) moves the clock on
-    itself and resumes the next script directly, so a sleep costs one hand-over between threads
-    instead of two through a coordinator (and none when the sleeper is next). The order is the
-    coordinator's: the same queue, popped at the same moments. The world thus runs in the script
-    threads, never two at once; the caller's thread waits until every script has returned.
+    The baton: the script that sleeps moves the clock on itself and switches straight to the next
+    script (none when the sleeper is next again). A script that ends returns to `run`, which does
+    the same for it. The order is a coordinator's: one queue, popped at the same moments.
+    `current` names the script running now (None between them).
     """
 
     def __init__(self, clock: Clock) -> None:
         self.clock = clock
         self._queue: list[tuple[int, int, _Process]] = []  # (wake_us, sequence, process)
         self._sequence = 0
-        self._finished = _closed_gate()  # released when every script has returned
         self._error: BaseException | None = None  # the first failure: a script's, or the world's
-        self._threads: list[threading.Thread] = []
         self._processes: list[_Process] = []
+        self._scripts: list[Callable[[], None]] = []
+        self.current: str | None = None
 
     def spawn(self, name: str, script: Callable[[Clock], T]) -> Handle[T]:
         """Add a script; it starts at `run`, at the clock's time then, with its own `ProcessClock`."""
@@ -103,28 +100,28 @@ class Processes:
         own_clock = ProcessClock(self, process)
 
         def body() -> None:
-            process.go.acquire()
             try:
                 if not process.stop:
                     handle.result = script(own_clock)
             except ProcessStopped:
                 pass
-            except BaseException as exc:  # handed to `run`, which raises it in the caller's thread
+            except BaseException as exc:  # handed to `run`, which raises it in the caller
                 self._fail(exc)
             process.done = True
-            self._pass_on(None)
 
         self._processes.append(process)
-        self._threads.append(threading.Thread(target=body, name=f"process-{name}", daemon=True))
+        self._scripts.append(body)
         return handle
 
     def park(self, process: _Process, wake_us: int) -> None:
-        """Called from the running script's thread: sleep until `wake_us`, the others running meanwhile."""
+        """Called from the running script: sleep until `wake_us`, the others running meanwhile."""
         if process.stop:
             raise ProcessStopped(process.name)
         self._push(process, wake_us)
-        if not self._pass_on(process):
-            process.go.acquire()
+        following = self._next()
+        if following is not process:
+            following.body.switch()  # type: ignore[union-attr]  # back here when our turn comes
+        self.current = process.name
         if process.stop:
             raise ProcessStopped(process.name)
 
@@ -136,12 +133,10 @@ class Processes:
         if self._error is None:
             self._error = exc  # from now on every script is stopped at its next turn
 
-    def _pass_on(self, current: _Process | None) -> bool:
-        """The baton holder's turn as coordinator: run the world to the earliest wake time and resume
-        that script. True if it is `current` itself (no hand-over); False if another thread now runs."""
-        if not self._queue:
-            self._finished.release()  # nobody left: every script has returned
-            return False
+    def _next(self) -> _Process:
+        """Run the world to the earliest wake time and return that script, marked stopped if
+        anything failed. The queue is never empty here: the caller has just queued itself, or
+        `run` checked."""
         wake_us, _, process = heapq.heappop(self._queue)
         if self._error is None:
             try:  # a zero sleep too delivers what is due now, as the clock's own sleep(0) does
@@ -149,20 +144,19 @@ class Processes:
             except BaseException as exc:  # the world failed: stop every script, then raise it in `run`
                 self._fail(exc)
         process.stop = self._error is not None
-        if process is current:
-            return True
-        process.go.release()
-        return False
+        return process
 
     def run(self) -> None:
         """Resume the earliest-waking script, one at a time, until every script has returned."""
-        for thread in self._threads:
-            thread.start()
-        for process in self._processes:
+        for process, body in zip(self._processes, self._scripts, strict=True):
+            process.body = greenlet(body)
             self._push(process, self.clock.now_us)
-        self._pass_on(None)
-        self._finished.acquire()
-        for thread in self._threads:
-            thread.join()
+        try:
+            while self._queue:
+                following = self._next()
+                self.current = following.name
+                following.body.switch()  # type: ignore[union-attr]  # returns when a script has ended
+        finally:
+            self.current = None
         if self._error is not None:
             raise self._error

@@ -5,6 +5,7 @@ from __future__ import annotations
 import threading
 
 import pytest
+from greenlet import greenlet
 
 from missiontime import Clock, VirtualClock
 from missiontime.processes import Processes
@@ -109,11 +110,12 @@ def test_the_worlds_error_stops_every_script_and_reaches_the_caller() -> None:
 
 def test_a_sleeper_that_is_next_again_runs_on_without_a_hand_over() -> None:
     clock = VirtualClock()
-    threads: list[str] = []
+    running: list[str | None] = []
+    switches: list[str] = []
 
     def quick(c: Clock) -> None:
         for _ in range(3):
-            threads.append(threading.current_thread().name)
+            running.append(procs.current)
             c.sleep(0.1)
 
     def slow(c: Clock) -> None:
@@ -122,8 +124,15 @@ def test_a_sleeper_that_is_next_again_runs_on_without_a_hand_over() -> None:
     procs = Processes(clock)
     procs.spawn("quick", quick)
     procs.spawn("slow", slow)
-    procs.run()
-    assert threads == ["process-quick"] * 3 and clock.time() == 10.0
+    previous = greenlet.settrace(lambda event, args: switches.append(event))
+    try:
+        procs.run()
+    finally:
+        greenlet.settrace(previous)
+    assert running == ["quick"] * 3 and clock.time() == 10.0
+    # run -> quick (starts, sleeps 0.1: slow is due first) -> slow (sleeps 10) -> quick, which sleeps
+    # twice more without a switch (it is next again) and ends -> run -> slow, which ends -> run.
+    assert len(switches) == 6
 
 
 def test_a_script_catching_exception_around_its_sleep_is_still_stopped() -> None:
