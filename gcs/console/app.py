@@ -17,13 +17,12 @@ from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.reactive import reactive
-from textual.widgets import Footer
 from textual.worker import Worker, WorkerState
 
 from gcs.console.help import HelpScreen
 from gcs.console.model import Snapshot
 from gcs.console.runner import ConsoleRunner, DockMussel, GoToMussel, Hold, UndockMussel
-from gcs.console.widgets import LEGEND, Chart, EventLog, FleetTable, MapView, StatusPanel
+from gcs.console.widgets import LEGEND, Chart, ConsoleFooter, EventLog, FleetTable, MapView, StatusPanel
 from gcs.mission.planner import COLLECT
 from gcs.records.replay import Replay
 
@@ -33,6 +32,9 @@ REDRAW_PERIOD_S = 0.1
 class ConsoleApp(App[None]):
     CSS_PATH = Path(__file__).with_name("console.tcss")  # absolute: subclasses live elsewhere
     HELP_INTRO = ""
+    # Screen classes for console.tcss: narrow, the map gives way to the tables; short, the plots do.
+    HORIZONTAL_BREAKPOINTS = [(0, "-narrow"), (96, "-wide")]
+    VERTICAL_BREAKPOINTS = [(0, "-short"), (36, "-tall")]
 
     def compose(self) -> ComposeResult:
         with Horizontal(id="top"):
@@ -45,7 +47,13 @@ class ConsoleApp(App[None]):
             yield Chart("battery", id="batteries")
             yield Chart("active", id="active")
             yield Chart("apad", id="apad-battery")
-        yield Footer()
+        yield ConsoleFooter()
+
+    def on_fleet_table_selected(self, event: FleetTable.Selected) -> None:
+        self.map_view.select(event.mussel_id)  # the map highlights the table's selection
+
+    def on_map_view_picked(self, event: MapView.Picked) -> None:
+        self.fleet.select_mussel(event.mussel_id)
 
     def on_mount(self) -> None:
         # Looked up once: a timer firing during shutdown must not query a torn-down DOM.

@@ -1,139 +1,50 @@
-"""The console's widgets. Each takes a `Snapshot` through `show()` and redraws only when it changed."""
+"""The console's widgets. Each takes a `Snapshot` through `show()` and repaints only what changed.
+
+The map and the fleet table live in their own modules (`mapview`, `fleetview`); the colours in
+`colours`.
+"""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numpy.typing import NDArray
 from rich.segment import Segment
 from rich.style import Style
 from rich.text import Text
+from textual.app import ComposeResult
 from textual.strip import Strip
-from textual.widget import Widget
-from textual.widgets import DataTable, Static
+from textual.widgets import Footer, Static
+from textual.widgets._footer import FooterKey
 
-from gcs.console.canvas import BrailleCanvas, scale_to
-from gcs.console.model import ApadSnapshot, MarkerColour, Snapshot
+from gcs.console.canvas import BrailleCanvas, CachedLines, scale_to
+from gcs.console.colours import (
+    APAD,
+    APAD_COLOURS,
+    AXIS,
+    BLUE,
+    GREEN,
+    LEGEND,
+    MARKER_COLOURS,
+    MARKER_INDEX,
+    OUTLINE,
+    PALETTE,
+    PURPLE,
+    RED,
+    SWARM_LEGEND,
+    apad_colour,
+)
+from gcs.console.fleetview import FleetTable
+from gcs.console.mapview import MapView
+from gcs.console.model import ApadSnapshot, Snapshot
 from missiontime import mm_ss
-from mussel_sim.geo import flat_m
 from mussel_sim.vocabulary import MusselState
 
-# Explicit hex colours: named red and magenta look alike in exports (NOTES.md).
-GREEN, RED, GREY, PURPLE = "#22c55e", "#ef4444", "#9ca3af", "#c026d3"
-OUTLINE, APAD, TRACE, AXIS, BLUE = "#64748b", "#facc15", "#38bdf8", "#94a3b8", "#60a5fa"
-MARKER_COLOURS = {MarkerColour.CHARGED: GREEN, MarkerColour.CANDIDATE: RED,
-                  MarkerColour.DEPLETED: GREY, MarkerColour.DOCKED: PURPLE}
-# A swarm's aPads, in the scenario's order (the first is the one aPad's colour); none is a marker's.
-APAD_COLOURS = [APAD, "#fb923c", "#2dd4bf", "#f472b6", "#a3e635", "#e2e8f0", "#818cf8", "#fda4af", "#0ea5e9"]
-PALETTE = [AXIS, GREEN, RED, GREY, PURPLE, OUTLINE, APAD, TRACE, BLUE, *APAD_COLOURS[1:]]
-_MARKER_INDEX = {k: PALETTE.index(v) for k, v in MARKER_COLOURS.items()}
-LEGEND = (f"[{GREEN}]●[/] charged  [{RED}]●[/] pool  [{PURPLE}]●[/] docked  [{GREY}]●[/] depleted  "
-          f"[{APAD}]◆[/] aPad")
-SWARM_LEGEND = (f"[{GREEN}]●[/] charged  [{RED}]●[/] pool  [{PURPLE}]●[/] docked  [{GREY}]●[/] depleted  "
-                f"2: aPad 2's  [{APAD}]◆[/][{APAD_COLOURS[1]}]◆[/] aPads")
+__all__ = ["APAD", "APAD_COLOURS", "GREEN", "LEGEND", "MARKER_COLOURS", "PURPLE", "RED", "SWARM_LEGEND",
+           "Chart", "ConsoleFooter", "EventLog", "FleetTable", "MapView", "StatusPanel"]
+
 AXIS_STYLE = Style(color=AXIS)
-
-
-def apad_colour(snap: Snapshot, sysid: int) -> str:
-    """An aPad's own colour: by its place in the scenario."""
-    place = next((i for i, a in enumerate(snap.apads) if a.system_id == sysid), 0)
-    return APAD_COLOURS[place % len(APAD_COLOURS)]
-
-
-class CachedLines(Widget):
-    """A line-API widget that draws all its strips at once, again only on new data or a new size."""
-
-    def __init__(self, *, id: str | None = None) -> None:
-        super().__init__(id=id)
-        self.snapshot: Snapshot | None = None
-        self._lines: list[Strip] = []
-        self._key: tuple[object, ...] = ()
-
-    def show(self, snapshot: Snapshot) -> None:
-        self.snapshot = snapshot
-        self.refresh()
-
-    def render_line(self, y: int) -> Strip:
-        width, height = self.scrollable_content_region.size
-        key = (id(self.snapshot), width, height)
-        if key != self._key:
-            self._key = key
-            self._lines = self.draw(width, height) if self.snapshot is not None and width and height else []
-        return self._lines[y] if y < len(self._lines) else Strip.blank(width)
-
-    def draw(self, width: int, height: int) -> list[Strip]:
-        raise NotImplementedError
-
-
-class MapView(CachedLines):
-    """The area in local metres, north up: outline, aMussels by class, the aPads and their traces.
-
-    With several aPads each has its own colour, its trace drawn in it and the selected one
-    highlighted; an aMussel shows the number of the aPad whose share it is, in its class colour."""
-
-    def draw(self, width: int, height: int) -> list[Strip]:
-        snap = self.snapshot
-        assert snap is not None
-        canvas = BrailleCanvas(width, height, PALETTE)
-        swarm = len(snap.apads) > 1
-        apads = snap.apads if swarm else ()
-        lat = np.concatenate([snap.outline_lat_deg, snap.lat_deg, snap.trace_lat_deg,
-                              [snap.apad_lat_deg if snap.apad_lat_deg is not None else np.nan],
-                              *[_apad_points(a)[0] for a in apads]])
-        lon = np.concatenate([snap.outline_lon_deg, snap.lon_deg, snap.trace_lon_deg,
-                              [snap.apad_lon_deg if snap.apad_lon_deg is not None else np.nan],
-                              *[_apad_points(a)[1] for a in apads]])
-        if not np.isfinite(lat).any():
-            canvas.text(1, 0, "waiting for positions", 0)
-            return canvas.strips()
-        lat0, lon0 = float(np.nanmean(lat)), float(np.nanmean(lon))
-
-        def local(la: NDArray[np.float64], lo: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
-            return flat_m(la, lo, lat0, lon0)
-
-        xs, ys = local(lat, lon)
-        x_lo, x_hi, y_lo, y_hi = np.nanmin(xs), np.nanmax(xs), np.nanmin(ys), np.nanmax(ys)
-        # Braille dots are square: one scale (metres per dot) for both axes, with a margin.
-        m_per_dot = max((x_hi - x_lo) / (canvas.dots_x - 3), (y_hi - y_lo) / (canvas.dots_y - 3), 1e-3) * 1.08
-        cx, cy = (x_lo + x_hi) / 2, (y_lo + y_hi) / 2
-
-        def dots(la: NDArray[np.float64], lo: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-            x, y = local(la, lo)
-            return (x - cx) / m_per_dot + canvas.dots_x / 2, (cy - y) / m_per_dot + canvas.dots_y / 2
-
-        canvas.polyline(*dots(snap.outline_lat_deg, snap.outline_lon_deg), PALETTE.index(OUTLINE))
-        if swarm:  # the selected aPad's trace last, on top
-            for a in sorted(apads, key=lambda a: a.system_id == snap.selected):
-                canvas.polyline(*dots(a.trace_lat_deg, a.trace_lon_deg), PALETTE.index(apad_colour(snap, a.system_id)))
-        else:
-            canvas.polyline(*dots(snap.trace_lat_deg, snap.trace_lon_deg), PALETTE.index(TRACE))
-        classes = snap.marker_classes()
-        order = np.argsort(classes, kind="stable")  # docked and pool candidates drawn last, on top
-        colours = np.array([_MARKER_INDEX[int(c)] for c in classes[order]], np.int16)
-        mx, my = dots(snap.lat_deg[order], snap.lon_deg[order])
-        if swarm and snap.owner.size == snap.mussel_ids.size:
-            owners = snap.owner[order]
-            canvas.glyphs(mx, my, np.array([str(o % 10) if o else "●" for o in owners], object), colours)
-        else:
-            canvas.glyphs(mx, my, "●", colours)
-        if swarm:
-            for a in sorted(apads, key=lambda a: a.system_id == snap.selected):
-                if a.lat_deg is not None and a.lon_deg is not None:
-                    ax, ay = dots(np.array([a.lat_deg]), np.array([a.lon_deg]))
-                    canvas.glyphs(ax, ay, "◆", PALETTE.index(apad_colour(snap, a.system_id)),
-                                  strong=a.system_id == snap.selected)
-            self.border_subtitle = SWARM_LEGEND
-        elif snap.apad_lat_deg is not None and snap.apad_lon_deg is not None:
-            ax, ay = dots(np.array([snap.apad_lat_deg]), np.array([snap.apad_lon_deg]))
-            canvas.glyphs(ax, ay, "◆", PALETTE.index(APAD))
-        self.border_title = f"Map  {2 * m_per_dot:.2g} m per column"
-        return canvas.strips()
-
-
-def _apad_points(a: ApadSnapshot) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """An aPad's trace and position, for the map's extent."""
-    here_lat = np.array([np.nan if a.lat_deg is None else a.lat_deg])
-    here_lon = np.array([np.nan if a.lon_deg is None else a.lon_deg])
-    return np.concatenate([a.trace_lat_deg, here_lat]), np.concatenate([a.trace_lon_deg, here_lon])
 
 
 class Chart(CachedLines):
@@ -144,6 +55,14 @@ class Chart(CachedLines):
     def __init__(self, quantity: str, *, id: str | None = None) -> None:
         super().__init__(id=id)
         self.quantity = quantity
+
+    def data_key(self) -> tuple[object, ...]:
+        """A new sample, a new fleet size, another aPad selected; the battery lines also take the classes."""
+        snap = self.snapshot
+        if snap is None:
+            return ()
+        classes = snap.marker_classes().tobytes() if self.quantity == "battery" else b""
+        return snap.hist_t_s.size, snap.mussel_ids.size, snap.duration_s, snap.selected, classes
 
     def draw(self, width: int, height: int) -> list[Strip]:
         snap = self.snapshot
@@ -180,7 +99,7 @@ class Chart(CachedLines):
             if hist.shape[1] <= 24:
                 classes = snap.marker_classes()
                 for col in np.argsort(classes, kind="stable"):
-                    canvas.polyline(x[sel], y_of(hist[:, col]), _MARKER_INDEX[int(classes[col])])
+                    canvas.polyline(x[sel], y_of(hist[:, col]), MARKER_INDEX[int(classes[col])])
             elif hist.size:
                 with np.errstate(all="ignore"):
                     for series, colour in ((np.nanmin(hist, 1), RED), (np.nanmax(hist, 1), GREEN),
@@ -199,52 +118,11 @@ class Chart(CachedLines):
         return f"{hi:g}V", f"{lo:g}V"
 
 
-STATE_NAMES = {int(s): s.name.lower() for s in MusselState}
-
-
-class FleetTable(DataTable[Text | str]):
-    """id, state, battery, uptime; rebuilt once per new sample, keeping the cursor."""
-
-    def on_mount(self) -> None:
-        self.cursor_type = "row"
-        self.zebra_stripes = True
-        # Fixed widths: auto-width columns measure every cell of every rebuild (most of a frame at 200 rows).
-        for label, key, width in (("id", "id", 5), ("state", "state", 9), ("battery %", "battery", 9),
-                                  ("uptime %", "uptime", 8)):
-            self.add_column(label, key=key, width=width)
-        self._shown: tuple[object, ...] = ()
-
-    def show(self, snap: Snapshot) -> None:
-        key = (snap.hist_t_s.size, snap.mussel_ids.size, snap.state.tobytes())
-        if key == self._shown:
-            return
-        self._shown = key
-        classes = snap.marker_classes()
-        rows = []
-        for i in range(snap.mussel_ids.size):
-            colour = MARKER_COLOURS[int(classes[i])]
-            battery = snap.battery_frac[i]
-            rows.append((
-                str(int(snap.mussel_ids[i])),
-                Text(STATE_NAMES.get(int(snap.state[i]), "?"), style=colour),
-                "-" if np.isnan(battery) else f"{100 * battery:5.1f}",
-                f"{snap.uptime_pct[i]:5.1f}",
-            ))
-        cursor = self.cursor_coordinate
-        self.clear()
-        self.add_rows(rows)
-        if rows:
-            self.move_cursor(row=min(cursor.row, len(rows) - 1), animate=False)
-
-    def selected_mussel(self) -> int | None:
-        if self.row_count == 0:
-            return None
-        return int(str(self.get_row_at(self.cursor_row)[0]))
-
-
 class StatusPanel(Static):
     """Mission time, phase, primitive, strategy, cost, aPad battery and slots, the last notice; with
     several aPads those of the selected one, its share, and a line for each other aPad."""
+
+    _shown: Text | None = None
 
     def show(self, snap: Snapshot, header: str) -> None:
         t = Text()
@@ -283,7 +161,9 @@ class StatusPanel(Static):
             t.append(f"\nmission ended: {snap.ended}", style=f"bold {APAD}")
         if snap.notice:
             t.append(f"\n{snap.notice}", style=APAD)
-        self.update(t)
+        if t != self._shown:  # the clock moves every second; the rest rarely
+            self._shown = t
+            self.update(t)
 
 
 def _apad_line(snap: Snapshot, a: ApadSnapshot) -> Text:
@@ -295,5 +175,39 @@ def _apad_line(snap: Snapshot, a: ApadSnapshot) -> Text:
 
 
 class EventLog(Static):
+    """The latest events, newest last; as many as fit."""
+
+    _shown: tuple[str, ...] = ()
+
     def show(self, snap: Snapshot) -> None:
-        self.update("\n".join(snap.log[-4:]))
+        lines = snap.log[-max(self.scrollable_content_region.height, 1):]
+        if lines != self._shown:
+            self._shown = lines
+            self.update("\n".join(lines))
+
+
+class ConsoleFooter(Footer):
+    """The key bindings, compact, on as many rows as the width needs: every key stays visible."""
+
+    def __init__(self) -> None:
+        super().__init__(compact=True, show_command_palette=False)
+        self._rows = 1
+
+    def compose(self) -> ComposeResult:
+        keys = [k for k in super().compose() if isinstance(k, FooterKey)]
+        self._rows = self._rows_for(keys)
+        if self._rows > 1:  # a grid, row by row, so the columns line up
+            self.styles.layout = "grid"
+            self.styles.grid_size_columns = math.ceil(len(keys) / self._rows)
+        else:
+            self.styles.layout = "horizontal"
+        self.styles.height = self._rows
+        yield from keys
+
+    def _rows_for(self, keys: list[FooterKey]) -> int:
+        need = sum(len(k.key_display) + len(k.description) + 2 for k in keys)  # compact: "k desc "
+        return max(1, math.ceil(need / max(self.app.size.width - 2, 1)))
+
+    def on_resize(self) -> None:
+        if self._rows_for(list(self.query(FooterKey))) != self._rows:
+            self.call_after_refresh(self.recompose)

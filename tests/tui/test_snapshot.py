@@ -12,7 +12,7 @@ import os
 from pathlib import Path
 
 import pytest
-from tui_helpers import screen_text
+from tui_helpers import screen_text, wait_for
 
 from gcs.console.app import ReplayConsole
 from gcs.console.widgets import APAD, GREEN, PURPLE, RED
@@ -27,6 +27,7 @@ def render(run: Path) -> tuple[str, str]:
     async def scenario() -> tuple[str, str]:
         app = ReplayConsole(load_replay(run), start_s=200.0, playing=False)
         async with app.run_test(size=(150, 46)) as pilot:
+            await wait_for(pilot, lambda: "q Quit" in screen_text(app))  # the footer lays out its keys last
             await pilot.pause(0.3)
             return screen_text(app), app.export_screenshot()
 

@@ -50,6 +50,7 @@ def test_both_apads_shown_with_their_shares_and_the_keys_command_the_selected_on
             assert not share1 & share2 and share1 | share2 == set(range(1, 13))  # FleetShares.owner, every aMussel
             assert sorted(snap.owner.tolist()) == sorted([1] * len(share1) + [2] * len(share2))
             await wait_for(pilot, lambda: "◆ aPad 2 " in screen_text(app))  # the other aPad's line
+            await wait_for(pilot, lambda: "a Next aPad" in screen_text(app))  # the footer, once its keys are laid out
             text = screen_text(app)
             assert "◆ aPad 1  selected of 2" in text and f"share {len(share2)}" in text
             assert "share     " + " ".join(map(str, sorted(share1))) in text
