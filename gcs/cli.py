@@ -63,6 +63,7 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     args = build_parser(argv).parse_args(argv)
+    args.argv = argv  # the command line as given (`vil gcs --web` serves the same one to browsers)
     runner: Runner = args.runner
     return runner(args)
 

@@ -4,6 +4,7 @@
     vil gcs --sitl --scenario missions/pool12x2.toml # two aPads: `a` picks the one the keys command
     vil gcs --connect udp:127.0.0.1:14550 --scenario missions/pool12.toml
     vil gcs --sitl --resume                          # continue the console mission that crashed
+    vil gcs --sitl --web 8000                        # the same console in a browser: http://127.0.0.1:8000/
     vil replay runs/latest --speed 16                # the last run; or runs/pool12-cautious-seed1-run1
 
 Everything `vil gcs` is given (scenario and its files, address, output folder) is opened before the
@@ -20,6 +21,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gcs.console.web import serve_console, web_address
 from gcs.mission import flags
 from gcs.mission.scenario import MISSIONS_DIR, Scenario, ScenarioError, load_scenario, resolve_scenario
 from gcs.records import rundirs
@@ -55,6 +57,10 @@ def add_gcs_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--signing-key", type=Path, metavar="FILE",
                         help="MAVLink 2 signing with the passphrase in FILE (default: $VIL_SIGNING_KEY if set); "
                              "the aPad's unsigned frames are then refused")
+    parser.add_argument("--web", type=web_address, metavar="[HOST:]PORT",
+                        help="serve this console to browsers (a tablet on deck) instead of this terminal: each "
+                             "browser session runs it with these same arguments, one at a time; HOST default "
+                             "127.0.0.1 (this machine only), 0.0.0.0 for every network")
     parser.add_argument("--bridge", metavar="ADDR",
                         help="listen here (udp:HOST:PORT or serial:DEV[:BAUD]) for real aMussels' AMUSSEL_STATUS "
                              "reports; they join the simulated fleet (the scenario's fleet.real_ids)")
@@ -80,6 +86,9 @@ def run_gcs(args: argparse.Namespace) -> int:
     if len(scenario.apads) > 1 and args.resume:  # a swarm's loops are not checkpointed (as in vil run)
         print(f"vil gcs: --resume serves one aPad; {path} has {len(scenario.apads)}", file=sys.stderr)
         return 2
+    if args.web is not None:  # checked as above; each browser session then runs the console itself
+        host, port = args.web
+        return serve_console(getattr(args, "argv", sys.argv[1:]), host, port, title=f"vil gcs: {scenario.name}")
     stem = f"console-{scenario.name}"
     if args.resume:
         try:

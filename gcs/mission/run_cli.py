@@ -4,7 +4,7 @@
     vil run missions/pool12.toml --strategy greedy --seed 3 --json out.json
     vil run pool12 --seeds 20                  # cautious, greedy, none on 20 freshly drawn fleets
     vil run --seeds 20                         # the same for pool12 and bay24: Table II's shape per seed
-    vil run pool12 --loss 0.2 --latency 0.2 --duplicate 0.05   # aPad link over UDP through a fault proxy
+    vil run pool12 --loss 0.2 --latency 200ms --duplicate 0.05 # aPad link over UDP through a fault proxy
     VIL_SIGNING_KEY=secret vil run pool12      # MAVLink 2 signing on the aPad link (or --signing-key FILE)
     vil run pool12 --resume                    # continue the run in its folder after a crash (kill -9)
 
