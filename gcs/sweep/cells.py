@@ -1,0 +1,146 @@
+"""The missions of a sweep: one cell per (scenario, point, strategy, seed), every one checked before
+any runs, and what a worker does with one.
+
+A cell's key is a hash of its inputs (the scenario's fields after the sweep's changes, the
+strategy, the seed, how the fleet is drawn), so a finished cell is found again by any later run
+of a spec that asks for the same mission, and a changed field is a new cell. The key does not
+cover the code: after changing a strategy, sweep into a new folder.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import tomllib
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gcs.mission.headless import run_mission, run_stem
+from gcs.mission.planner import COLLECT
+from gcs.mission.scenario import Scenario, ScenarioError, load_scenario, scenario_from_data
+from gcs.mission.scenario_models import check_inputs
+from gcs.mission.world import World
+from gcs.sweep.spec import SweepSpec, Value
+from missiontime import US_PER_S
+
+SERIES_POINTS = 240  # at most this many points of a run's active count are kept (10 s bins on 40 min)
+SERIES_MIN_BIN_S = 10.0
+
+
+@dataclass(frozen=True)
+class Cell:
+    index: int  # place in the spec's order (scenario, point, strategy, seed): rows are sorted by it
+    key: str  # hash of the inputs: the cell's file in DIR/cells
+    scenario: Scenario  # with the sweep's fields, strategy and seed applied
+    values: dict[str, Value]  # the swept fields' values
+    strategy: str
+    seed: int
+
+    @property
+    def label(self) -> str:
+        values = " ".join(f"{k}={v}" for k, v in self.values.items())
+        return f"{self.scenario.name} {self.strategy} seed {self.seed}" + (f" {values}" if values else "")
+
+
+def registered_strategies() -> tuple[str, ...]:
+    """Every collect strategy the planner knows now (a new one is in the next sweep of "all")."""
+    return tuple(str(s) for s in COLLECT)
+
+
+def make_cells(spec: SweepSpec) -> list[Cell]:
+    """Every mission of the spec, each scenario checked with each point's fields (`SpecError` if one fails)."""
+    known = registered_strategies()
+    strategies = spec.strategies if spec.strategies is not None else known
+    unknown = [s for s in strategies if s not in known]
+    if unknown:
+        raise spec.fail(f"sweep.strategies: {unknown[0]!r} is not a strategy (registered: {', '.join(known)})")
+    cells: list[Cell] = []
+    for ref in spec.scenarios:
+        path, raw = _scenario_toml(spec, ref)
+        for point in spec.points:
+            fields = spec.fixed | point
+            data = patched(raw, fields)
+            try:
+                base = scenario_from_data(path, data)
+                if spec.draw_fleet:
+                    base = replace(base, fleet=replace(base.fleet, start_config=None))
+                check_inputs(base)
+            except ScenarioError as exc:
+                given = ", ".join(f"{k} = {v!r}" for k, v in fields.items())
+                raise spec.fail(f"{ref}" + (f" with {given}" if given else "") + f": {exc}") from None
+            for strategy in strategies:
+                for seed in spec.seeds:
+                    key = cell_key(base.name, data, strategy, seed, spec.draw_fleet)
+                    scenario = base.with_overrides(strategy=strategy, seed=seed)
+                    cells.append(Cell(len(cells), key, scenario, dict(point), strategy, seed))
+    seen: dict[str, Cell] = {}
+    for cell in cells:
+        if cell.key in seen:
+            raise spec.fail(f"the same mission twice: {seen[cell.key].label} and {cell.label}")
+        seen[cell.key] = cell
+    return cells
+
+
+def _scenario_toml(spec: SweepSpec, ref: str) -> tuple[Path, dict[str, Any]]:
+    """A scenario beside the spec, or as `vil run` finds it; checked as it is, then its TOML to patch."""
+    beside = spec.path.parent / ref
+    try:
+        scenario = load_scenario(beside if beside.is_file() else ref)
+    except ScenarioError as exc:
+        raise spec.fail(f"sweep.scenarios: {exc}") from None
+    return scenario.path, tomllib.loads(scenario.path.read_text(encoding="utf-8"))
+
+
+def patched(raw: dict[str, Any], fields: dict[str, Value]) -> dict[str, Any]:
+    """The scenario's TOML with each "table.field" set (on every aPad of an `[[apad]]` array)."""
+    data = copy.deepcopy(raw)
+    for name, value in fields.items():
+        table, key = name.split(".")
+        target = data.setdefault(table, {})
+        for t in target if isinstance(target, list) else [target]:
+            if isinstance(t, dict):  # not a table: the scenario's own check names the field
+                t[key] = copy.deepcopy(value)
+    return data
+
+
+def cell_key(name: str, data: dict[str, Any], strategy: str, seed: int, draw_fleet: bool) -> str:
+    inputs = {"scenario": name, "fields": data, "strategy": strategy, "seed": seed, "draw_fleet": draw_fleet}
+    text = json.dumps(inputs, sort_keys=True, separators=(",", ":"), default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def run_cell(cell: Cell, runs_dir: str | None = None) -> dict[str, Any]:
+    """On a worker: one mission in lockstep; its result.json and active-count series as plain data.
+
+    `runs_dir`: keep the run's folder there (.tlog, logs, traces); without it the run writes nothing.
+    """
+    series: dict[str, Any] = {}
+
+    def keep_series(world: World) -> None:
+        rec = world.fleet.recorder
+        series.update(active_series(rec.step_time_us(), rec.active_count(), world.scenario.mission.duration_s))
+
+    out = Path(runs_dir) / f"{run_stem(cell.scenario)}-{cell.key}" if runs_dir is not None else None
+    result = run_mission(cell.scenario, out, on_end=keep_series)
+    return {"result": result.to_json(), "series": series}
+
+
+def active_series(time_us: NDArray[np.int64], active: NDArray[np.int32], duration_s: float) -> dict[str, Any]:
+    """The active count's mean over bins of mission time (at most `SERIES_POINTS`), for bands across runs.
+
+    Returns {"bin_s": width, "t_s": [end of each bin], "active": [mean count in it]}.
+    """
+    bin_s = max(SERIES_MIN_BIN_S, float(np.ceil(duration_s / SERIES_POINTS)))
+    if active.size == 0:
+        return {"bin_s": bin_s, "t_s": [], "active": []}
+    bins = np.maximum(np.ceil(time_us / (bin_s * US_PER_S)).astype(np.int64) - 1, 0)
+    counts = np.bincount(bins)
+    present = counts > 0
+    means = np.bincount(bins, weights=active.astype(np.float64))[present] / counts[present]
+    ends = np.minimum((np.flatnonzero(present) + 1) * bin_s, duration_s)
+    return {"bin_s": bin_s, "t_s": ends.round(3).tolist(), "active": means.round(3).tolist()}

@@ -1,0 +1,83 @@
+"""Running a sweep's cells on Dask: a local cluster (a process per core, one thread each) or an
+existing one at a scheduler's address. Each finished cell is handed back to the client, which
+writes it (so a cluster on other machines needs no shared folder, unless runs are kept)."""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from typing import Any
+
+from distributed import Client, LocalCluster, as_completed
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+from gcs.sweep.cells import Cell, run_cell
+
+CONNECT_TIMEOUT_S = 20.0
+
+
+class ClusterError(RuntimeError):
+    """The cluster could not be started or reached (one line)."""
+
+
+@dataclass
+class Outcome:
+    ran: int = 0
+    failed: list[tuple[Cell, str]] = field(default_factory=list)
+
+
+@contextmanager
+def dask_client(scheduler: str | None, workers: int | None = None, processes: bool = True) -> Iterator[Client]:
+    """A client of the scheduler at `scheduler` (tcp://HOST:PORT), or of a local cluster of
+    `workers` (default: cores) single-threaded workers, closed on the way out."""
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout=CONNECT_TIMEOUT_S)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise ClusterError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+        with client:
+            yield client
+        return
+    n = workers or os.cpu_count() or 1
+    # The scheduler's HTTP server on a free port: the default 8787 may be another cluster's.
+    with LocalCluster(n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=":0",
+                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+        yield client
+
+
+def describe(client: Client) -> str:
+    info = client.scheduler_info(n_workers=-1)
+    threads = sum(w.get("nthreads", 0) for w in info["workers"].values())
+    return f"{info['address']} ({len(info['workers'])} workers, {threads} threads)"
+
+
+def run_cells(
+    client: Client, cells: list[Cell], runs_dir: str | None, on_done: Callable[[Cell, dict[str, Any]], None],
+    console: Console,
+) -> Outcome:
+    """Every cell on the cluster; `on_done` gets each result as it comes, in any order. A cell whose
+    mission raised is listed in the outcome, not written, so the next run tries it again."""
+    outcome = Outcome()
+    columns = (TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
+               TextColumn("missions"), TimeElapsedColumn(), TextColumn("eta"), TimeRemainingColumn())
+    with Progress(*columns, console=console, transient=False) as progress:
+        task = progress.add_task("sweep", total=len(cells))
+        futures = {
+            client.submit(run_cell, cell, runs_dir, key=f"vil-sweep-{cell.key}", retries=0): cell
+            for cell in cells
+        }
+        for future in as_completed(futures):
+            cell = futures.pop(future)
+            if future.status == "error":
+                exc = future.exception()
+                outcome.failed.append((cell, f"{type(exc).__name__}: {exc}"))
+            else:
+                on_done(cell, future.result())
+                outcome.ran += 1
+            future.release()
+            progress.advance(task)
+    return outcome

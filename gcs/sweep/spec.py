@@ -1,0 +1,230 @@
+"""Sweep specs: which scenarios, strategies, seeds and parameter points a sweep runs.
+
+    [sweep]
+    scenarios = ["pool12", "bay24"]   # names in missions/ or files (relative to the spec)
+    strategies = "all"                # or a list; "all" = every collect strategy registered now
+    seeds = "1-20"                    # a range "A-B", or a list of integers
+    draw_fleet = true                 # each seed draws its fleet (as `vil run --seeds`); false: the saved start
+
+    [set]                             # the same in every cell
+    mission.duration = "20m"
+
+    [grid]                            # every combination of these values
+    mission.pool_threshold = [0.7, 0.8, 0.9]
+
+    [sample]                          # n points drawn at random (seeded), crossed with the grid
+    n = 8
+    seed = 1
+    mission.theta = {min = 10, max = 60}    # uniform in [min, max] (integers if both are)
+    apad.speed_mps = [0.3, 0.5]             # a list: one of these
+
+A field is TABLE.FIELD of a scenario file; under `[[apad]]` (several aPads) it is set on each.
+Nothing here runs a mission: `gcs.sweep.cells` turns a spec into the missions, checking each one.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import re
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gcs.mission.scenario import SEED_MAX
+
+MAX_CELLS = 100_000  # more is a typo in a range, not a sweep this machine should start
+MAX_SAMPLE = 10_000
+_SEED_RANGE = re.compile(r"^\s*(\d+)\s*-\s*(\d+)\s*$")
+# Fields a sweep sets itself: the strategy and the seed are axes of their own, the name identifies the scenario.
+RESERVED = {
+    "scenario.seed": "use [sweep] seeds",
+    "scenario.name": "a sweep names its rows by the scenario's own name",
+    "mission.collect_strategy": "use [sweep] strategies",
+}
+
+Value = Any  # a TOML value: number, string, boolean, list
+
+
+class SpecError(ValueError):
+    """One line for the user: the spec file, the entry, what is wrong."""
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    path: Path
+    name: str
+    scenarios: tuple[str, ...]  # as written; `gcs.sweep.cells` finds and checks them
+    strategies: tuple[str, ...] | None  # None: every registered collect strategy, read when the cells are made
+    seeds: tuple[int, ...]
+    draw_fleet: bool
+    fixed: dict[str, Value]  # [set]: field -> value
+    swept: tuple[str, ...]  # the fields that vary, grid first, then sample
+    points: tuple[dict[str, Value], ...]  # one dict of swept values per point (one empty point if none)
+
+    def fail(self, what: str) -> SpecError:
+        return SpecError(f"{self.path}: {what}")
+
+
+def load_spec(path: str | Path) -> SweepSpec:
+    """Read a sweep spec and check its shape (fields are checked against each scenario by `cells`)."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise SpecError(f"{path}: no such sweep spec") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SpecError(f"{path}: cannot read: {exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise SpecError(f"{path}: not valid TOML: {exc}") from None
+
+    def fail(what: str) -> SpecError:
+        return SpecError(f"{path}: {what}")
+
+    unknown = sorted(set(data) - {"sweep", "set", "grid", "sample"})
+    if unknown:
+        raise fail(f"[{unknown[0]}]: unknown table (known: [sweep], [set], [grid], [sample])")
+    top = _table(data, "sweep", fail)
+    for key in sorted(set(top) - {"name", "scenarios", "strategies", "seeds", "draw_fleet"}):
+        raise fail(f"sweep.{key}: unknown field")
+    name = top.get("name", path.stem)
+    if not isinstance(name, str) or not name:
+        raise fail(f"sweep.name: expected a string, got {name!r}")
+    scenarios = top.get("scenarios")
+    if not isinstance(scenarios, list) or not scenarios or not all(isinstance(s, str) for s in scenarios):
+        raise fail(f"sweep.scenarios: expected a list of scenario names or files, got {scenarios!r}")
+    if len(set(scenarios)) != len(scenarios):
+        raise fail(f"sweep.scenarios: a scenario twice in {scenarios}")
+    strategies = _strategies(top.get("strategies", "all"), fail)
+    seeds = _seeds(top.get("seeds", [1]), fail)
+    draw_fleet = top.get("draw_fleet", True)
+    if not isinstance(draw_fleet, bool):
+        raise fail(f"sweep.draw_fleet: expected true or false, got {draw_fleet!r}")
+
+    fixed = _fields(_table(data, "set", fail), "set", fail)
+    grid = _fields(_table(data, "grid", fail), "grid", fail)
+    for key, values in grid.items():
+        if not isinstance(values, list) or not values:
+            raise fail(f"grid.{key}: expected a non-empty list of values, got {values!r}")
+    sample_table = dict(_table(data, "sample", fail))
+    sampled = _sample(sample_table, fail) if sample_table else []
+    sampled_keys = list(sampled[0]) if sampled else []
+    twice = sorted((set(fixed) & {*grid, *sampled_keys}) | (set(grid) & set(sampled_keys)))
+    if twice:
+        raise fail(f"{twice[0]}: set in more than one of [set], [grid], [sample]")
+    swept = (*grid, *sampled_keys)
+    points = [dict(zip(grid, combo, strict=True)) for combo in itertools.product(*grid.values())]
+    if sampled:
+        points = [p | s for p in points for s in sampled]
+    n_strategies = len(strategies) if strategies is not None else 1
+    n_cells = len(scenarios) * len(points) * n_strategies * len(seeds)
+    if n_cells > MAX_CELLS:
+        raise fail(f"{n_cells} missions is more than {MAX_CELLS}; narrow the grid or the seeds")
+    return SweepSpec(path.resolve(), name, tuple(scenarios), strategies, seeds, draw_fleet, fixed, swept,
+                     tuple(points))
+
+
+def _table(data: dict[str, Any], key: str, fail: Any) -> dict[str, Any]:
+    value = data.get(key, {})
+    if not isinstance(value, dict):
+        raise fail(f"{key}: expected a table [{key}]")
+    return value
+
+
+def _fields(table: dict[str, Any], where: str, fail: Any) -> dict[str, Value]:
+    """Scenario fields as "table.field" keys: `mission.theta = 1` and `"mission.theta" = 1` alike."""
+    out: dict[str, Value] = {}
+    for key, value in table.items():
+        if "." not in key and isinstance(value, dict):
+            for sub, v in value.items():
+                out[f"{key}.{sub}"] = v
+        else:
+            out[key] = value
+    for key in out:
+        parts = key.split(".")
+        if len(parts) != 2 or not all(parts):
+            raise fail(f"{where}.{key}: expected a scenario field as TABLE.FIELD (e.g. mission.theta)")
+        if key in RESERVED:
+            raise fail(f"{where}.{key}: not a sweep field ({RESERVED[key]})")
+    return out
+
+
+def _strategies(value: Any, fail: Any) -> tuple[str, ...] | None:
+    if value == "all":
+        return None
+    if not isinstance(value, list) or not value or not all(isinstance(v, str) and v for v in value):
+        raise fail(f'sweep.strategies: expected "all" or a list of strategy names, got {value!r}')
+    if len(set(value)) != len(value):
+        raise fail(f"sweep.strategies: a strategy twice in {value}")
+    return tuple(value)
+
+
+def _seeds(value: Any, fail: Any) -> tuple[int, ...]:
+    if isinstance(value, str):
+        match = _SEED_RANGE.match(value)
+        if not match or int(match.group(1)) > int(match.group(2)):
+            raise fail(f'sweep.seeds: {value!r} is not a range "FIRST-LAST" (e.g. "1-20")')
+        seeds = list(range(int(match.group(1)), int(match.group(2)) + 1))
+    elif isinstance(value, int) and not isinstance(value, bool):
+        seeds = [value]
+    elif isinstance(value, list) and value and all(isinstance(v, int) and not isinstance(v, bool) for v in value):
+        seeds = list(value)
+    else:
+        raise fail(f'sweep.seeds: expected a range "FIRST-LAST" or a list of integers, got {value!r}')
+    bad = [s for s in seeds if not 0 <= s <= SEED_MAX]
+    if bad:
+        raise fail(f"sweep.seeds: {bad[0]} is outside [0, {SEED_MAX}]")
+    if len(set(seeds)) != len(seeds):
+        raise fail(f"sweep.seeds: a seed twice in {value!r}")
+    if len(seeds) > MAX_CELLS:
+        raise fail(f"sweep.seeds: {len(seeds)} seeds is more than {MAX_CELLS}")
+    return tuple(seeds)
+
+
+def _sample(table: dict[str, Any], fail: Any) -> list[dict[str, Value]]:
+    """`n` points drawn with the table's `seed`: each field uniform in {min, max} or one of a list."""
+    n = table.pop("n", None)
+    if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_SAMPLE:
+        raise fail(f"sample.n: expected an integer in [1, {MAX_SAMPLE}], got {n!r}")
+    seed = table.pop("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= SEED_MAX:
+        raise fail(f"sample.seed: expected an integer in [0, {SEED_MAX}], got {seed!r}")
+    fields: dict[str, Value] = {}
+    for key, value in table.items():  # a {min, max} table is a range, not a scenario table
+        if "." not in key and isinstance(value, dict) and not _is_range(value):
+            fields |= {f"{key}.{sub}": v for sub, v in value.items()}
+        else:
+            fields[key] = value
+    fields = _fields(fields, "sample", fail)
+    if not fields:
+        raise fail("sample: no field to sample (add e.g. mission.theta = {min = 10, max = 60})")
+    for key, value in fields.items():
+        if _is_range(value):
+            lo, hi = value["min"], value["max"]
+            numbers = all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+                          for v in (lo, hi))
+            if not numbers or lo > hi:
+                raise fail(f"sample.{key}: expected {{min = A, max = B}} with numbers A <= B, got {value!r}")
+        elif not isinstance(value, list) or not value:
+            raise fail(f"sample.{key}: expected {{min = A, max = B}} or a non-empty list of values, got {value!r}")
+    rng = np.random.default_rng(seed)
+    points = []
+    for _ in range(n):
+        point: dict[str, Value] = {}
+        for key in sorted(fields):  # a fixed order of draws: the same spec draws the same points
+            value = fields[key]
+            if not _is_range(value):
+                point[key] = value[int(rng.integers(len(value)))]
+            elif isinstance(value["min"], int) and isinstance(value["max"], int):
+                point[key] = int(rng.integers(value["min"], value["max"] + 1))
+            else:
+                point[key] = float(f"{rng.uniform(value['min'], value['max']):.6g}")  # readable in tables
+        points.append({k: point[k] for k in fields})
+    return points
+
+
+def _is_range(value: Any) -> bool:
+    return isinstance(value, dict) and set(value) == {"min", "max"}
