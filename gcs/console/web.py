@@ -95,13 +95,23 @@ def serve_console(argv: Sequence[str], host: str, port: int, title: str) -> int:
         except (OSError, ValueError) as exc:
             print(f"vil gcs: --web: {exc}", file=sys.stderr)
             return 2
-        server = _console_server(console_command(argv), host, port, title, templates)
         try:
-            server.serve()
+            _probe(host, port)  # refused here, not after the start line said we serve
+            _console_server(console_command(argv), host, port, title, templates).serve()
         except OSError as exc:
             print(f"vil gcs: --web {host}:{port}: cannot listen: {exc.strerror or exc}", file=sys.stderr)
             return 2
     return 0
+
+
+def _probe(host: str, port: int) -> None:
+    """OSError if nothing can listen on HOST:PORT now (in use, no such address)."""
+    import socket
+
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    with socket.socket(family, socket.SOCK_STREAM) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as aiohttp binds
+        probe.bind((host, port))
 
 
 def start_line(host: str, port: int) -> str:

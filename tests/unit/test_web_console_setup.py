@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import shlex
+import socket
 import sys
 from pathlib import Path
 
@@ -46,3 +47,15 @@ def test_the_start_line_says_what_to_open_and_who_can_reach_it() -> None:
         "vil gcs: serving the console to this machine only: open http://127.0.0.1:8000/ (--web 0.0.0.0:8000 for "
         "the boat's network); one browser at a time; Ctrl+C stops")
     assert "on every network of this machine" in start_line("0.0.0.0", 8000)
+
+
+def test_a_port_in_use_is_one_line_before_anything_says_it_serves(capsys: pytest.CaptureFixture[str]) -> None:
+    from gcs.cli import main
+
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        assert main(["gcs", "--sitl", "--web", str(port)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err == f"vil gcs: --web 127.0.0.1:{port}: cannot listen: Address already in use\n"
