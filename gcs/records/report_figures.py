@@ -40,6 +40,8 @@ def battery_png(data: RunData, path: Path) -> Path:
     t = minutes(data)
     pct = 100.0 * data.battery.astype(np.float64)
     n = data.ids.size
+    ax.axhline(100 * data.pool_threshold, color=GREY, ls="--", lw=1,
+               label=f"pool threshold {100 * data.pool_threshold:.0f} %")
     if n <= MAX_DISTINCT:
         every = max(t.size // 6, 1)
         for c, mussel in enumerate(data.ids):
@@ -47,6 +49,7 @@ def battery_png(data: RunData, path: Path) -> Path:
             ax.plot(t, pct[:, c], color=s.colour, ls=s.line, marker=s.marker, ms=4, lw=1.3,
                     markevery=(c * every // max(n, 1), every), label=str(mussel))
         ax.legend(title="aMussel", ncols=2, fontsize=7, loc="center left", bbox_to_anchor=(1.0, 0.5))
+        # (the threshold line is the legend's first entry)
     elif pct.size:
         heard = np.asarray(np.isfinite(pct).any(axis=1))
         lo, mid, hi = (np.full(t.size, np.nan) for _ in range(3))
@@ -56,9 +59,6 @@ def battery_png(data: RunData, path: Path) -> Path:
         ax.plot(t, np.nanmin(np.where(heard[:, None], pct, 100.0), axis=1), color=palette()[2], lw=1, ls=":",
                 label="lowest")
         ax.legend(fontsize=8, loc="lower left")
-    ax.axhline(100 * data.pool_threshold, color=GREY, ls="--", lw=1, label="pool threshold")
-    ax.text(0, 100 * data.pool_threshold + 1, f"pool threshold {100 * data.pool_threshold:.0f} %", fontsize=7,
-            color=GREY)
     ax.set(xlabel="mission time [min]", ylabel="battery [% of the 3.6-4.2 V range]", ylim=(0, 102),
            title=f"aMussel battery levels — {data.title}")
     return save(fig, path)
@@ -112,8 +112,8 @@ def active_png(data: RunData, path: Path) -> Path:
     grid(ax)
     c = palette()
     ax.step(minutes(data), data.active, where="post", color=c[0], lw=1.5, label="active aMussels")
-    if data.active.size:
-        mean = float(data.active.mean())
+    if data.active.size:  # the index (result.json's where the run wrote one): the number the tables show
+        mean = data.indices.active_avg
         ax.axhline(mean, color=c[6], ls="--", lw=1.2, label=f"mean {mean:.2f}")
     ax.set(xlabel="mission time [min]", ylabel="active aMussels [count]", ylim=(0, data.ids.size + 0.5),
            title=f"Active aMussels over time — {data.title}")
@@ -127,7 +127,8 @@ def uptime_png(data: RunData, path: Path) -> Path:
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    fig, ax = figure(max(8.0, 0.35 * data.ids.size), 4.4)
+    many = data.ids.size > 40  # thin bars: no numbers in them, every 5th id on the axis
+    fig, ax = figure(min(max(8.0, 0.35 * data.ids.size), 14.0), 4.4)
     grid(ax)
     x = np.arange(data.ids.size)
     apads = sorted({m.apad for m in data.mussels})
@@ -141,9 +142,10 @@ def uptime_png(data: RunData, path: Path) -> Path:
         if m.depleted:
             ax.plot(k, m.uptime_pct + 5, "X", color=BLACK, ms=8)
             ax.annotate(f"{m.depleted_s / 60:.0f} min", (k, m.uptime_pct + 9), ha="center", fontsize=6)
-        ax.annotate(f"{m.dockings}", (k, 2), ha="center", fontsize=8, fontweight="bold",
-                    color="white" if not m.never_collected else BLACK)
-    avg = float(np.mean([m.uptime_pct for m in data.mussels])) if data.mussels else 0.0
+        if not many:
+            ax.annotate(f"{m.dockings}", (k, 2), ha="center", fontsize=8, fontweight="bold",
+                        color="white" if not m.never_collected else BLACK)
+    avg = data.indices.avg_uptime_pct
     ax.axhline(avg, color=palette()[6], ls="--", lw=1.2)
     handles: list[Artist] = [Patch(color=colour_of[a], label=f"aPad {a}'s share" if data.swarm else "collected")
                              for a in apads]
@@ -151,11 +153,13 @@ def uptime_png(data: RunData, path: Path) -> Path:
                 Line2D([], [], color=BLACK, marker="X", ls="", label="depleted (minutes)"),
                 Line2D([], [], color=palette()[6], ls="--", label=f"average {avg:.1f} %")]
     ax.legend(handles=handles, fontsize=7, loc="center left", bbox_to_anchor=(1.0, 0.5))
-    ax.set_xticks(x, [str(i) for i in data.ids], fontsize=7 if data.ids.size > 30 else 9)
+    ticks = x[::5] if many else x
+    ax.set_xticks(ticks, [str(data.ids[k]) for k in ticks], fontsize=7 if data.ids.size > 30 else 9)
     never = [m.id for m in data.mussels if m.never_collected]
     flat = [m.id for m in data.mussels if m.depleted]
-    ax.set(xlabel="aMussel id (number in the bar: dockings)", ylabel="uptime [% of mission steps active]",
-           ylim=(0, 118), title=f"Uptime per aMussel (eq. 3) — {data.title}")
+    ax.set(xlabel="aMussel id" if many else "aMussel id (number in the bar: dockings)",
+           ylabel="uptime [% of mission steps active]", ylim=(0, 118),
+           title=f"Uptime per aMussel (eq. 3) — {data.title}")
     ax.text(0.01, 0.98, f"never collected: {_ids(never)}    depleted: {_ids(flat)}", transform=ax.transAxes,
             va="top", fontsize=8)
     return save(fig, path)

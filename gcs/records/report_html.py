@@ -28,6 +28,7 @@ dl.facts dt { font-weight: 600; } dl.facts dd { margin: 0; }
 figure { margin: 1.2em 0; } figure img { max-width: 100%; border: 1px solid #e5e7eb; }
 figcaption { font-size: 0.9em; color: #374151; max-width: 60em; }
 .scroll { max-height: 32em; overflow-y: auto; border: 1px solid #e5e7eb; display: inline-block; }
+.scroll th { position: sticky; top: 0; }
 caption { caption-side: bottom; text-align: left; font-size: 0.85em; color: #4b5563; padding-top: 4px; }
 nav a { margin-right: 1em; }
 """
@@ -41,10 +42,11 @@ class Figure:
 
 
 def table(headers: Sequence[str], rows: Sequence[Sequence[object]], caption: str = "", text_cols: int = 1,
-          flagged: Sequence[bool] = ()) -> str:
-    """An HTML table; the first `text_cols` columns left-aligned, flagged rows highlighted."""
+          flagged: Sequence[bool] = (), text_right: int = 0) -> str:
+    """An HTML table; the first `text_cols` and the last `text_right` columns left-aligned (words, not
+    numbers), flagged rows highlighted."""
     def cell(k: int, value: object, tag: str) -> str:
-        align = ' class="text"' if k < text_cols else ""
+        align = ' class="text"' if k < text_cols or k >= len(headers) - text_right else ""
         return f"<{tag}{align}>{html.escape(str(value))}</{tag}>"
 
     head = "<tr>" + "".join(cell(k, h, "th") for k, h in enumerate(headers)) + "</tr>"
@@ -88,8 +90,9 @@ INDEX_HEADERS = ("run", "avg uptime %", "max uptime %", "min uptime %", "cost m"
 def write_page(data: RunData, figures: Sequence[Figure], path: Path, geojson: str = "run.geojson") -> Path:
     sections = [
         f"<h1>{html.escape(data.title)}</h1>",
-        "<nav>" + " ".join(f'<a href="#{s}">{s}</a>' for s in ("summary", "amussels", "apads", "figures",
-                                                                 "events")) + "</nav>",
+        "<nav>" + " ".join(f'<a href="#{a}">{t}</a>' for a, t in (("summary", "Summary"), ("amussels", "aMussels"),
+                                                                   ("apads", "aPads"), ("figures", "Figures"),
+                                                                   ("events", "Event timeline"))) + "</nav>",
         _facts(data),
         '<h2 id="summary">Summary (the paper\'s Table II indices)</h2>',
         table(INDEX_HEADERS, indices_rows(data),
@@ -112,7 +115,7 @@ def write_page(data: RunData, figures: Sequence[Figure], path: Path, geojson: st
 def _facts(data: RunData) -> str:
     r = data.result
     facts = [
-        ("run folder", str(data.folder)),
+        ("run folder", str(data.folder.resolve())),
         ("scenario", str(r.get("scenario") or (data.scenario.name if data.scenario else "-"))),
         ("strategy", str(r.get("strategy", "-"))), ("seed", str(r.get("seed", "-"))),
         ("mission time", f"{data.end_s / 60:.1f} of {data.duration_s / 60:.1f} min"),
@@ -137,7 +140,8 @@ def _mussel_table(data: RunData) -> str:
         flagged.append(bool(notes))
     headers = ("aMussel", "aPad", "start battery %", "end battery %", "uptime %", "dockings", "depleted min",
                "state at the end", "notes")
-    return table(headers, rows, "Highlighted: aMussels never collected or depleted for a while.", flagged=flagged)
+    return table(headers, rows, "Highlighted: aMussels never collected or depleted for a while.", flagged=flagged,
+                 text_right=2)
 
 
 def _apad_table(data: RunData) -> str:
@@ -147,9 +151,13 @@ def _apad_table(data: RunData) -> str:
                  f"{float(a.get('travelled_m', 0.0)):.1f}", a.get("dockings", "-"), a.get("cycles", "-"),
                  f"{100 * float(a.get('idle_share', 0.0)):.0f}", a.get("end_reason", "-")] for a in apads]
         return table(("aPad", "aMussels served", "cost m", "travelled m", "dockings", "cycles", "idle %", "ended"),
-                     rows, "From result.json.")
+                     rows, "From result.json.", text_right=1)
     rows = [[t.system_id, f"{float(t.cost_m[-1]) if t.cost_m.size else 0.0:.1f}", t.t_s.size] for t in data.tracks]
     return table(("aPad", "cost m", "seconds heard"), rows, "From the replayed log (the run wrote no result.json).")
+
+
+def _listed(value: object) -> str:
+    return ", ".join(str(v) for v in value) or "none" if isinstance(value, list) else str(value)
 
 
 def _details(ev: Event) -> str:
@@ -159,8 +167,16 @@ def _details(ev: Event) -> str:
             continue
         if key == "mussel":
             words.append(f"aMussel {value}")
+        elif key in ("phase", "why", "reason"):
+            words.append(str(value))
+        elif key == "slot":
+            words.append(f"slot {value}")
         elif key == "route" and isinstance(value, list):
             words.append("route " + " → ".join(str(v) for v in value))
+        elif key == "shares" and isinstance(value, dict):
+            words += [f"aPad {a} serves {_listed(ids)}" for a, ids in value.items()]
+        elif isinstance(value, list):
+            words.append(f"{key.replace('_', ' ')}: {_listed(value)}")
         elif key.endswith("_m") and isinstance(value, int | float):
             words.append(f"{key[:-2].replace('_', ' ')} {value:.1f} m")
         else:
@@ -172,7 +188,10 @@ def _timeline(events: Sequence[Event]) -> str:
     if not events:
         return "<p>The run left no events.jsonl.</p>"
     shown = events[:MAX_EVENTS]
-    rows = [[mm_ss(ev.t_s), ev.fields.get("apad", "-"), ev.kind.replace("_", " "), _details(ev)] for ev in shown]
+    swarm = any("apad" in ev.fields for ev in shown)  # a swarm's loops name their aPad
+    rows = [[mm_ss(ev.t_s), *([ev.fields.get("apad", "-")] if swarm else []), ev.kind.replace("_", " "),
+             _details(ev)] for ev in shown]
+    headers = ("time", *(["aPad"] if swarm else []), "event", "details")
     cut = f" The first {MAX_EVENTS} of {len(events)} are shown." if len(events) > MAX_EVENTS else ""
-    caption = (f"{len(events)} events from events.jsonl, in mission time (mm:ss).{cut}")
-    return f'<div class="scroll">{table(("time", "aPad", "event", "details"), rows, caption, text_cols=4)}</div>'
+    caption = f"{len(events)} events from events.jsonl, in mission time (mm:ss).{cut}"
+    return f'<div class="scroll">{table(headers, rows, caption, text_cols=len(headers))}</div>'

@@ -64,7 +64,9 @@ def track_png(data: RunData, path: Path) -> Path:
         if not np.isfinite(mx[c]):
             continue
         s = series_style(c)
-        ax.plot(mx[c], my[c], s.marker if distinct else "o", color=s.colour if distinct else palette()[3],
+        # Past MAX_DISTINCT: a swarm's aMussels in their aPad's colour, one aPad's all alike.
+        many = apad_colour(m.apad) if data.swarm and m.apad else palette()[3]
+        ax.plot(mx[c], my[c], s.marker if distinct else "o", color=s.colour if distinct else many,
                 mec=BLACK, mew=0.5, ms=7 if distinct else 4, ls="", zorder=3)
         if distinct or data.ids.size <= 60:
             ax.annotate(str(m.id), (mx[c], my[c]), textcoords="offset points", xytext=(4, 4), fontsize=7)

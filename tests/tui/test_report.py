@@ -78,7 +78,7 @@ def compared(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A pool12 run with no collection (aMussels run flat) beside a pool12x2 run that loses aPad 2."""
     root = tmp_path_factory.mktemp("compare")
     flat = root / "pool12-none"
-    run_mission(load_scenario("pool12").with_overrides(strategy="none", duration_s=720.0, theta=60.0), flat)
+    run_mission(load_scenario("pool12").with_overrides(strategy="none", duration_s=360.0, theta=120.0), flat)
     swarm = root / "pool12x2"
     run_mission(load_scenario("pool12x2").with_overrides(duration_s=420.0), swarm,
                 options=LinkOptions(fail_apads=((2, 200.0),)))
