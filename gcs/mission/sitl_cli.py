@@ -43,8 +43,11 @@ def run(args: argparse.Namespace) -> int:
         print(f"vil sitl: {exc}", file=sys.stderr)
         return 2
     env = scenario.environment
-    print(f"vil sitl: {scenario.name} ({scenario.path}): {len(apads)} of its aPads with their homes and "
-          "parameters" + ("" if args.geofence else ", its water area as the geofence"), flush=True)
+    n, given = len(apads), len(scenario.apads)
+    which = ("its aPad" if given == 1 else f"its {n} aPads" if n == given
+             else f"the first {'' if n == 1 else f'{n} '}of its {given} aPads")
+    print(f"vil sitl: {scenario.name} ({scenario.path}): {which} at {'its home' if n == 1 else 'their homes'} "
+          "with the scenario's parameters" + ("" if args.geofence else ", its water area as the geofence"), flush=True)
     return serve.serve(args, apads, args.current or (env.current_east_mps, env.current_north_mps), fence)
 
 

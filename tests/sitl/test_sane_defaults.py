@@ -13,9 +13,10 @@ import pytest
 from testkit import free_udp_port, scenario_variant
 
 from gcs.api import Location
-from gcs.cli import main
+from gcs.cli import build_parser, main
 from gcs.link.commands import CommandError
 from gcs.mission.scenario import MISSIONS_DIR, load_scenario
+from gcs.mission.sitl_cli import scenario_apads
 from gcs.mission.world import LinkOptions, build_world
 from missiontime import Scheduler, WallClock
 from mussel_sim.geo import distance_m
@@ -73,38 +74,46 @@ def test_sitl_with_a_scenario_of_one_apad_refuses_a_second_and_a_home_of_its_own
         "vil sitl: --home and --scenario both say it")
 
 
-def test_vil_sitl_scenario_serves_each_apad_at_its_home_with_the_scenarios_geofence(tmp_path: Path) -> None:
-    scenario = load_scenario("pool12x2").with_overrides(duration_s=1.0)
+def test_vil_sitl_scenario_pool12_serves_its_apad_at_its_home_with_its_geofence(tmp_path: Path) -> None:
+    scenario = load_scenario("pool12").with_overrides(duration_s=1.0)
+    a = scenario.apad
     port = free_udp_port()
     proc = subprocess.Popen(
-        [sys.executable, "-m", "gcs.cli", "sitl", "--scenario", "pool12x2", "--listen", f"udp:127.0.0.1:{port}",
+        [sys.executable, "-m", "gcs.cli", "sitl", "--scenario", "pool12", "--listen", f"udp:127.0.0.1:{port}",
          "--duration", "60s", "--log-dir", str(tmp_path)],
         cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    connect = f"udp:127.0.0.1:{port},udp:127.0.0.1:{port + 1}"
     # No geofence on the GCS side: the Go To below goes out, so the refusal is the aPad's own.
     world = build_world(scenario, WallClock(Scheduler()), tmp_path / "gcs",
-                        LinkOptions(connect=connect, geofence_buffer_m=None))
+                        LinkOptions(connect=f"udp:127.0.0.1:{port}", geofence_buffer_m=None))
     try:
-        for a in scenario.apads:
-            assert world.api.wait_apad(timeout_s=15.0, apad_id=a.system_id) == a.system_id
-            here = world.api.position(a.system_id)
-            assert float(distance_m(here.lat, here.lon, a.home_lat_deg, a.home_lon_deg)) < 0.05
-        ashore = Location(scenario.apad.home_lat_deg, scenario.apad.home_lon_deg - 0.001)  # 80 m west of the pool
+        assert world.api.wait_apad(timeout_s=15.0) == a.system_id
+        here = world.api.position(a.system_id)
+        assert float(distance_m(here.lat, here.lon, a.home_lat_deg, a.home_lon_deg)) < 0.05
         with pytest.raises(CommandError, match="DENIED"):
-            world.api.go_to(ashore, apad_id=2)
+            world.api.go_to(Location(a.home_lat_deg, a.home_lon_deg - 0.001))  # 80 m west, ashore
     finally:
         world.close()
         proc.terminate()
         out, err = proc.communicate(timeout=10)
     assert proc.returncode == 0, err
     assert out.splitlines() == [
-        f"vil sitl: pool12x2 ({MISSIONS_DIR / 'pool12x2.toml'}): 2 of its aPads with their homes and parameters, "
+        f"vil sitl: pool12 ({MISSIONS_DIR / 'pool12.toml'}): its aPad at its home with the scenario's parameters, "
         "its water area as the geofence",
-        f"vil sitl: aPad sysid 1 listening on udp:127.0.0.1:{port}, home 43.940000,15.439838 (pool12x2's), "
-        f"current 0,0 m/s, logs in {tmp_path}",
-        f"vil sitl: aPad sysid 2 listening on udp:127.0.0.1:{port + 1}, home 43.940000,15.440162 (pool12x2's), "
+        f"vil sitl: aPad sysid 1 listening on udp:127.0.0.1:{port}, home 43.940000,15.439838 (pool12's), "
         f"current 0,0 m/s, logs in {tmp_path}",
     ]
+
+
+def test_each_apad_of_a_swarm_scenario_comes_from_its_own_table() -> None:
+    scenario = load_scenario("pool12x2")
+    args = build_parser(["sitl"]).parse_args(["sitl", "--scenario", "pool12x2", "--param", "SPEED_MAX=0.3"])
+    apads, fence = scenario_apads(scenario, args)
+    assert [(p.system_id, p.home_lat_deg, p.home_lon_deg) for p in apads] == [
+        (a.system_id, a.home_lat_deg, a.home_lon_deg) for a in scenario.apads]
+    assert [p.params.sysid_thismav for p in apads] == [1, 2] and {p.params.speed_max_mps for p in apads} == {0.3}
+    assert len(fence) > 3  # the pool grown by the world's margin, as `vil run` gives the embedded aPads
+    args = build_parser(["sitl"]).parse_args(["sitl", "--scenario", "pool12x2", "--count", "1"])
+    assert [p.system_id for p in scenario_apads(scenario, args)[0]] == [1]
 
 
 def test_vil_sitl_without_home_or_scenario_starts_at_pool12s_home_and_says_so() -> None:
