@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from gcs.console.model import Snapshot
 from gcs.mission.scenario import Scenario
 from gcs.records.events import Event
-from gcs.records.replay import find_scenario, load_replay, read_events, run_files
+from gcs.records.replay import ReplayError, find_scenario, load_replay, read_events, run_files
 from mavlink_dialect import tlog
 from mussel_sim.geo import flat_m
 from mussel_sim.placement import load_area
@@ -131,6 +131,7 @@ class RunData:
 def load_run(run: str | Path, scenario: str | Path | None = None) -> RunData:
     """Everything a report shows of one run; `ReplayError` / `ScenarioError` on bad input."""
     files = run_files(run)
+    check_result(files.result, files.folder / "result.json")
     found = find_scenario(files, scenario)
     frames = load_replay(run, scenario).frames
     last = frames[-1]
@@ -167,6 +168,30 @@ def load_run(run: str | Path, scenario: str | Path | None = None) -> RunData:
         origin=_origin(found, tracks, outline),
         events=events,
     )
+
+
+def check_result(result: dict[str, object], path: Path) -> None:
+    """The fields of result.json a report reads have the types it reads them as (or are absent);
+    `ReplayError` naming the first that has not."""
+    def numbers(where: str, obj: object, keys: tuple[str, ...]) -> None:
+        if not isinstance(obj, dict):
+            raise ReplayError(f"{path}: {where.rstrip('.')} is {obj!r}, not a record")
+        for key in keys:
+            value = obj.get(key, 0.0)
+            if not isinstance(value, int | float) or isinstance(value, bool):
+                raise ReplayError(f"{path}: {where}{key} is {value!r}, not a number")
+
+    if "uptime" in result:
+        numbers("uptime.", result["uptime"], ("avg", "max", "min"))
+    numbers("", result, ("cost_m", "active_avg"))
+    for k, m in enumerate(as_list(result.get("mussels"))):
+        if not isinstance(m, dict) or type(m.get("id")) is not int or not isinstance(m.get("dockings", []), list):
+            raise ReplayError(f"{path}: mussels[{k}] is not an aMussel record (an int id, a list of dockings)")
+        numbers(f"mussels[{k}].", m, ("start_battery", "uptime_pct"))
+    for k, a in enumerate(as_list(result.get("apads"))):
+        numbers(f"apads[{k}].", a, ("cost_m", "travelled_m", "idle_share"))
+        phases = a.get("phase_s", {})
+        numbers(f"apads[{k}].phase_s.", phases, tuple(phases) if isinstance(phases, dict) else ())
 
 
 def indices(result: dict[str, object], last: Snapshot) -> Indices:
@@ -227,7 +252,7 @@ def _first_positions(frames: list[Snapshot]) -> tuple[NDArray[np.float64], NDArr
 def _mussels(frames: list[Snapshot], state: NDArray[np.uint8], result: dict[str, object],
              events: tuple[Event, ...]) -> tuple[MusselFacts, ...]:
     last = frames[-1]
-    from_result = {int(m["id"]): m for m in as_list(result.get("mussels")) if isinstance(m, dict) and "id" in m}
+    from_result = {m["id"]: m for m in as_list(result.get("mussels"))}  # checked: dicts with int ids
     docked_events: dict[int, int] = {}
     for ev in events:
         if ev.kind == "docked" and type(ev.fields.get("mussel")) is int:

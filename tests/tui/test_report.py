@@ -166,3 +166,11 @@ def test_bad_input_is_one_line(recorded_run: Path, tmp_path: Path, capsys: pytes
     assert main(["report", str(recorded_run), str(recorded_run)]) == 2  # several runs, no -o
     err = capsys.readouterr().err
     assert err.startswith("vil report:") and "-o" in err and err.count("\n") == 1
+    run = tmp_path / "run"
+    run.mkdir()
+    shutil.copy(recorded_run / "gcs.tlog", run / "gcs.tlog")
+    (run / "result.json").write_text('{"mussels": [{"id": 1, "uptime_pct": "high"}]}')
+    assert main(["report", str(run), "-o", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err == f"vil report: {run / 'result.json'}: mussels[0].uptime_pct is 'high', not a number\n"
+    assert not (tmp_path / "out").exists()
