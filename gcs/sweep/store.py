@@ -58,6 +58,7 @@ def atomic(path: Path) -> Iterator[Path]:
     tmp = Path(name)
     try:
         yield tmp
+        tmp.chmod(0o644)  # mkstemp makes it private; the sweep's files are for everyone who reads DIR
         os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)
