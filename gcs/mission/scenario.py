@@ -267,15 +267,19 @@ def resolve_scenario(name: str | Path) -> Path:
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file, found by `resolve_scenario` ("pool12" is missions/pool12.toml)."""
     path = resolve_scenario(path)
+    return scenario_from_data(path, read_toml(path))
+
+
+def read_toml(path: Path, error: type[ValueError] = ScenarioError, what: str = "scenario file") -> dict[str, Any]:
+    """A TOML file's tables, or `error` with one line (no such file, unreadable, not TOML); `vil sweep`'s spec too."""
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        return tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
-        raise ScenarioError(f"{path}: no such scenario file") from None
+        raise error(f"{path}: no such {what}") from None
     except (OSError, UnicodeDecodeError) as exc:
-        raise ScenarioError(f"{path}: cannot read: {exc}") from None
+        raise error(f"{path}: cannot read: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: not valid TOML: {exc}") from None
-    return scenario_from_data(path, data)
+        raise error(f"{path}: not valid TOML: {exc}") from None
 
 
 def scenario_from_data(path: Path, data: dict[str, Any]) -> Scenario:

@@ -27,14 +27,13 @@ from __future__ import annotations
 import itertools
 import math
 import re
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from gcs.mission.scenario import SEED_MAX
+from gcs.mission.scenario import SEED_MAX, read_toml
 
 MAX_CELLS = 100_000  # more is a typo in a range, not a sweep this machine should start
 MAX_SAMPLE = 10_000
@@ -72,14 +71,7 @@ class SweepSpec:
 def load_spec(path: str | Path) -> SweepSpec:
     """Read a sweep spec and check its shape (fields are checked against each scenario by `cells`)."""
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise SpecError(f"{path}: no such sweep spec") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SpecError(f"{path}: cannot read: {exc}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SpecError(f"{path}: not valid TOML: {exc}") from None
+    data = read_toml(path, SpecError, "sweep spec")
 
     def fail(what: str) -> SpecError:
         return SpecError(f"{path}: {what}")
