@@ -43,6 +43,13 @@ class BrailleCanvas:
         self.glyph_colour = np.zeros((self.height, self.width), np.int16)
         self.strong = np.zeros((self.height, self.width), bool)  # glyphs drawn bold and reversed
 
+    def copy(self) -> BrailleCanvas:
+        out = BrailleCanvas.__new__(BrailleCanvas)
+        out.width, out.height, out.palette = self.width, self.height, self.palette
+        for name in ("bits", "colour", "glyph", "glyph_colour", "strong"):
+            setattr(out, name, getattr(self, name).copy())
+        return out
+
     @property
     def dots_x(self) -> int:
         return 2 * self.width

@@ -79,6 +79,9 @@ class MapView(CachedLines):
         self.hits = NO_HITS
         self._frame: tuple[object, LocalFrame] | None = None
         self._outline: tuple[object, Floats, Floats] | None = None
+        self._view: _View | None = None
+        self._base: tuple[object, BrailleCanvas] | None = None
+        self._legend = ""
 
     def data_key(self) -> tuple[object, ...]:
         return id(self.snapshot), self.selected, self.hover
@@ -111,30 +114,29 @@ class MapView(CachedLines):
     def draw(self, width: int, height: int) -> list[Strip]:
         snap = self.snapshot
         assert snap is not None
-        canvas = BrailleCanvas(width, height, PALETTE)
         legend = SWARM_LEGEND if len(snap.apads) > 1 else LEGEND
-        if self.border_subtitle != legend:
-            self.border_subtitle = legend
+        if legend != self._legend:
+            self.border_subtitle = self._legend = legend
         frame = self._local_frame(snap)
         if frame is None:
+            canvas = BrailleCanvas(width, height, PALETTE)
             canvas.text(1, 0, "waiting for positions", 0)
             self.hits = NO_HITS
             return canvas.strips()
         ox, oy = self._outline_xy(snap, frame)
         mx, my = frame.to_local(snap.lat_deg, snap.lon_deg)
         pads = [(a, *frame.to_local(*_apad_points(a))) for a in snap.apads]
-        xs = np.concatenate([ox, mx, *[p[1] for p in pads]])
-        ys = np.concatenate([oy, my, *[p[2] for p in pads]])
-        ok = np.isfinite(xs) & np.isfinite(ys)
-        # The top row holds the longitude labels and the bottom row the scale bar: fit between.
-        fit_y = max(4 * (height - 2), 4)
-        x_lo, x_hi, y_lo, y_hi = xs[ok].min(), xs[ok].max(), ys[ok].min(), ys[ok].max()
-        # Braille dots are square: one scale (metres per dot) for both axes, with a margin.
-        m = max((x_hi - x_lo) / (canvas.dots_x - 3), (y_hi - y_lo) / (fit_y - 3), 1e-3) * 1.08
-        view = _View(frame, m, (x_lo + x_hi) / 2, (y_lo + y_hi) / 2, canvas.dots_x, canvas.dots_y)
-
-        _grid(canvas, view)
-        canvas.polyline(*view.dots(ox, oy), PALETTE.index(OUTLINE))
+        view = self._fit(frame, width, height, np.concatenate([ox, mx, *[p[1] for p in pads]]),
+                         np.concatenate([oy, my, *[p[2] for p in pads]]))
+        # The grid, its labels, the outline and the scale bar change only with the view.
+        base_key = (view, id(snap.outline_lat_deg))
+        if self._base is None or self._base[0] != base_key:
+            base = BrailleCanvas(width, height, PALETTE)
+            _grid(base, view)
+            base.polyline(*view.dots(ox, oy), PALETTE.index(OUTLINE))
+            _scale_bar(base, view.m)
+            self._base = (base_key, base)
+        canvas = self._base[1].copy()
         swarm = len(snap.apads) > 1
         for a, tx, ty in sorted(pads, key=lambda p: p[0].system_id == snap.selected):  # the selected on top
             colour = apad_colour(snap, a.system_id) if swarm else TRACE
@@ -149,8 +151,30 @@ class MapView(CachedLines):
                 if strong:
                     canvas.strong[hits.cy[i], hits.cx[i]] = True
                 canvas.text(int(hits.label_x[i]), int(hits.cy[i]), str(mussel), PALETTE.index(LABEL), strong)
-        _scale_bar(canvas, m)
         return canvas.strips()
+
+    def _fit(self, frame: LocalFrame, width: int, height: int, xs: Floats, ys: Floats) -> _View:
+        """The view of the last frame while everything stays inside it and it is not far too big
+        (a map that rescales with every move repaints every row); else one fitted afresh, with
+        room to spare when things were leaving it."""
+        ok = np.isfinite(xs) & np.isfinite(ys)
+        xs, ys = (xs[ok], ys[ok]) if ok.any() else (np.zeros(1), np.zeros(1))  # nothing yet: the origin
+        dots_x, dots_y = 2 * width, 4 * height
+        # The top row holds the longitude labels and the bottom row the scale bar: fit between.
+        fit_y = max(4 * (height - 2), 4)
+        x_lo, x_hi, y_lo, y_hi = xs.min(), xs.max(), ys.min(), ys.max()
+        # Braille dots are square: one scale (metres per dot) for both axes, with a margin.
+        m = max((x_hi - x_lo) / (dots_x - 3), (y_hi - y_lo) / (fit_y - 3), 1e-3) * 1.08
+        old = self._view
+        if old is not None and (old.frame, old.dots_x, old.dots_y) == (frame, dots_x, dots_y):
+            dx, dy = old.dots(xs, ys)
+            inside = dx.min() >= 0 and dx.max() < dots_x and dy.min() >= 4 and dy.max() < dots_y - 4
+            if inside and m > 0.6 * old.m:
+                return old
+            if not inside:
+                m *= 1.2
+        self._view = _View(frame, m, (x_lo + x_hi) / 2, (y_lo + y_hi) / 2, dots_x, dots_y)
+        return self._view
 
     def _markers(self, canvas: BrailleCanvas, view: _View, snap: Snapshot, mx: Floats, my: Floats) -> Hits:
         """Every aMussel not in a slot, by class (docked and pool candidates drawn last, on top)."""

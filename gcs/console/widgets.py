@@ -6,14 +6,12 @@ The map and the fleet table live in their own modules (`mapview`, `fleetview`); 
 
 from __future__ import annotations
 
-import math
+from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
-from rich.segment import Segment
-from rich.style import Style
 from rich.text import Text
 from textual.app import ComposeResult
+from textual.containers import HorizontalGroup
 from textual.strip import Strip
 from textual.widgets import Footer, Static
 from textual.widgets._footer import FooterKey
@@ -44,9 +42,6 @@ from mussel_sim.vocabulary import MusselState
 __all__ = ["APAD", "APAD_COLOURS", "GREEN", "LEGEND", "MARKER_COLOURS", "PURPLE", "RED", "SWARM_LEGEND",
            "Chart", "ConsoleFooter", "EventLog", "FleetTable", "MapView", "StatusPanel"]
 
-AXIS_STYLE = Style(color=AXIS)
-
-
 class Chart(CachedLines):
     """Time on x (mission minutes, over the whole mission), one quantity on y, labelled gutter."""
 
@@ -65,34 +60,30 @@ class Chart(CachedLines):
         return snap.hist_t_s.size, snap.mussel_ids.size, snap.duration_s, snap.selected, classes
 
     def draw(self, width: int, height: int) -> list[Strip]:
+        """One canvas for the gutter, the plot and the time axis (its rows are cached strips)."""
         snap = self.snapshot
         assert snap is not None
-        plot_w, plot_h = max(width - self.GUTTER, 1), max(height - 1, 1)
-        canvas = BrailleCanvas(plot_w, plot_h, PALETTE)
+        canvas = BrailleCanvas(width, height, PALETTE)
+        plot = _Plot(2 * self.GUTTER, max(2 * (width - self.GUTTER), 2), max(4 * (height - 1), 4))
         t = snap.hist_t_s
         t_hi = max(snap.duration_s, float(t[-1]) if t.size else 0.0, 1.0)
-        labels = self._plot(canvas, snap, t_hi)
-        gutter = [f"{labels[0]:>{self.GUTTER - 1}} ", *[" " * self.GUTTER] * (plot_h - 2),
-                  f"{labels[1]:>{self.GUTTER - 1}} "][:plot_h]
-        axis = f"0{mm_ss(t_hi / 2):^{max(plot_w - 6, 0)}}{mm_ss(t_hi):>5}"[:plot_w]
-        lines = []
-        for label, strip in zip(gutter, canvas.strips(), strict=False):
-            lines.append(Strip.join([Strip([Segment(label, AXIS_STYLE)], self.GUTTER), strip]))
-        lines.append(Strip([Segment(f"{' ' * self.GUTTER}{axis:<{plot_w}}", AXIS_STYLE)], width))
-        return lines
+        top, bottom = self._plot(canvas, plot, snap, t_hi)
+        axis = PALETTE.index(AXIS)
+        canvas.text(0, 0, f"{top:>{self.GUTTER - 1}}", axis)
+        canvas.text(0, max(height - 2, 0), f"{bottom:>{self.GUTTER - 1}}", axis)
+        plot_w = width - self.GUTTER
+        canvas.text(self.GUTTER, height - 1, f"0{mm_ss(t_hi / 2):^{max(plot_w - 6, 0)}}{mm_ss(t_hi):>5}"[:plot_w], axis)
+        return canvas.strips()
 
-    def _x(self, canvas: BrailleCanvas, t: NDArray[np.float64], t_hi: float) -> NDArray[np.float64]:
-        return scale_to(t, 0.0, t_hi, canvas.dots_x)
-
-    def _plot(self, canvas: BrailleCanvas, snap: Snapshot, t_hi: float) -> tuple[str, str]:
+    def _plot(self, canvas: BrailleCanvas, plot: _Plot, snap: Snapshot, t_hi: float) -> tuple[str, str]:
         t = snap.hist_t_s
-        x = self._x(canvas, t, t_hi)
+        x = scale_to(t, 0.0, t_hi, plot.w) + plot.x0
         # One point per dot column at most: decimate long histories before drawing.
-        step = max(int(t.size // max(canvas.dots_x, 1)), 1)
+        step = max(int(t.size // plot.w), 1)
         sel = slice(None, None, step)
         if self.quantity == "battery":
-            y_of = lambda v: scale_to(v, 0.0, 100.0, canvas.dots_y, flip=True)  # noqa: E731
-            dashes = np.arange(0, canvas.dots_x, 3, dtype=np.float64)  # the pool threshold, dotted
+            y_of = lambda v: scale_to(v, 0.0, 100.0, plot.h, flip=True)  # noqa: E731
+            dashes = np.arange(plot.x0, plot.x0 + plot.w, 3, dtype=np.float64)  # the pool threshold, dotted
             canvas.dots(dashes, np.full_like(dashes, y_of(np.array([100 * snap.pool_threshold]))[0]),
                         PALETTE.index(OUTLINE))
             hist = 100.0 * snap.hist_battery[sel].astype(np.float64)
@@ -108,14 +99,23 @@ class Chart(CachedLines):
             return "100%", "0%"
         if self.quantity == "active":
             n = max(snap.mussel_ids.size, 1)
-            canvas.polyline(x[sel], scale_to(snap.hist_active[sel].astype(np.float64), 0, n, canvas.dots_y, True),
+            canvas.polyline(x[sel], scale_to(snap.hist_active[sel].astype(np.float64), 0, n, plot.h, True),
                             PALETTE.index(GREEN))
             return str(n), "0"
         v = snap.hist_apad_v[sel]
         lo, hi = 10.5, 16.0  # the aPad pack, empty to full
         colour = apad_colour(snap, snap.selected)  # the selected aPad's
-        canvas.polyline(x[sel], scale_to(v, lo, hi, canvas.dots_y, True), PALETTE.index(colour))
+        canvas.polyline(x[sel], scale_to(v, lo, hi, plot.h, True), PALETTE.index(colour))
         return f"{hi:g}V", f"{lo:g}V"
+
+
+@dataclass(frozen=True)
+class _Plot:
+    """Where a chart plots, in its canvas's dots: from column x0, w wide, h tall from the top."""
+
+    x0: int
+    w: int
+    h: int
 
 
 class StatusPanel(Static):
@@ -187,7 +187,7 @@ class EventLog(Static):
 
 
 class ConsoleFooter(Footer):
-    """The key bindings, compact, on as many rows as the width needs: every key stays visible."""
+    """The key bindings, compact, on as many rows as the width needs: every key stays visible whole."""
 
     def __init__(self) -> None:
         super().__init__(compact=True, show_command_palette=False)
@@ -195,19 +195,30 @@ class ConsoleFooter(Footer):
 
     def compose(self) -> ComposeResult:
         keys = [k for k in super().compose() if isinstance(k, FooterKey)]
-        self._rows = self._rows_for(keys)
-        if self._rows > 1:  # a grid, row by row, so the columns line up
-            self.styles.layout = "grid"
-            self.styles.grid_size_columns = math.ceil(len(keys) / self._rows)
-        else:
-            self.styles.layout = "horizontal"
+        rows = self._rows_for(keys)
+        self._rows = len(rows)
+        self.styles.layout = "vertical" if self._rows > 1 else "horizontal"
         self.styles.height = self._rows
-        yield from keys
+        if self._rows == 1:
+            yield from keys
+        else:
+            for row in rows:
+                yield HorizontalGroup(*row)
 
-    def _rows_for(self, keys: list[FooterKey]) -> int:
-        need = sum(len(k.key_display) + len(k.description) + 2 for k in keys)  # compact: "k desc "
-        return max(1, math.ceil(need / max(self.app.size.width - 2, 1)))
+    def _rows_for(self, keys: list[FooterKey]) -> list[list[FooterKey]]:
+        """The keys in order, a row filled before the next begins."""
+        width = max(self.app.size.width - 1, 1)
+        rows: list[list[FooterKey]] = [[]]
+        used = 0
+        for key in keys:
+            need = len(key.key_display) + len(key.description) + 2  # compact: "k description "
+            if rows[-1] and used + need > width:
+                rows.append([])
+                used = 0
+            rows[-1].append(key)
+            used += need
+        return rows
 
     def on_resize(self) -> None:
-        if self._rows_for(list(self.query(FooterKey))) != self._rows:
+        if len(self._rows_for(list(self.query(FooterKey)))) != self._rows:
             self.call_after_refresh(self.recompose)
