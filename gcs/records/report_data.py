@@ -25,6 +25,8 @@ from mussel_sim.placement import load_area
 from mussel_sim.vocabulary import MusselState
 
 UNHEARD = 255  # in `RunData.state`: no report from this aMussel yet
+# result.json's per-aPad shares of the mission time by what the aPad was doing (newer runs)
+APAD_SHARES = ("travelling_share", "docking_share", "holding_share")
 
 
 @dataclass(frozen=True)
@@ -75,6 +77,7 @@ class MusselFacts:
     uptime_pct: float
     dockings: int
     depleted_s: float  # mission seconds spent DEPLETED
+    first_depleted_s: float | None  # the mission second it first ran flat; None: never
     state_s: dict[str, float]  # mission seconds per state (lower-case state name)
     end_state: str
     apad: int  # the aPad whose share it ended in (0: none known)
@@ -189,7 +192,7 @@ def check_result(result: dict[str, object], path: Path) -> None:
             raise ReplayError(f"{path}: mussels[{k}] is not an aMussel record (an int id, a list of dockings)")
         numbers(f"mussels[{k}].", m, ("start_battery", "uptime_pct"))
     for k, a in enumerate(as_list(result.get("apads"))):
-        numbers(f"apads[{k}].", a, ("cost_m", "travelled_m", "idle_share"))
+        numbers(f"apads[{k}].", a, ("cost_m", "travelled_m", "idle_share", *APAD_SHARES))
         phases = a.get("phase_s", {})
         numbers(f"apads[{k}].phase_s.", phases, tuple(phases) if isinstance(phases, dict) else ())
 
@@ -252,6 +255,7 @@ def _first_positions(frames: list[Snapshot]) -> tuple[NDArray[np.float64], NDArr
 def _mussels(frames: list[Snapshot], state: NDArray[np.uint8], result: dict[str, object],
              events: tuple[Event, ...]) -> tuple[MusselFacts, ...]:
     last = frames[-1]
+    t_s = last.hist_t_s
     from_result = {m["id"]: m for m in as_list(result.get("mussels"))}  # checked: dicts with int ids
     docked_events: dict[int, int] = {}
     for ev in events:
@@ -275,6 +279,7 @@ def _mussels(frames: list[Snapshot], state: NDArray[np.uint8], result: dict[str,
             uptime_pct=float(rec.get("uptime_pct", last.uptime_pct[c])),
             dockings=len(dockings) if "dockings" in rec else docked_events.get(mussel, 0),
             depleted_s=state_s.get(MusselState.DEPLETED.name.lower(), 0.0),
+            first_depleted_s=_first_depleted(rec, t_s, state[:, c]),
             state_s=state_s,
             end_state=MusselState(int(last.state[c])).name.lower() if heard.size else "never heard",
             apad=int(owner[c]) if owner is not None else single,
@@ -282,6 +287,15 @@ def _mussels(frames: list[Snapshot], state: NDArray[np.uint8], result: dict[str,
             end_lat_deg=float(last.lat_deg[c]), end_lon_deg=float(last.lon_deg[c]),
         ))
     return tuple(out)
+
+
+def _first_depleted(rec: dict[str, Any], t_s: NDArray[np.float64], state: NDArray[np.uint8]) -> float | None:
+    """result.json's `first_depleted_s` when the run wrote it (exact), else the first 1 Hz sample DEPLETED."""
+    if "first_depleted_s" in rec:
+        given = rec["first_depleted_s"]
+        return float(given) if isinstance(given, int | float) else None
+    flat = np.flatnonzero(state == MusselState.DEPLETED)
+    return float(t_s[flat[0]]) if flat.size else None
 
 
 def _state_seconds(rec: dict[str, Any]) -> dict[str, float] | None:

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gcs.records.report_data import UNHEARD, RunData, as_list
+from gcs.records.report_data import APAD_SHARES, UNHEARD, RunData, as_list
 from gcs.records.report_style import (
     BLACK,
     GREY,
@@ -18,6 +18,7 @@ from gcs.records.report_style import (
     apad_colour,
     figure,
     grid,
+    ink,
     palette,
     save,
     series_style,
@@ -144,7 +145,7 @@ def uptime_png(data: RunData, path: Path) -> Path:
             ax.annotate(f"{m.depleted_s / 60:.0f} min", (k, m.uptime_pct + 9), ha="center", fontsize=6)
         if not many:
             ax.annotate(f"{m.dockings}", (k, 2), ha="center", fontsize=8, fontweight="bold",
-                        color="white" if not m.never_collected else BLACK)
+                        color=ink(colour) if not m.never_collected else BLACK)
     avg = data.indices.avg_uptime_pct
     ax.axhline(avg, color=palette()[6], ls="--", lw=1.2)
     handles: list[Artist] = [Patch(color=colour_of[a], label=f"aPad {a}'s share" if data.swarm else "collected")
@@ -166,28 +167,41 @@ def uptime_png(data: RunData, path: Path) -> Path:
 
 
 def phases_png(data: RunData, path: Path) -> Path | None:
-    """Where each aPad's time went (result.json's per-aPad `phase_s`); None when the run has none."""
+    """Where each aPad's time went: by the loop's phase (result.json's per-aPad `phase_s`) and, for
+    newer runs, by what the aPad was doing (travelling, docking, holding shares). None without either."""
     apads = [a for a in as_list(data.result.get("apads")) if isinstance(a, dict) and isinstance(a.get("phase_s"), dict)]
     if not apads:
         return None
-    phases = list(dict.fromkeys(p for a in apads for p in a["phase_s"]))
-    fig, ax = figure(8.0, 1.4 + 0.5 * len(apads))
-    grid(ax)
-    left = np.zeros(len(apads))
+    panels = [{p: float(a["phase_s"].get(p, 0.0)) / 60.0 for p in dict.fromkeys(p for b in apads for p in b["phase_s"])}
+              for a in apads]
+    titles = ["by the loop's phase"]
+    activity = [a for a in apads if all(k in a for k in APAD_SHARES)]
+    groups = [panels]
+    if len(activity) == len(apads):
+        groups.append([{k.removesuffix("_share"): float(a[k]) * data.end_s / 60.0 for k in APAD_SHARES}
+                       for a in apads])
+        titles.append("by what the aPad was doing")
+    fig, axes = figure(8.0, (1.0 + 0.45 * len(apads)) * len(groups) + 0.4, nrows=len(groups), squeeze=False)
     rows = np.arange(len(apads))
-    drawn = 0
-    for phase in phases:
-        width = np.array([float(a["phase_s"].get(phase, 0.0)) for a in apads]) / 60.0
-        if width.any():  # the loop's instant phases (planning) take no time
-            bars = ax.barh(rows, width, left=left, color=series_style(drawn).colour, height=0.6, label=phase)
-            ax.bar_label(bars, [f"{w:.0f}" if w >= 2 else "" for w in width], label_type="center", fontsize=8,
-                         color="white")
-            drawn += 1
-        left += width
-    ax.set_yticks(rows, [f"aPad {a.get('sysid', k + 1)}" for k, a in enumerate(apads)])
-    ax.invert_yaxis()
-    ax.set(xlabel="minutes (the numbers in the bars)", title=f"Each aPad's time per phase — {data.title}")
-    ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.0, 0.5))
+    for ax, group, title in zip(axes[:, 0], groups, titles, strict=True):
+        grid(ax)
+        left = np.zeros(len(apads))
+        drawn = 0
+        for key in group[0]:
+            width = np.array([minutes_of.get(key, 0.0) for minutes_of in group])
+            if width.any():  # the loop's instant phases (planning) take no time
+                colour = series_style(drawn).colour
+                bars = ax.barh(rows, width, left=left, color=colour, height=0.6, label=key)
+                ax.bar_label(bars, [f"{w:.0f}" if w >= 2 else "" for w in width], label_type="center", fontsize=8,
+                             color=ink(colour))
+                drawn += 1
+            left += width
+        ax.set_yticks(rows, [f"aPad {a.get('sysid', k + 1)}" for k, a in enumerate(apads)])
+        ax.invert_yaxis()
+        ax.set_title(title, fontsize=10)
+        ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.0, 0.5))
+    axes[-1, 0].set_xlabel("minutes (the numbers in the bars)")
+    fig.suptitle(f"Each aPad's time — {data.title}")
     return save(fig, path)
 
 

@@ -85,7 +85,8 @@ def _mussel(data: RunData, k: int) -> dict[str, Any]:
         "properties": {
             "kind": "amussel", "amussel_id": m.id, "apad": m.apad or None,
             "uptime_pct": _number(m.uptime_pct), "dockings": m.dockings, "never_collected": m.never_collected,
-            "depleted_s": _number(m.depleted_s, 1), "start_battery": _number(m.start_battery, 4),
+            "depleted_s": _number(m.depleted_s, 1), "first_depleted_s": m.first_depleted_s,
+            "start_battery": _number(m.start_battery, 4),
             "end_battery": _number(m.end_battery, 4), "end_state": m.end_state,
             "state_s": {state: _number(s, 1) for state, s in m.state_s.items()},
             "end_position": _position(m.end_lon_deg, m.end_lat_deg) if end else None,

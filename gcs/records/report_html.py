@@ -11,7 +11,7 @@ from pathlib import Path
 
 from gcs.mission.results import PAPER_TABLE_II
 from gcs.records.events import Event
-from gcs.records.report_data import RunData, as_list
+from gcs.records.report_data import APAD_SHARES, RunData, as_list
 from missiontime import mm_ss
 
 MAX_EVENTS = 3000  # rows of the timeline; a longer log is cut, and the page says so
@@ -135,11 +135,12 @@ def _mussel_table(data: RunData) -> str:
     rows, flagged = [], []
     for m in data.mussels:
         notes = [w for w, on in (("never collected", m.never_collected), ("depleted", m.depleted)) if on]
+        first = "-" if m.first_depleted_s is None else mm_ss(m.first_depleted_s)
         rows.append([m.id, m.apad or "-", _pct(m.start_battery), _pct(m.end_battery), f"{m.uptime_pct:.1f}",
-                     m.dockings, f"{m.depleted_s / 60:.1f}", m.end_state, ", ".join(notes)])
+                     m.dockings, first, f"{m.depleted_s / 60:.1f}", m.end_state, ", ".join(notes)])
         flagged.append(bool(notes))
-    headers = ("aMussel", "aPad", "start battery %", "end battery %", "uptime %", "dockings", "depleted min",
-               "state at the end", "notes")
+    headers = ("aMussel", "aPad", "start battery %", "end battery %", "uptime %", "dockings", "ran flat at",
+               "depleted min", "state at the end", "notes")
     return table(headers, rows, "Highlighted: aMussels never collected or depleted for a while.", flagged=flagged,
                  text_right=2)
 
@@ -147,11 +148,16 @@ def _mussel_table(data: RunData) -> str:
 def _apad_table(data: RunData) -> str:
     apads = [a for a in as_list(data.result.get("apads")) if isinstance(a, dict)]
     if apads:
+        shares = [k for k in APAD_SHARES if all(k in a for a in apads)]  # newer runs: time by activity
         rows = [[a.get("sysid", "-"), len(as_list(a.get("mussels"))), f"{float(a.get('cost_m', 0.0)):.1f}",
                  f"{float(a.get('travelled_m', 0.0)):.1f}", a.get("dockings", "-"), a.get("cycles", "-"),
-                 f"{100 * float(a.get('idle_share', 0.0)):.0f}", a.get("end_reason", "-")] for a in apads]
-        return table(("aPad", "aMussels served", "cost m", "travelled m", "dockings", "cycles", "idle %", "ended"),
-                     rows, "From result.json.", text_right=1)
+                 f"{100 * float(a.get('idle_share', 0.0)):.0f}", *(f"{100 * float(a[k]):.0f}" for k in shares),
+                 a.get("end_reason", "-")] for a in apads]
+        headers = ("aPad", "aMussels served", "cost m", "travelled m", "dockings", "cycles", "idle %",
+                   *(k.replace("_share", " %") for k in shares), "ended")
+        return table(headers, rows, "From result.json; idle: waiting for enough charging candidates"
+                     + ("; travelling, docking, holding: the aPad's time by what it was doing." if shares else "."),
+                     text_right=1)
     rows = [[t.system_id, f"{float(t.cost_m[-1]) if t.cost_m.size else 0.0:.1f}", t.t_s.size] for t in data.tracks]
     return table(("aPad", "cost m", "seconds heard"), rows, "From the replayed log (the run wrote no result.json).")
 

@@ -61,6 +61,12 @@ def state_colours() -> dict[MusselState, tuple[float, float, float]]:
             MusselState.DOCKED: c[4], MusselState.SINKING: c[9], MusselState.DEPLETED: c[8]}
 
 
+def ink(colour: tuple[float, float, float]) -> str:
+    """Black or white, whichever reads better on `colour` (by its relative luminance)."""
+    r, g, b = colour[:3]
+    return BLACK if 0.2126 * r + 0.7152 * g + 0.0722 * b > 0.45 else "white"
+
+
 def apad_colour(system_id: int) -> tuple[float, float, float]:
     """An aPad keeps its colour in every figure (system ids count from 1)."""
     c = palette()

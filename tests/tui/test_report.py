@@ -156,6 +156,9 @@ def test_depleted_and_never_collected_amussels_are_marked(compared: Path) -> Non
     assert all(p["never_collected"] for p in points)  # strategy none collects nobody
     depleted = [p["amussel_id"] for p in points if p["depleted_s"] > 0]
     assert depleted and all(p["end_state"] == "depleted" for p in points if p["amussel_id"] in depleted)
+    assert all(0 < p["first_depleted_s"] < 360 for p in points if p["amussel_id"] in depleted)
+    assert all(p["first_depleted_s"] is None for p in points if p["amussel_id"] not in depleted)
+    assert all(sum(p["state_s"].values()) == pytest.approx(360, abs=2) for p in points)  # the whole mission
     assert f'<tr class="flag"><td class="text">{depleted[0]}</td>' in text
     assert "never collected, depleted" in text
 
