@@ -31,6 +31,14 @@ HEADER = f"{'id':>5}  {'state':<9} {'battery %':>9} {'uptime %':>9}"
 _STATE_AT, _STATE_END = 7, 16  # where the state column sits in a row's text
 
 
+class MusselMessage(Message):
+    """An aMussel the operator chose (in the table, on the map)."""
+
+    def __init__(self, mussel_id: int) -> None:
+        super().__init__()
+        self.mussel_id = mussel_id
+
+
 @lru_cache(maxsize=64)
 def _coloured(base: Style, colour: str) -> Style:
     return base + Style(color=colour)
@@ -56,12 +64,8 @@ class FleetTable(ScrollView, can_focus=True):
 
     cursor_row: reactive[int] = reactive(0, init=False)
 
-    class Selected(Message):
+    class Selected(MusselMessage):
         """The cursor moved to another aMussel."""
-
-        def __init__(self, mussel_id: int) -> None:
-            super().__init__()
-            self.mussel_id = mussel_id
 
     def __init__(self, *, id: str | None = None) -> None:
         super().__init__(id=id)

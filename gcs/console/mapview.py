@@ -15,7 +15,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 from textual import events
-from textual.message import Message
 from textual.strip import Strip
 
 from gcs.console.canvas import BrailleCanvas, CachedLines
@@ -32,6 +31,7 @@ from gcs.console.colours import (
     TRACE,
     apad_colour,
 )
+from gcs.console.fleetview import MusselMessage
 from gcs.console.model import ApadSnapshot, Snapshot
 from mussel_sim.geo import LocalFrame
 
@@ -65,12 +65,8 @@ class MapView(CachedLines):
     """With several aPads each has its own colour, its trace drawn in it and the selected one
     highlighted; an aMussel shows the number of the aPad whose share it is, in its class colour."""
 
-    class Picked(Message):
+    class Picked(MusselMessage):
         """The operator clicked an aMussel on the map."""
-
-        def __init__(self, mussel_id: int) -> None:
-            super().__init__()
-            self.mussel_id = mussel_id
 
     def __init__(self, *, id: str | None = None) -> None:
         super().__init__(id=id)
