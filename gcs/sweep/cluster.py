@@ -67,7 +67,8 @@ def run_cells(
     with Progress(*columns, console=console, transient=False) as progress:
         task = progress.add_task("sweep", total=len(cells))
         futures = {
-            client.submit(run_cell, cell, runs_dir, key=f"vil-sweep-{cell.key}", retries=0): cell
+            client.submit(run_cell, cell, runs_dir, key=f"vil-sweep-{cell.key}", retries=0,
+                          priority=_work(cell)): cell
             for cell in cells
         }
         for future in as_completed(futures):
@@ -81,3 +82,10 @@ def run_cells(
             future.release()
             progress.advance(task)
     return outcome
+
+
+def _work(cell: Cell) -> int:
+    """A mission's rough cost, aMussel-seconds: the longest start first, so no worker is left with a
+    long one at the end while the others idle."""
+    s = cell.scenario
+    return int(s.fleet.count * s.mission.duration_s)

@@ -107,8 +107,9 @@ def row(record: dict[str, Any], swept: tuple[str, ...]) -> dict[str, Any]:
     clash = sorted(set(values) & set(figures))
     if clash:
         raise StoreError(f"swept field {clash[0]} has the name of a result column")
+    kept = {"run_dir": record["result"]["out_dir"]} if record["result"].get("out_dir") else {}  # --keep-runs
     return {"cell": record["key"], "scenario": record["scenario"], "strategy": record["strategy"],
-            "seed": record["seed"], **values, **figures}
+            "seed": record["seed"], **values, **figures, **kept}
 
 
 def _scalar(value: Any) -> Any:
