@@ -52,16 +52,16 @@ __all__ = ["DEFAULT_RATES_HZ", "PHYSICS_HZ", "Command", "Geofence", "MusselTable
 PHYSICS_HZ = 10.0
 # One for every vehicle of the process: the aPads of a swarm get the same status datagrams (hot_decode.SharedDecode).
 _STATUS_DECODE = hot_decode.SharedDecode()
-_last_checked: tuple[hot_decode.Split, CheckedStatuses] | None = None
+_last_checked: tuple[hot_decode.HotFrames, CheckedStatuses] | None = None
 
 
 def _checked(split: hot_decode.Split) -> CheckedStatuses:
-    """The fix table's checks of a shared split, made once for all the aPads that got it."""
+    """The fix table's checks of shared status frames, made once for all the aPads that got them."""
     global _last_checked
     last = _last_checked
-    if last is None or last[0] is not split:
+    if last is None or last[0] is not split.hot:
         f = split.hot.fields
-        last = _last_checked = split, checked_statuses(f["mussel_id"], f["lat"], f["lon"], f["state"])
+        last = _last_checked = split.hot, checked_statuses(f["mussel_id"], f["lat"], f["lon"], f["state"])
     return last[1]
 MessageHandler = Callable[[Any], None]  # a decoded pymavlink message in
 

@@ -20,7 +20,7 @@ import struct
 from bisect import bisect_right
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
-from itertools import accumulate
+from itertools import accumulate, repeat, starmap
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -158,19 +158,113 @@ def pack_records(spec: HotSpec, columns: Mapping[str, ArrayLike]) -> np.ndarray:
     return rec
 
 
+# Below this many messages, struct per message beats numpy's fixed cost per call (a 12-aMussel pool's
+# statuses: 3x); the numpy path wins from about this many on (bay120's 120, stress240's 240).
+FEW_ROWS = 64
+_HEADER = struct.Struct("<BBBBBBBHB")  # MAVLink_header.pack's layout
+
+
+@dataclass(frozen=True)
+class Encoded:
+    """A batch as frames, and the records they were packed from (`spec.dtype`: wire types, full
+    payloads), which is exactly what a receiver decodes from those frames."""
+
+    spec: HotSpec
+    frames: list[bytes]
+    records: np.ndarray
+    system_id: int
+    component_id: int
+    first_seq: int
+
+
+@dataclass(frozen=True)
+class Packed:
+    """The last batch this process encoded and then cut into datagrams (`pack_datagrams`).
+
+    A party of the same process that receives those very datagram objects (an in-memory transport
+    hands on the objects it was given) can take `encoded.records` instead of parsing the bytes back
+    (`hot_decode.SharedDecode`): the same values, without the work, as the GCS router takes the
+    fleet's columns. Identity, not equality: a kept object's id cannot be reused.
+    """
+
+    datagrams: tuple[bytes, ...]
+    encoded: Encoded
+
+
+_last_encoded: Encoded | None = None
+last_packed: Packed | None = None  # read once by a receiver: one assignment, so a thread never sees half
+
+
 def encode_batch(codec: Codec, spec: HotSpec, columns: Mapping[str, ArrayLike]) -> list[bytes]:
     """n MAVLink 2 frames, byte for byte what `codec.encode` gives one message at a time (same seq run).
 
     `columns`: every field of `spec` by name, as (n,) arrays or scalars for all. ValueError (naming
     the field) for a value struct.pack would refuse; then no sequence number is used.
     """
-    rec = pack_records(spec, columns)  # validate everything before taking sequence numbers
+    global _last_encoded
+    if codec.mav.signing.sign_outgoing:  # SHA-256 per frame: pymavlink's path, one by one
+        rec = pack_records(spec, columns)
+        cols = [rec[f].tolist() for f in spec.fieldnames]
+        return [codec.encode(spec.cls(*row)) for row in zip(*cols, strict=True)]
+    payloads = _struct_payloads(spec, columns)
+    if payloads is not None:
+        rec = np.frombuffer(b"".join(payloads), spec.dtype)
+        first = codec.next_seq(len(payloads))
+        frames = _frames_few(spec, payloads, first, codec.system_id, codec.component_id)
+    else:
+        rec = pack_records(spec, columns)  # validate everything before taking sequence numbers
+        first = codec.next_seq(len(rec))
+        frames = _frames_many(spec, rec, first, codec.system_id, codec.component_id)
+    _last_encoded = Encoded(spec, frames, rec, codec.system_id, codec.component_id, first)
+    return frames
+
+
+def _struct_payloads(spec: HotSpec, columns: Mapping[str, ArrayLike]) -> list[bytes] | None:
+    """Full payloads packed by struct, one per message, when the batch is small and plain (1-D arrays of
+    integers or doubles, Python scalars); None otherwise, or if struct refuses a value: the numpy path
+    then decides (it refuses exactly what struct refuses, naming the field)."""
+    if columns.keys() != set(spec.fieldnames):
+        return None  # the numpy path says which field is missing or unknown
+    n = -1
+    cols: list[Iterable[object]] = []
+    for name in spec.dtype.names or ():  # wire order, as the struct packs
+        value = columns[name]
+        if isinstance(value, np.ndarray):
+            if value.ndim != 1 or (value.dtype.kind not in "iub" and value.dtype != np.float64):
+                return None  # float32 keeps its bits only on the numpy path; object arrays go there too
+            if n not in (-1, len(value)) or len(value) >= FEW_ROWS:
+                return None
+            n = len(value)
+            cols.append(value.tolist())
+        elif type(value) in (int, float):
+            cols.append(repeat(value))
+        else:
+            return None
+    if n <= 0:
+        return None  # scalars only, or an empty batch
+    try:
+        return list(starmap(spec.cls.unpacker.pack, zip(*cols, strict=False)))  # scalars repeat for ever
+    except (struct.error, OverflowError, TypeError, ValueError):
+        return None
+
+
+def _frames_few(spec: HotSpec, payloads: list[bytes], first: int, system_id: int, component_id: int) -> list[bytes]:
+    """One frame per payload, as `MAVLink_message._pack` makes it: trailing zeros cut (one byte kept)."""
+    extra = bytes([spec.crc_extra])
+    low, high = spec.msg_id & 0xFFFF, spec.msg_id >> 16
+    frames = []
+    for k, payload in enumerate(payloads):
+        cut = payload.rstrip(b"\0") or payload[:1]
+        body = _HEADER.pack(MAGIC_V2, len(cut), 0, 0, (first + k) & 0xFF, system_id, component_id, low, high) + cut
+        frames.append(body + crc(extra, crc(body[1:])).to_bytes(2, "little"))
+    return frames
+
+
+def _frames_many(spec: HotSpec, rec: np.ndarray, first: int, system_id: int, component_id: int) -> list[bytes]:
+    """`_frames_few` for many messages at once: numpy per column, the CRC call per frame iterated in C."""
     n = len(rec)
     if n == 0:
         return []
-    if codec.mav.signing.sign_outgoing:  # SHA-256 per frame: pymavlink's path, one by one
-        cols = [rec[f].tolist() for f in spec.fieldnames]
-        return [codec.encode(spec.cls(*row)) for row in zip(*cols, strict=True)]
     size = spec.size
     payload = rec.view(np.uint8).reshape(n, size)
     # MAVLink 2 drops trailing zero bytes of the payload but keeps the first (MAVLink_message._pack)
@@ -178,10 +272,10 @@ def encode_batch(codec: Codec, spec: HotSpec, columns: Mapping[str, ArrayLike]) 
     keep[:, 0] = True
     plen = size - keep[:, ::-1].argmax(axis=1)
     head = np.empty((n, HEADER), np.uint8)
-    ids = bytes([MAGIC_V2, 0, 0, 0, 0, codec.system_id, codec.component_id]) + spec.msg_id.to_bytes(3, "little")
+    ids = bytes([MAGIC_V2, 0, 0, 0, 0, system_id, component_id]) + spec.msg_id.to_bytes(3, "little")
     head[:] = np.frombuffer(ids, np.uint8)
     head[:, 1] = plen
-    head[:, 4] = (codec.next_seq(n) + np.arange(n)) % 256
+    head[:, 4] = (first + np.arange(n)) % 256
     lengths = [int(plen[0])] if plen.min() == plen.max() else np.unique(plen).tolist()
     frames: list[bytes] = []
     order = []
@@ -212,7 +306,11 @@ def slices(data: bytes, starts: np.ndarray, ends: np.ndarray) -> Iterator[bytes]
 
 
 def pack_datagrams(frames: Iterable[bytes], max_bytes: int = DATAGRAM_BYTES) -> list[bytes]:
-    """Whole frames joined into datagrams of at most `max_bytes`, in order; a frame is never split."""
+    """Whole frames joined into datagrams of at most `max_bytes`, in order; a frame is never split.
+    The datagrams of the batch `encode_batch` made last are remembered with its records (`Packed`)."""
+    global last_packed
+    encoded = _last_encoded
+    given = frames
     frames = list(frames)
     sizes = list(map(len, frames))
     if sizes and max(sizes) > max_bytes:
@@ -224,4 +322,6 @@ def pack_datagrams(frames: Iterable[bytes], max_bytes: int = DATAGRAM_BYTES) -> 
         stop = bisect_right(ends, (ends[start - 1] if start else 0) + max_bytes, lo=start)
         datagrams.append(b"".join(frames[start:stop]))
         start = stop
+    if encoded is not None and given is encoded.frames and datagrams:
+        last_packed = Packed(tuple(datagrams), encoded)
     return datagrams

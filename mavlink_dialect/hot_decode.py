@@ -17,6 +17,7 @@ from itertools import repeat
 
 import numpy as np
 
+from mavlink_dialect import hot
 from mavlink_dialect import subcultron as mavlink
 from mavlink_dialect.codec import CodecStats
 from mavlink_dialect.hot import (
@@ -138,12 +139,15 @@ class SharedDecode:
     router hands every aPad the same bytes objects, and each aPad decoding the fleet's 120 statuses
     again was a fifth of a bay120 run. The last answer is kept with the datagrams it was for and
     given again when a call brings those same objects (identity, not equality: a kept object's id
-    cannot be reused, and bytes do not change). Each caller's `stats` is still counted. The arrays
-    of a shared answer are read-only: one party must not change another's view.
+    cannot be reused, and bytes do not change). Datagrams this process packed itself
+    (`hot.last_packed`: an in-memory transport hands on the sender's objects) are not parsed at
+    all: their records are the values the bytes hold. Each caller's `stats` is still counted. The
+    arrays of a shared answer are read-only: one party must not change another's view.
     """
 
     def __init__(self) -> None:
         self._last: tuple[list[bytes], HotSpec, bool, Split] | None = None
+        self._packed: tuple[hot.Packed, HotFrames] | None = None
 
     def decode(
         self, datagrams: list[bytes], spec: HotSpec = AMUSSEL_STATUS, stats: CodecStats | None = None,
@@ -154,14 +158,53 @@ class SharedDecode:
                 and all(map(operator.is_, last[0], datagrams))):
             split = last[3]
         else:
-            split = decode_datagrams(datagrams, spec, keep_raw=keep_raw)
-            for column in (*split.hot.fields.values(), split.hot.src_system, split.hot.src_component, split.hot.seq):
-                column.flags.writeable = False
-            self._last = (list(datagrams), spec, keep_raw, split)
+            split = self._sent_here(datagrams, spec) or self._decoded(datagrams, spec, keep_raw)
+            self._last = (list(datagrams), spec, split.hot.raw is not None, split)
         if stats is not None:
             stats.bad_data += split.bad
             stats.received += len(split.hot)
         return split
+
+    @staticmethod
+    def _decoded(datagrams: list[bytes], spec: HotSpec, keep_raw: bool) -> Split:
+        split = decode_datagrams(datagrams, spec, keep_raw=keep_raw)
+        _read_only(split.hot)
+        return split
+
+    def _sent_here(self, datagrams: list[bytes], spec: HotSpec) -> Split | None:
+        """The split of `datagrams` if they hold the batch this process packed last, one run of the very
+        objects, and nothing else of `spec` (else None: decode them all, the arrival order is theirs)."""
+        packed = hot.last_packed
+        if packed is None or packed.encoded.spec is not spec:
+            return None
+        run = packed.datagrams
+        at = next((i for i, d in enumerate(datagrams) if d is run[0]), -1)
+        if at < 0 or not all(map(operator.is_, run, datagrams[at:at + len(run)])):
+            return None
+        kept = self._packed
+        if kept is None or kept[0] is not packed:
+            kept = self._packed = (packed, _frames_of(packed.encoded))
+        rest = decode_datagrams(datagrams[:at] + datagrams[at + len(run):], spec) if len(run) < len(datagrams) else None
+        if rest is None:
+            return Split(kept[1], [], 0)
+        return None if len(rest.hot) else Split(kept[1], rest.others, rest.bad)
+
+
+def _frames_of(encoded: hot.Encoded) -> HotFrames:
+    """What decoding an encoded batch's frames gives, from the records they were packed from."""
+    n = len(encoded.records)
+    frames = HotFrames(
+        {f: encoded.records[f] for f in encoded.spec.fieldnames},
+        np.full(n, encoded.system_id, np.uint8), np.full(n, encoded.component_id, np.uint8),
+        ((encoded.first_seq + np.arange(n)) % 256).astype(np.uint8), encoded.frames,
+    )
+    _read_only(frames)
+    return frames
+
+
+def _read_only(frames: HotFrames) -> None:
+    for column in (*frames.fields.values(), frames.src_system, frames.src_component, frames.seq):
+        column.flags.writeable = False
 
 
 def _walk(

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 import struct
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -82,6 +84,19 @@ def _msg_rows(spec: HotSpec, msgs: list[mavlink.MAVLink_message]) -> list[tuple[
     ]  # fmt: skip
 
 
+@contextmanager
+def _path(few_rows: int) -> Iterator[None]:
+    """Encode on the struct path (hot.FEW_ROWS as it is: the batches here are small) or the numpy one (0)."""
+    kept, hot.FEW_ROWS = hot.FEW_ROWS, few_rows
+    try:
+        yield
+    finally:
+        hot.FEW_ROWS = kept
+
+
+PATHS = pytest.mark.parametrize("few_rows", [hot.FEW_ROWS, 0], ids=["struct", "numpy"])
+
+
 def _pair(system: int, component: int, seq: int) -> tuple[Codec, Codec]:
     """Two identical senders: one for the batch path, one for pymavlink's."""
     a, b = Codec(system, component), Codec(system, component)
@@ -100,15 +115,17 @@ HEARTBEAT = mavlink.MAVLink_heartbeat_message(11, 3, 0, 4, 4, 3)
 # ---- encode -------------------------------------------------------------------------------------
 
 
+@PATHS
 @pytest.mark.parametrize("spec", SPECS, ids=lambda s: s.name)
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=80, deadline=None)  # per path: the two together about what one path had
 @given(data=st.data(), system=st.integers(1, 255), component=st.integers(0, 255), seq=st.integers(0, 255))
 def test_batch_frames_are_byte_identical_to_codec_encode(
-    spec: HotSpec, data: st.DataObject, system: int, component: int, seq: int
+    spec: HotSpec, data: st.DataObject, system: int, component: int, seq: int, few_rows: int
 ) -> None:
     rows = data.draw(_rows(spec))
     batch, ref = _pair(system, component, seq)
-    got = encode_batch(batch, spec, _columns(spec, rows))
+    with _path(few_rows):
+        got = encode_batch(batch, spec, _columns(spec, rows))
     want = [ref.encode(spec.cls(**r)) for r in rows]
     assert got == want
     assert (batch.mav.seq, batch.stats.sent) == (ref.mav.seq, len(rows))
@@ -140,23 +157,26 @@ def test_all_zero_payload_keeps_one_byte_and_trailing_zeros_go() -> None:
     assert [len(f) for f in got] == [13, 13]
 
 
-@settings(max_examples=300, deadline=None)
+@PATHS
+@settings(max_examples=150, deadline=None)
 @given(value=st.floats(allow_nan=True, allow_infinity=True) | st.integers(-(2**1100), 2**1100))
 @example(value=3.4028235677973366e38)  # halfway past FLT_MAX: rounds to inf, struct refuses
 @example(value=float(np.nextafter(3.4028235677973366e38, 0)))  # just below: rounds to FLT_MAX
 @example(value=2**128)
-def test_float_fields_refuse_exactly_what_struct_refuses(value: float) -> None:
+def test_float_fields_refuse_exactly_what_struct_refuses(value: float, few_rows: int) -> None:
     cols = _columns(AMUSSEL_STATUS, [_status(0)])
     cols["depth"] = np.array([value], object if isinstance(value, int) and abs(value) >= 2**63 else None)
     try:
         want = Codec(1, 1).encode(mavlink.MAVLink_amussel_status_message(**{**_status(0), "depth": value}))
     except (OverflowError, struct.error):
-        with pytest.raises(ValueError, match="depth"):
+        with _path(few_rows), pytest.raises(ValueError, match="depth"):
             encode_batch(Codec(1, 1), AMUSSEL_STATUS, cols)
     else:
-        assert encode_batch(Codec(1, 1), AMUSSEL_STATUS, cols) == [want]
+        with _path(few_rows):
+            assert encode_batch(Codec(1, 1), AMUSSEL_STATUS, cols) == [want]
 
 
+@PATHS
 @pytest.mark.parametrize("same_value_cast", [True, False], ids=["numpy-2.4-cast", "min-max"])
 @pytest.mark.parametrize(
     ("field", "value"),
@@ -164,9 +184,10 @@ def test_float_fields_refuse_exactly_what_struct_refuses(value: float) -> None:
      ("time_us", 2**64), ("time_us", -1)],
 )  # fmt: skip
 def test_out_of_range_integers_raise_naming_the_field_and_take_no_sequence_numbers(
-    field: str, value: int, same_value_cast: bool, monkeypatch: pytest.MonkeyPatch
+    field: str, value: int, same_value_cast: bool, few_rows: int, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setattr(hot, "_SAME_VALUE", same_value_cast and hot._SAME_VALUE)
+    monkeypatch.setattr(hot, "FEW_ROWS", few_rows)
     with pytest.raises(struct.error):  # what pymavlink does with the same value
         mavlink.MAVLink_amussel_status_message(**{**_status(0), field: value}).pack(Codec(1, 1).mav)
     codec = Codec(1, 1)
@@ -183,8 +204,11 @@ def test_out_of_range_integers_raise_naming_the_field_and_take_no_sequence_numbe
     assert encode_batch(Codec(1, 1), AMUSSEL_STATUS, cols) == want
 
 
+@PATHS
 @pytest.mark.parametrize(("field", "value"), [("mussel_id", 3.0), ("mussel_id", "3"), ("depth", "1.5")])
-def test_values_struct_refuses_raise_naming_the_field(field: str, value: object) -> None:
+def test_values_struct_refuses_raise_naming_the_field(field: str, value: object, few_rows: int,
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(hot, "FEW_ROWS", few_rows)
     with pytest.raises(struct.error):
         mavlink.MAVLink_amussel_status_message(**{**_status(0), field: value}).pack(Codec(1, 1).mav)
     cols: dict[str, Any] = _columns(AMUSSEL_STATUS, [_status(0)])
@@ -202,7 +226,9 @@ def test_missing_or_unknown_fields_raise() -> None:
         encode_batch(Codec(1, 1), AMUSSEL_STATUS, {**_columns(AMUSSEL_STATUS, [_status(0)]), "colour": [1]})
 
 
-def test_scalars_broadcast_beside_arrays() -> None:
+@PATHS
+def test_scalars_broadcast_beside_arrays(few_rows: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(hot, "FEW_ROWS", few_rows)
     rows = [_status(i) for i in range(3)]
     cols: dict[str, Any] = _columns(AMUSSEL_STATUS, rows)
     cols["simulated"], cols["depth"] = 1, 2.5
