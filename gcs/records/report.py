@@ -62,7 +62,9 @@ FIGURES: tuple[tuple[str, Draw, str, str], ...] = (
      "Each aPad's path (circle: start, diamond: end) and each aMussel where it was deployed, in metres east "
      "and north of the origin marked + (its position is on the x axis label)."),
     ("phases.png", figs.phases_png, "aPad time per phase",
-     "Each aPad's mission minutes spent collecting, waiting for charging, redeploying and idle."),
+     "Top: each aPad's mission minutes by its loop's phase (idle: waiting for enough charging candidates; "
+     "the planning phases take no time). Below, for runs that recorded it: by what the aPad was doing: "
+     "travelling (a Go To in progress), docking (a Dock or Undock in progress), holding (the rest)."),
     ("partition.png", maps.partition_png, "The fleet shared among the aPads",
      "Which aPad served which aMussels (k-means, balanced): the first sharing, then the last re-shares "
      "after an aPad was lost or came back. X marks each share's centre."),
