@@ -170,13 +170,14 @@ class ApadApi:
                 lat_e7, lon_e7, clock=self.clock,
             )
 
-    def hold(self, apad_id: int | None = None) -> None:
-        """Hold Position (dynamic positioning) where the aPad is now."""
+    def hold(self, apad_id: int | None = None, timeout_s: float = 1.0, retries: int = 3) -> None:
+        """Hold Position (dynamic positioning) where the aPad is now; `timeout_s`, `retries` as
+        `CommandClient.send_long` (a console quitting waits little)."""
         sysid = self.apad(apad_id).system_id
         with self._expecting(sysid, Primitive.HOLD):
             self.link.commands.send_long(
                 sysid, mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, RoverMode.HOLD),
-                clock=self.clock,
+                timeout_s=timeout_s, retries=retries, clock=self.clock,
             )
 
     def docking(self, dock: bool, slot: int, mussel_id: int = 0, apad_id: int | None = None) -> None:

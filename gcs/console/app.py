@@ -1,32 +1,45 @@
 """The console apps: one screen, two drivers.
 
-`LiveConsole` shows a `ConsoleRunner` (the world runs in a worker thread; keys go through
-`LoopControl` and the runner's command queue, never to the API from the UI thread).
+`LiveConsole` shows a `ConsoleRunner` (the world runs in a thread of its own; keys go through
+`LoopControl` and the runner's command queue, never to the API from the UI thread). Quitting is
+bounded: the app leaves once the world thread has ended, or `QUIT_BOUND_S` after asking it to.
 `ReplayConsole` shows a recorded run with play, pause, speed and seek. Both redraw from plain
 snapshots on a 10 Hz timer, and only when the snapshot changed.
 """
 
 from __future__ import annotations
 
+import contextlib
+import threading
+import time
 from dataclasses import replace
 from pathlib import Path
 from typing import ClassVar
 
-from textual import on
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.reactive import reactive
-from textual.worker import Worker, WorkerState
 
+from gcs.console.confirm import ConfirmQuit, QuitChoice
 from gcs.console.help import HelpScreen
+from gcs.console.linkbar import LinkBar
 from gcs.console.model import Snapshot
 from gcs.console.runner import ConsoleRunner, DockMussel, GoToMussel, Hold, UndockMussel
 from gcs.console.widgets import LEGEND, Chart, ConsoleFooter, EventLog, FleetTable, MapView, StatusPanel
 from gcs.mission.planner import COLLECT
 from gcs.records.replay import Replay
+from mussel_sim.vocabulary import MusselState
 
 REDRAW_PERIOD_S = 0.1
+# Quitting waits this long (wall time) for the world thread to hold the aPads, send the floating
+# aMussels down and close its logs (it takes a few hundredths of a second when the aPads answer, at
+# most about half a second when they do not). At the bound the console leaves anyway: the world
+# thread is a daemon and dies with the process, so the aPads get no hold from us (each holds by
+# its own GCS failsafe after 3 s without our heartbeat), the last events may be missing from
+# events.jsonl, and `vil gcs` says so in one line.
+QUIT_BOUND_S = 2.0
+STALLED_S = 2.0  # no link status from the world thread for this long (wall time): say so
 
 
 class ConsoleApp(App[None]):
@@ -37,6 +50,7 @@ class ConsoleApp(App[None]):
     VERTICAL_BREAKPOINTS = [(0, "-short"), (36, "-tall")]  # noqa: RUF012
 
     def compose(self) -> ComposeResult:
+        yield LinkBar(id="links")
         with Horizontal(id="top"):
             yield MapView(id="map")
             with Vertical(id="side"):
@@ -58,6 +72,7 @@ class ConsoleApp(App[None]):
     def on_mount(self) -> None:
         # Looked up once: a timer firing during shutdown must not query a torn-down DOM.
         self.map_view = self.query_one(MapView)
+        self.link_bar = self.query_one(LinkBar)
         self.status_panel = self.query_one(StatusPanel)
         self.fleet = self.query_one(FleetTable)
         self.event_log = self.query_one(EventLog)
@@ -79,7 +94,11 @@ class ConsoleApp(App[None]):
     def header(self) -> str:
         return ""
 
+    def show_links(self) -> None:
+        """The link bar, every tick (ages move even when nothing else does)."""
+
     def redraw(self) -> None:
+        self.show_links()
         snap = self.current()
         if snap is None or snap is self._shown:
             return
@@ -98,9 +117,10 @@ class ConsoleApp(App[None]):
 
 class LiveConsole(ConsoleApp):
     TITLE = "vil gcs"
-    HELP_INTRO = ("Live console. Override, go-to, dock and undock pause the scenario loop first; "
-                  "p resumes it. q ends the mission once the collection in progress is done; Q ends it at once "
-                  "(surfaced aMussels sink). Either way the aPad is left holding, never mid-dock.")
+    HELP_INTRO = ("Live console. Override, go-to, dock and undock pause the loop; p resumes it. q quits within a "
+                  "second (asks first if aMussels are at the surface); Q, ctrl+q quit at once: the aPads hold, "
+                  "floating aMussels sink. Top line: each link's last heartbeat (amber 1.5 s, LINK LOST 3 s), "
+                  "lost frames, signing, restarts.")
     SWARM_HELP = (" With several aPads, a picks the aPad these keys act on (highlighted on the map, detailed in the "
                   "panel); on the map each aMussel shows the number of the aPad whose share it is.")
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -113,7 +133,7 @@ class LiveConsole(ConsoleApp):
         Binding("a", "next_apad", "Next aPad"),
         Binding("question_mark", "help", "Help", key_display="?"),
         Binding("q", "quit_console", "Quit"),
-        Binding("Q", "quit_console(True)", "Quit now", show=False),
+        Binding("Q", "quit_console(True)", "Quit now"),
     ]
 
     paused: reactive[bool] = reactive(False, init=False)
@@ -125,21 +145,46 @@ class LiveConsole(ConsoleApp):
             self.HELP_INTRO = LiveConsole.HELP_INTRO + self.SWARM_HELP
         self.set_reactive(LiveConsole.paused, runner.control.paused)
         self.quitting = False
+        self._quit_by: float | None = None  # monotonic time the app leaves at, whatever the world thread does
+        self._ended_seen = False
+        # The world (link, fleet, SITL, loop) lives on this one thread for the whole session. Not a
+        # Textual worker: those run in asyncio's default executor, which the app's exit waits for
+        # without a bound (the screen blank meanwhile).
+        self.world_thread = threading.Thread(target=self._run_world, name="vil-world", daemon=True)
+
+    def _run_world(self) -> None:
+        with contextlib.suppress(Exception):  # kept in runner.error and shown: no traceback over the screen
+            self.runner.run()
 
     def on_mount(self) -> None:
         super().on_mount()
-        # The world (link, fleet, SITL, loop) lives on this one thread for the whole session.
-        self.run_worker(self.runner.run, name="world", thread=True, exit_on_error=False)
+        self.world_thread.start()
 
     def on_unmount(self) -> None:
-        # However the app ends (q, an error, a test), the world thread must not outlive it.
+        # However the app ends (q, an error, a test), the world thread must not outlive it for long.
         self.runner.request_quit(now=True)
+        if self.world_thread.is_alive():
+            self.world_thread.join(max((self._quit_by or 0.0) - time.monotonic(), 0.0) or QUIT_BOUND_S)
 
     def current(self) -> Snapshot | None:
         return self.runner.snapshot
 
     def header(self) -> str:
-        return "LIVE  " + (self.runner.snapshot.source if self.runner.snapshot else "")
+        return self.runner.snapshot.source if self.runner.snapshot else ""
+
+    def show_links(self) -> None:
+        runner = self.runner
+        stalled = time.monotonic() - runner.link_published_s if runner.link_published_s else 0.0
+        alive = not runner.finished.is_set()
+        self.link_bar.show(runner.link_status, stalled if alive and stalled > STALLED_S else 0.0)
+        if runner.finished.is_set() and not self._ended_seen:
+            self._ended_seen = True
+            if self.quitting:
+                self.exit()
+            elif runner.error:
+                self.notify(runner.error, severity="error", timeout=30)
+        if self._quit_by is not None and time.monotonic() >= self._quit_by:
+            self.exit()  # the bound: the world thread did not end in time (see QUIT_BOUND_S)
 
     def watch_paused(self, paused: bool) -> None:
         self.runner.set_paused(paused)
@@ -188,19 +233,49 @@ class LiveConsole(ConsoleApp):
             self.paused = True
 
     def action_quit_console(self, now: bool = False) -> None:
-        if not self.quitting or now:
-            self.quitting = True
-            self.runner.request_quit(now)
+        """q: quit now, but ask first when the mission runs and aMussels are at the surface; Q: at once."""
+        if self.quitting and not now:
+            return
+        up = self._at_surface()
+        if not now and self.runner.mission_running() and any(up):
+            self.push_screen(ConfirmQuit(*up), self._quit_choice)
+            return
+        self._quit(finish=False)
+
+    async def action_quit(self) -> None:
+        """ctrl+q (Textual's own quit key) quits as q does, bounded, never leaving a blank screen waiting."""
+        self.action_quit_console()
+
+    def _quit_choice(self, choice: QuitChoice | None) -> None:
+        if choice == "now":
+            self._quit(finish=False)
+        elif choice == "finish":
+            self._quit(finish=True)
+        else:
+            self.runner.log_operator("quit_cancelled")
+
+    def _quit(self, finish: bool) -> None:
+        """Ask the world to end; leave when it has, or at the bound (`finish`: no bound, the loop ends
+        its collection first; Q still quits at once)."""
+        self.quitting = True
+        self.runner.request_quit(now=not finish)
+        self._quit_by = None if finish else time.monotonic() + QUIT_BOUND_S
         if self.runner.finished.is_set():
             self.exit()
+        else:
+            self.notify("finishing the collection, then quitting (Q: now)" if finish else "quitting")
 
-    @on(Worker.StateChanged)
-    def world_ended(self, event: Worker.StateChanged) -> None:
-        if event.worker.name == "world" and event.state in (WorkerState.SUCCESS, WorkerState.ERROR):
-            if self.quitting:
-                self.exit()
-            elif self.runner.error:
-                self.notify(self.runner.error, severity="error", timeout=30)
+    def _at_surface(self) -> tuple[list[int], list[int]]:
+        """aMussels floating and surfacing, not on a slot, as the screen shows them now."""
+        snap = self.runner.snapshot
+        if snap is None:
+            return [], []
+        on_slots = {s.mussel_id for a in snap.apads for s in a.slots if s.mussel_id}
+
+        def those(state: MusselState) -> list[int]:
+            return [int(m) for m in snap.mussel_ids[snap.state == state] if int(m) not in on_slots]
+
+        return those(MusselState.FLOATING), those(MusselState.SURFACING)
 
 
 class ReplayConsole(ConsoleApp):
@@ -236,6 +311,7 @@ class ReplayConsole(ConsoleApp):
 
     def on_mount(self) -> None:
         super().on_mount()
+        self.link_bar.show_replay(Path(self.replay.source).name)
         self.set_interval(REDRAW_PERIOD_S, self._advance)
 
     def _advance(self) -> None:

@@ -28,6 +28,9 @@ from missiontime import mm_ss
 from mussel_sim.vocabulary import MusselState
 
 TRACE_SAMPLES = 300  # the aPad's recent trace: this many 1 Hz samples
+# Why a mission ended (`gcs.mission.control.EndReason`), as the console says it.
+END_WORDS = {"mission time": "its time is up", "aPad battery": "the aPad's battery reached its end threshold",
+             "operator stop": "the operator stopped it"}
 
 
 class MarkerColour:
@@ -276,9 +279,10 @@ class ConsoleModel:
         apads = tuple(self._apad(i, owner) for i in range(len(self.apad_ids)))
         column = self.apad_ids.index(selected) if selected in self.apad_ids else 0
         a = apads[column]
+        ended = all(loop.ended is not None for loop in self.loops.values())
         return Snapshot(
             version=self.version,
-            t_s=t_s,
+            t_s=max(loop.ended_t_s for loop in self.loops.values()) if ended else t_s,  # the clock stops at the end
             duration_s=self.duration_s,
             source=self.source,
             pool_threshold=self.pool_threshold,
@@ -338,6 +342,7 @@ class _LoopTrack:
         self.phase = "-"
         self.cycles = 0
         self.ended: str | None = None
+        self.ended_t_s = 0.0
         self._redeploying = False
 
     def event(self, ev: Event) -> None:
@@ -351,6 +356,7 @@ class _LoopTrack:
             self._redeploying = True
         elif ev.kind == "mission_end":
             self.ended = str(ev.fields.get("reason", "ended"))
+            self.ended_t_s = ev.t_s
 
 
 def area_outline(geometry: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -383,6 +389,17 @@ def _event_text(ev: Event) -> str:
     who = f"aPad {f.pop('apad')}: " if "apad" in f else ""  # a swarm's loops name their aPad
     if ev.kind == "phase":
         body = str(f.get("phase"))
+    elif ev.kind in ("operator", "refused"):  # the operator's actions, and what was refused, in words
+        action = str(f.pop("action", ""))
+        why = f.pop("why", None)
+        f.pop("result", None)
+        names = {"mussel": "aMussel"}
+        body = f"{ev.kind} {action}: {why}" if why else " ".join(
+            [ev.kind, action, *(f"{names.get(k, k)} {v}" for k, v in f.items())])
+    elif ev.kind == "apad_restart":
+        body = "aPad restarted" + (f", held {f['held']} before" if f.get("held") else "")
+    elif ev.kind == "mission_end":
+        body = f"mission ended: {END_WORDS.get(str(f.get('reason')), f.get('reason'))}"
     elif "mussel" in f:
         body = f"{ev.kind} aMussel {f['mussel']}" + (f" slot {f['slot']}" if "slot" in f else "")
         if "why" in f:

@@ -2,8 +2,7 @@
 
 The commands are plain values the UI puts on the runner's queue; `execute` runs one on the world
 thread (or on an aPad loop's process, with that loop's API on its clock). `leave_holding` is what
-quitting does to every aPad: let a dock or undock finish, then hold (and with quit-now, send any
-surfaced aMussel back down).
+quitting does, in a bounded time: hold every aPad and send the floating aMussels back down.
 """
 
 from __future__ import annotations
@@ -16,8 +15,8 @@ from gcs.api import ApadApi, CommandError
 from gcs.mission.world import World
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
-QUIT_DOCK_WAIT_S = 120.0  # quitting waits this long at most for a dock/undock to finish
-SINK_MARGIN_S = 10.0  # quit-now waits for surfacing aMussels to float (then sinks them), this much extra
+QUIT_ACK_S = 0.3  # quitting waits this long (mission time) for each aPad's ACK of its hold
+QUIT_FLUSH_S = 0.1  # and this long for the last commands to go out
 
 
 @dataclass(frozen=True)
@@ -43,30 +42,55 @@ class UndockMussel:
 OperatorCommand = Hold | GoToMussel | DockMussel | UndockMussel
 
 
-def execute(api: ApadApi, apad: int, command: OperatorCommand, name: str = "aPad") -> str:
-    """Send `command` to aPad `apad`; the notice the operator reads. `name`: how the aPad is called
-    in it ("aPad" with one, "aPad 2" in a swarm). Raises `CommandError` or `LookupError`."""
+class Refused(Exception):
+    """An operator command the console refuses itself, nothing sent; `words` say why."""
+
+    def __init__(self, words: str) -> None:
+        super().__init__(words)
+        self.words = words
+
+
+ACTIONS: dict[type, str] = {Hold: "override", GoToMussel: "goto", DockMussel: "dock", UndockMussel: "undock"}
+
+
+def action_of(command: OperatorCommand) -> tuple[str, dict[str, int]]:
+    """The command as the event log names it, and its aMussel if it has one."""
+    mussel = getattr(command, "mussel_id", None)
+    return ACTIONS[type(command)], ({} if mussel is None else {"mussel": mussel})
+
+
+def words_of(exc: Exception) -> str:
+    """Why a command did not happen, in the operator's words (`gcs.link.commands.refusal_words`)."""
+    if isinstance(exc, CommandError | Refused):
+        return exc.words
+    return str(exc).strip("'\"")  # a LookupError: "no status heard from aMussel 3", "aPad 2 has not been heard"
+
+
+def execute(api: ApadApi, apad: int, command: OperatorCommand, name: str = "aPad") -> tuple[str, dict[str, int]]:
+    """Send `command` to aPad `apad`: the notice the operator reads and what the event log adds (the
+    slot). `name`: how the aPad is called ("aPad" with one, "aPad 2" in a swarm). Raises `Refused`,
+    `CommandError` or `LookupError`."""
     on = "" if name == "aPad" else f" on {name}"  # one aPad: the notices it always had
     match command:
         case Hold():
             api.hold(apad)
-            return f"override: {name} holding, loop paused"
+            return f"override: {name} holding, loop paused", {}
         case GoToMussel(mussel_id):
             api.go_to(api.get_location(mussel_id), apad_id=apad)
-            return f"manual: {name} going to aMussel {mussel_id}, loop paused"
+            return f"manual: {name} going to aMussel {mussel_id}, loop paused", {}
         case DockMussel(mussel_id):
             free = api.apad(apad).free_slots()
             if not free:
-                return f"refused: no free slot{on}"
+                raise Refused(f"no free slot{on}")
             api.command_mussel(mussel_id, MusselCommand.SURFACE, apad)
             api.docking(True, free[0], mussel_id, apad)
-            return f"manual: {name} docking aMussel {mussel_id} in slot {free[0]}, loop paused"
+            return f"manual: {name} docking aMussel {mussel_id} in slot {free[0]}, loop paused", {"slot": free[0]}
         case UndockMussel(mussel_id):
             slots = [s.slot for s in api.slots(apad) if s.mussel_id == mussel_id and s.latch == Latch.LATCHED]
             if not slots:
-                return f"refused: aMussel {mussel_id} is not docked{on}"
+                raise Refused(f"aMussel {mussel_id} is not docked{on}")
             api.docking(False, slots[0], mussel_id, apad)
-            return f"manual: {name} undocking aMussel {mussel_id} from slot {slots[0]}, loop paused"
+            return f"manual: {name} undocking aMussel {mussel_id} from slot {slots[0]}, loop paused", {"slot": slots[0]}
     raise AssertionError(command)
 
 
@@ -78,38 +102,29 @@ def docking(world: World, apad: int) -> bool:
     )
 
 
-def leave_holding(world: World, now: bool, notice: Callable[[str], None]) -> None:
-    """Quit: let every dock or undock finish, then hold every aPad heard (the loops already did if
-    they ran); `now`: also sink what surfaced. Raises `CommandError`."""
+def leave_holding(world: World, notice: Callable[[str], None]) -> list[int]:
+    """Quit, bounded: hold every aPad heard (one send and a short wait for its ACK: a lost link must
+    not keep the console), and send every aMussel floating outside a slot back down. A dock in
+    progress is left to its latch (the aPad holds in place: in reach it latches; if not, the aMussel
+    floats and the whereabouts say so), and so is an aMussel still surfacing (it takes no sink
+    command before it floats). Returns those left at the surface."""
     heard = [a.system_id for a in world.scenario.apads if a.system_id in world.link.vehicles]
-    if not heard:
-        return
-    deadline = world.clock.time() + QUIT_DOCK_WAIT_S
-    while any(docking(world, a) for a in heard) and world.clock.time() < deadline:
-        notice("quitting: waiting for the dock to finish")
-        world.clock.sleep(0.2)
     for apad in heard:
-        world.api.hold(apad)
-    if now:
-        _sink_surfaced(world, heard, notice)
-    world.clock.sleep(0.5)  # let the last commands go out before the link closes
-
-
-def _sink_surfaced(world: World, apads: list[int], notice: Callable[[str], None]) -> None:
-    """Nothing left floating where it cannot work: a surfacing aMussel is sunk once it floats."""
+        try:
+            world.api.hold(apad, timeout_s=QUIT_ACK_S, retries=0)
+        except CommandError as exc:
+            notice(f"quitting: {exc.words} to the hold of aPad {apad}")
+    if not heard:
+        return []
     api = world.api
-    deadline = world.clock.time() + world.scenario.fleet.surfacing_time_s + SINK_MARGIN_S
-    while world.clock.time() < deadline:
-        docked = {s.mussel_id for a in apads for s in api.slots(a) if s.mussel_id}
-        up = {m: api.mussels[m].state for m in api.mussels.select((MusselState.SURFACING, MusselState.FLOATING))
-              if m not in docked}
-        if not up:
-            return
-        notice(f"quitting now: sending aMussel {', '.join(map(str, sorted(up)))} back down")
-        for mussel_id, state in up.items():
-            if state == MusselState.FLOATING:
-                api.command_mussel(mussel_id, MusselCommand.SINK, apads[0])
-        world.clock.sleep(1.0)
+    held = {s.mussel_id for a in heard for s in api.slots(a) if s.mussel_id}
+    up = {m: api.mussels[m].state for m in api.mussels.select((MusselState.SURFACING, MusselState.FLOATING))
+          if m not in held}
+    for mussel_id, state in up.items():
+        if state == MusselState.FLOATING:
+            api.command_mussel(mussel_id, MusselCommand.SINK, heard[0])
+    world.clock.sleep(QUIT_FLUSH_S)  # let the last commands go out before the link closes
+    return sorted(m for m, state in up.items() if state != MusselState.FLOATING)
 
 
-__all__ = ["CommandError", "DockMussel", "GoToMussel", "Hold", "OperatorCommand", "UndockMussel", "execute"]
+__all__ = ["CommandError", "DockMussel", "GoToMussel", "Hold", "OperatorCommand", "Refused", "UndockMussel", "execute"]

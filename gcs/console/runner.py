@@ -28,21 +28,25 @@ from __future__ import annotations
 import functools
 import json
 import threading
+import time
 
 import numpy as np
 
 from gcs.api import ApadApi, CommandError
 from gcs.console.config import ConsoleConfig, ResumePoint, open_world
-from gcs.console.model import ConsoleModel, Snapshot, area_outline
+from gcs.console.link_health import Level, LinkHealth, LossWindow, link_health
+from gcs.console.model import END_WORDS, ConsoleModel, Snapshot, area_outline
 from gcs.console.operator import (
     DockMussel,
     GoToMussel,
     Hold,
     OperatorCommand,
+    Refused,
     UndockMussel,
-    docking,
+    action_of,
     execute,
     leave_holding,
+    words_of,
 )
 from gcs.mission.accounting import account
 from gcs.mission.loop import EnergySharingLoop, LoopControl
@@ -51,8 +55,9 @@ from gcs.mission.world import World
 from gcs.records import checkpoint
 from gcs.records.checkpoint import CHECKPOINT_NAME, CHECKPOINT_PERIOD_S, Checkpoint, CheckpointFiles
 from gcs.records.events import EVENTS_NAME, Event
-from missiontime import PacedClock, Task, seconds_to_us, us_to_s
+from missiontime import PacedClock, Task, mm_ss, seconds_to_us, us_to_s
 from mussel_sim.placement import load_area
+from mussel_sim.vocabulary import MusselCommand, MusselState
 
 PUBLISH_PERIOD_S = 0.1  # the UI redraws at 10 Hz at most
 SAMPLE_PERIOD_S = 1.0  # one point on the plots per second of mission time
@@ -82,6 +87,17 @@ class ConsoleRunner:
         self._last_event: Event | None = None
         self._published: tuple[object, ...] = ()
         self._checkpoints: CheckpointFiles | None = config.resume.files if config.resume else None
+        # The links as last computed on the world thread, and when (monotonic wall seconds): a UI that
+        # sees no new one for a while knows the world thread is stuck, not that the links are fine.
+        self.link_status: tuple[LinkHealth, ...] = ()
+        self.link_published_s = 0.0
+        self._loss = LossWindow()
+        self._listening_us = 0
+        self._restarts: dict[int, int] = {}
+        self._lost: dict[str, bool] = {}
+        self._to_sink: dict[int, int] = {}  # aMussel -> the aPad to relay its sink command
+        self._operator_events: list[tuple[str, dict[str, object]]] = []  # from the UI, logged on the world thread
+        self._mission_started = False
 
     @property
     def swarm(self) -> bool:
@@ -91,37 +107,54 @@ class ConsoleRunner:
 
     def submit(self, command: OperatorCommand) -> None:
         """Queue an operator command for the selected aPad; it pauses the loops first."""
-        self.control.paused = True
+        self.set_paused(True)
         with self._commands_lock:
             self._commands.append((self.selected, command))
 
     def select_apad(self, sysid: int | None = None) -> int:
         """Pick the aPad the commands act on (None: the next one); the one picked."""
         ids = self.apad_ids
-        self.selected = ids[(ids.index(self.selected) + 1) % len(ids)] if sysid is None else sysid
-        if self.selected not in ids:
+        picked = ids[(ids.index(self.selected) + 1) % len(ids)] if sysid is None else sysid
+        if picked not in ids:
             raise ValueError(f"no aPad {sysid}")
-        return self.selected
+        self.selected = picked
+        self.log_operator("select_apad", apad=picked)
+        return picked
 
     def set_paused(self, paused: bool) -> None:
+        if paused != self.control.paused:
+            self.log_operator("pause" if paused else "resume")
         self.control.paused = paused
 
     def switch_strategy(self, name: str) -> None:
         with self.control.lock:  # one loop takes it from here; a swarm's each get it at their waits
             self.control.strategy = name
+        self.log_operator("strategy", strategy=name)
+
+    def log_operator(self, action: str, **fields: object) -> None:
+        """An operator action for the event log (written on the world thread, within a tenth of a second)."""
+        with self._commands_lock:
+            self._operator_events.append((action, fields))
+
+    def mission_running(self) -> bool:
+        """Whether a loop runs (started and not ended): quitting then interrupts a mission."""
+        return self._mission_started and any(self._running(s) for s in self.apad_ids)
 
     def request_quit(self, now: bool = False) -> None:
         """End the mission, leave the aPads holding, close everything.
 
         The loops stop at their next safe point: each finishes a collection it has started (an
-        aMussel called up is docked, not left floating). `now` ends them at their next wait instead,
-        sends any surfaced aMussel back down, and still never interrupts a dock or undock.
+        aMussel called up is docked, not left floating). `now` ends them at their next wait instead
+        (a latch closing finishes on the aPad by itself). Either way the end is bounded and quick
+        (`leave_holding`): the aPads hold, the floating aMussels are sent down, the world closes.
         """
+        if not self._quit_now.is_set() and (now or not self._quit.is_set()):
+            self.log_operator("quit", now=now)
         self._quit.set()
         self.control.stop = True
         if now:
             self._quit_now.set()
-            self._notice = "quitting now: the aPad holds once no dock is in progress"
+            self._notice = "quitting now: the aPads hold, floating aMussels are sent down"
         else:
             self._notice = "quitting: the loop finishes the collection it started, then the aPad holds (Q: now)"
 
@@ -158,9 +191,10 @@ class ConsoleRunner:
         if self.config.resume is not None:
             self._replay_history(model, self.config.resume.checkpoint)
         self._model = model
+        self._listening_us = clock.now_us
         clock.scheduler.every(PUBLISH_PERIOD_S, self._publish, "console.publish", clock.now_us)
-        clock.scheduler.every(SAMPLE_PERIOD_S, lambda now_us: model.sample(us_to_s(now_us)), "console.sample",
-                              clock.now_us)
+        sampling = clock.scheduler.every(SAMPLE_PERIOD_S, lambda now_us: model.sample(us_to_s(now_us)),
+                                         "console.sample", clock.now_us)
         if not self._wait_for_apads(world):
             return
         for sysid in self.apad_ids:
@@ -171,16 +205,17 @@ class ConsoleRunner:
             clock.sleep(PUBLISH_PERIOD_S)
         if not self._quit.is_set():
             self._notice = ""
+            self._mission_started = True
             end = self._run_swarm(world, model) if self.swarm else self._run_one(world)
-            self._notice = f"mission ended: {end}"
+            sampling.active = False  # the plots and the clock stop at the mission's end
+            why = END_WORDS.get(end, end)
+            self._notice = f"mission ended at {mm_ss(clock.time())}: {why}; the aPad holds (q quits)"
         while not self._quit.is_set():  # telemetry and manual commands go on until the operator quits
             self._serve(world.api, None)
             clock.sleep(PUBLISH_PERIOD_S)
-        try:
-            leave_holding(world, self._quit_now.is_set(), self._set_notice)
-        except CommandError as exc:
-            self.error = str(exc)
-        self._log_whereabouts(world)
+        self._flush_operator(world)
+        left = leave_holding(world, self._set_notice)
+        self._log_whereabouts(world, left)
 
     def _run_one(self, world: World) -> str:
         """One aPad: its loop on the world's clock, checkpointed; the reason it ended."""
@@ -207,11 +242,11 @@ class ConsoleRunner:
         for sysid in self.apad_ids:
             control = self._controls[sysid] = LoopControl(paused=self.control.paused, stop=self.control.stop)
             control.before_wait = functools.partial(self._loop_wait, world, sysid)
-        return SwarmOutcome(run_loops(world, shares, watch, self._controls, self.loops), shares, watch).end_reason
+        return str(SwarmOutcome(run_loops(world, shares, watch, self._controls, self.loops), shares, watch).end_reason)
 
     def _loop_wait(self, world: World, sysid: int) -> bool:
         """A loop's hook before each of its waits: follow the operator's pause, stop and strategy,
-        run the commands queued for its aPad; True ends it here (quit now, its aPad not docking)."""
+        run the commands queued for its aPad; True ends it here (quit now)."""
         control, loop = self._controls.get(sysid), self.loops[sysid]
         if control is not None:
             control.paused, control.stop = self.control.paused, self.control.stop
@@ -220,7 +255,7 @@ class ConsoleRunner:
                 with control.lock:
                     control.strategy = wanted  # taken at its next planning step
         self._serve(loop.api, sysid)
-        return self._quit_now.is_set() and not docking(world, sysid)
+        return self._quit_now.is_set()
 
     def _start_checkpoints(self, world: World, loop: EnergySharingLoop) -> Task | None:
         """Save the mission every `CHECKPOINT_PERIOD_S` of mission time (with an output folder)."""
@@ -248,14 +283,16 @@ class ConsoleRunner:
             except (ValueError, KeyError, TypeError, AttributeError):
                 continue  # the console's history is for show; the mission does not depend on it
 
-    def _log_whereabouts(self, world: World) -> None:
-        """Where every aMussel is as the console quits: on the seabed, on a slot, or lost (and why)."""
+    def _log_whereabouts(self, world: World, surfacing: list[int]) -> None:
+        """Where every aMussel is as the console quits: on the seabed, on a slot, or lost (and why);
+        `surfacing`: those still rising, left to float (they take no sink command before they float)."""
         homes = {m: (h.lat, h.lon) for m, h in world.homes.items()}
         accounts = account(world.fleet.state, world.frame, homes, world.link.vehicles)
         world.events.emit(world.clock.time(), "whereabouts",
                           seabed=[a.mussel_id for a in accounts if a.where == "seabed"],
                           slot=[a.mussel_id for a in accounts if a.where == "slot"],
-                          lost={str(a.mussel_id): a.detail for a in accounts if a.lost})
+                          lost={str(a.mussel_id): a.detail for a in accounts if a.lost},
+                          **({"left_surfacing": surfacing} if surfacing else {}))
 
     def _wait_for_apads(self, world: World) -> bool:
         for sysid in self.apad_ids:
@@ -284,10 +321,65 @@ class ConsoleRunner:
             take = [c for c in self._commands if serving in (None, c[0]) or not self._running(c[0])]
             self._commands = [c for c in self._commands if not any(c is t for t in take)]
         for sysid, command in take:
+            action, fields = action_of(command)
+            who = {"apad": sysid} if self.swarm else {}
             try:
-                self._notice = execute(api, sysid, command, f"aPad {sysid}" if self.swarm else "aPad")
-            except (CommandError, LookupError) as exc:
-                self._notice = f"refused: {exc}"
+                self._notice, more = execute(api, sysid, command, f"aPad {sysid}" if self.swarm else "aPad")
+                self._emit("operator", action=action, **who, **fields, **more)
+            except (CommandError, LookupError, Refused) as exc:
+                why = words_of(exc)
+                self._notice = f"refused: {why}" if isinstance(exc, Refused) else f"refused: {action}: {why}"
+                result = {"result": str(exc)} if isinstance(exc, CommandError) else {}
+                self._emit("refused", action=action, **who, **fields, why=why, **result)
+                if isinstance(command, DockMussel) and isinstance(exc, CommandError):
+                    self._to_sink[command.mussel_id] = sysid  # called up for a dock refused: not left afloat
+
+    def _sink_refused(self, world: World) -> None:
+        """aMussels the operator called up for a dock that was refused: sent down once they float
+        (a surfacing one takes no sink command); forgotten if they went anywhere else."""
+        for mussel_id, sysid in list(self._to_sink.items()):
+            state = world.api.mussels[mussel_id].state if mussel_id in world.api.mussels else None
+            if state == MusselState.FLOATING:
+                world.api.command_mussel(mussel_id, MusselCommand.SINK, sysid)
+                world.events.emit(world.clock.time(), "operator_sink", mussel=mussel_id, why="its dock was refused")
+            if state != MusselState.SURFACING:
+                del self._to_sink[mussel_id]
+
+    def _emit(self, kind: str, **fields: object) -> None:
+        world = self.world
+        if world is not None:
+            world.events.emit(world.clock.time(), kind, **fields)
+
+    def _flush_operator(self, world: World) -> None:
+        """Log the operator's actions the UI queued (a world thread only)."""
+        with self._commands_lock:
+            taken, self._operator_events = self._operator_events, []
+        for action, fields in taken:
+            world.events.emit(world.clock.time(), "operator", action=action, **fields)
+
+    def _watch_links(self, world: World, now_us: int) -> None:
+        """The links' health for the UI, and an event (and a notice) for every aPad restart seen."""
+        registry = world.link.registry
+        self.link_status = link_health(registry, self.apad_ids, now_us, self._listening_us, world.link.codec.signing,
+                                       self._loss)
+        self.link_published_s = time.monotonic()
+        for h in self.link_status:  # into and out of LINK LOST: an event each
+            lost = h.level == Level.LOST
+            if lost != self._lost.get(h.name, False):
+                self._lost[h.name] = lost
+                world.events.emit(world.clock.time(), "link_lost" if lost else "link_back", link=h.name,
+                                  silent_s=round(h.age_s, 1))
+        for sysid in self.apad_ids:
+            view = registry.vehicles.get(sysid)
+            if view is not None and view.restarts != self._restarts.get(sysid, 0):
+                self._restarts[sysid] = view.restarts
+                held = list(view.held_before_restart)
+                world.events.emit(world.clock.time(), "apad_restart", apad=sysid, held=held,
+                                  slots_now=list(view.held()))
+                now = ", ".join(map(str, view.held())) or "nothing"
+                was = f": it held aMussel {', '.join(map(str, held))} before, its slots report {now} now" \
+                    if held else ""
+                self._notice = f"aPad {sysid} restarted (its clock went back){was}"
 
     def _swarm_strategy(self) -> str | None:
         """A swarm's loops do not take the operator's strategy: each is handed it until it has it."""
@@ -306,6 +398,9 @@ class ConsoleRunner:
         model, world = self._model, self.world
         if model is None or world is None:
             return
+        self._flush_operator(world)
+        self._watch_links(world, now_us)
+        self._sink_refused(world)
         events = world.events.events
         fresh: list[Event] = []
         for ev in reversed(events):

@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Collection
 from dataclasses import dataclass, field
 
-from apad_sitl.vocabulary import N_SLOTS, Primitive
+from apad_sitl.vocabulary import N_SLOTS, Latch, Primitive
 from gcs.link.fleet_table import MusselTable
 from gcs.link.telemetry import (
     DEG_E7,
@@ -29,6 +29,9 @@ from gcs.link.telemetry import (
 from mussel_sim.geo import distance_m
 
 STATUSTEXT_KEPT = 50
+# The aPad's own clock (PRIMITIVE_STATUS.time_us) going back more than this is a restart.
+RESTART_SLACK_US = 2_000_000
+SEQ_REORDER = 128  # a sequence step back (or a jump of more than half the 8-bit range) is no loss
 
 
 @dataclass
@@ -74,6 +77,19 @@ class VehicleView:
     # The paper's movement cost as seen on the link: aPad-to-setpoint distance per new Go To target.
     goto_cost_m: float = 0.0
     last_goto_e7: tuple[int, int] | None = None
+    # Link health: frames taken from it and frames missing from its MAVLink sequence (`count_frame`).
+    frames: int = 0
+    frames_lost: int = 0
+    # Restarts seen (its own clock went back): how many, when (our clock), what its slots held before.
+    boot_us: int = -1
+    restarts: int = 0
+    restarted_us: int = 0
+    held_before_restart: tuple[int, ...] = ()
+    _held: tuple[int, ...] = ()  # what its slots held at its last PRIMITIVE_STATUS
+
+    def held(self) -> tuple[int, ...]:
+        """The aMussels its slots hold (latched, closing or releasing)."""
+        return tuple(s.mussel_id for s in self.slots.values() if s.mussel_id and s.latch != Latch.OPEN)
 
     def free_slots(self) -> list[int]:
         return [s.slot for s in self.slots.values() if s.free]
@@ -92,6 +108,8 @@ class VehicleRegistry:
         # When (our clock) each aMussel reported alone, as real agents do; the simulated fleet's
         # batches arrive every second and are not tracked here.
         self.mussel_heard_us: dict[int, int] = {}
+        self.fleet_heard_us = -1  # when (our clock) the last aMussel status of any kind arrived; -1: never
+        self._seq: dict[tuple[int, int], int] = {}  # (system, component) -> the last sequence number taken
         self.version = 0  # bumped on every change a screen could show
 
     def believes(self, system_id: int, record: Record) -> bool:
@@ -109,7 +127,7 @@ class VehicleRegistry:
         if isinstance(record, MusselView):
             refused = self.mussels.update(record)
             if refused is None:
-                self.mussel_heard_us[record.mussel_id] = now_us
+                self.mussel_heard_us[record.mussel_id] = self.fleet_heard_us = now_us
                 self.version += 1
             return refused
         if isinstance(record, GoToSent):
@@ -133,6 +151,7 @@ class VehicleRegistry:
                 if record.heading_deg is not None:
                     view.heading_deg = record.heading_deg
             case PrimitiveView():
+                self._check_boot(view, record.time_us, now_us)
                 view.primitive = record
                 if view.expected is not None and view.expected.matches(record):
                     view.expected.seen = True
@@ -151,6 +170,31 @@ class VehicleRegistry:
                 del view.statustext[:-STATUSTEXT_KEPT]
         self.version += 1
         return None
+
+    def count_frame(self, system_id: int, component_id: int, seq: int) -> None:
+        """A frame taken from a transport: count it, and the frames its sequence number says were lost
+        on the way since the last one of that (system, component), against the vehicle it came from."""
+        view = self.vehicles.get(system_id)
+        if view is None:
+            return
+        key = (system_id, component_id)
+        last = self._seq.get(key)
+        self._seq[key] = seq
+        view.frames += 1
+        if last is not None:
+            gap = (seq - last - 1) % 256
+            if gap < SEQ_REORDER:
+                view.frames_lost += gap
+
+    def _check_boot(self, view: VehicleView, boot_us: int, now_us: int) -> None:
+        """The aPad's own clock went back: it restarted. Its slots it reports from now on are what it
+        knows after the restart; what they held before is kept for the operator to read."""
+        if 0 <= boot_us + RESTART_SLACK_US < view.boot_us:
+            view.restarts += 1
+            view.restarted_us = now_us
+            view.held_before_restart = view._held
+        view.boot_us = boot_us
+        view._held = view.held()
 
     def restore(self, saved: VehicleRegistry) -> None:
         """Take what a saved registry knew (a mission resumed from its checkpoint), in place: whoever

@@ -111,7 +111,10 @@ class _TransportPoller:
         chunks = self.transport.receive()
         for chunk in chunks:
             for msg in self.codec.decode(chunk):
-                if self.link._receive(msg) and msg.get_msgId() in self.forward:
+                taken = self.link._receive(msg)
+                if taken:
+                    self.link.registry.count_frame(msg.get_srcSystem(), msg.get_srcComponent(), msg.get_seq())
+                if taken and msg.get_msgId() in self.forward:
                     # A frame heard twice (an echo through another radio, a duplicate) is relayed once.
                     ident = (msg.get_srcSystem(), msg.get_seq(), msg.get_msgId())
                     if ident not in self._relayed:
@@ -280,6 +283,7 @@ class Link:
             self._tlog.write_many(self.clock.now_us, frames)
         if msg_id == mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS:
             self.dropped.update(self.registry.mussels.update_batch(MusselBatch.from_wire(columns)))
+            self.registry.fleet_heard_us = self.clock.now_us
             self.registry.version += 1
 
     # --- waiting for vehicles ---------------------------------------------------------------

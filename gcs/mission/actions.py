@@ -8,6 +8,7 @@ ends only between actions (never mid-dock). The loop's phases (`gcs.mission.loop
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 
 from apad_sitl.vocabulary import Latch, Progress
 from gcs.api import ApadApi, CommandError, GeofenceError, Location
@@ -80,21 +81,35 @@ class LoopActions:
                 self._log("command_failed", what=str(exc))
                 self._sleep(self.settings.poll_s * 4, interruptible)
                 continue
+            mine = self.api.apad(self.apad_id).expected
             # Accepted, but not one report on it (all lost, or the failsafe took over unheard):
             # send it again; a re-send of a Go To in force is answered, not restarted.
-            if not self._wait_until(lambda: self.api.primitive_heard(self.apad_id), timeout_s=GOTO_HEARD_S,
+            if not self._wait_until(partial(self._goto_heard, mine), timeout_s=GOTO_HEARD_S,
                                     interruptible=interruptible):
                 self._log("goto_unconfirmed", lat=target.lat, lon=target.lon, after_s=GOTO_HEARD_S)
                 continue
-            if not self._wait_until(lambda: self.api.goto_status(self.apad_id) != Progress.IN_PROGRESS,
-                                    timeout_s=trip_limit_s, interruptible=interruptible):
+            if not self._wait_until(partial(self._goto_over, mine), timeout_s=trip_limit_s,
+                                    interruptible=interruptible):
                 self._log("goto_timeout", lat=target.lat, lon=target.lon, after_s=round(trip_limit_s, 1))
+                continue
+            if self._replaced(mine):  # the operator commanded the aPad meanwhile: the loop takes it back
+                self._log("goto_resent", lat=target.lat, lon=target.lon, why="the operator commanded the aPad")
                 continue
             if self.api.goto_status(self.apad_id) != Progress.FAILED:
                 return True
             self._log("goto_resumed", lat=target.lat, lon=target.lon)
         self._log("gave_up", what="go to", lat=target.lat, lon=target.lon, attempts=self.settings.goto_attempts)
         return False
+
+    def _replaced(self, mine: object) -> bool:
+        """Whether another command (the operator's) replaced the primitive this loop commanded."""
+        return self.api.apad(self.apad_id).expected is not mine
+
+    def _goto_heard(self, mine: object) -> bool:
+        return self.api.primitive_heard(self.apad_id) or self._replaced(mine)
+
+    def _goto_over(self, mine: object) -> bool:
+        return self.api.goto_status(self.apad_id) != Progress.IN_PROGRESS or self._replaced(mine)
 
     def _keep_apart(self, target: Location, interruptible: bool) -> None:
         """Several aPads: do not set off while the straight leg to `target` passes within
@@ -124,8 +139,10 @@ class LoopActions:
             s = self._slot(slot)
             return s.mussel_id == mussel_id and s.latch == latch
 
-        def settled() -> bool:
-            failed = self.api.docking_status(self.apad_id) == Progress.FAILED
+        mine = self.api.apad(self.apad_id).expected
+
+        def settled() -> bool:  # an operator's command over the dock: its latch decides alone
+            failed = self.api.docking_status(self.apad_id) == Progress.FAILED or self._replaced(mine)
             return ours(Latch.LATCHED) or (failed and not ours(Latch.CLOSING))
 
         # Never abandon a dock half-way: the waits ignore the end of the mission.

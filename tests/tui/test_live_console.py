@@ -129,7 +129,9 @@ def test_strategy_switch_takes_effect_at_the_next_planning_step() -> None:
     asyncio.run(scenario())
 
 
-def test_quit_now_mid_collection_holds_and_sinks_the_surfaced() -> None:
+def test_quit_now_mid_collection_holds_and_accounts_for_the_surfaced() -> None:
+    """Q quits at once (bounded): the aPad holds, and every aMussel still at the surface is in the
+    whereabouts the console logs as it quits (floating ones were sent down, surfacing ones left)."""
     async def scenario() -> None:
         app, runner = make_app()
         async with app.run_test(size=SIZE) as pilot:
@@ -141,8 +143,11 @@ def test_quit_now_mid_collection_holds_and_sinks_the_surfaced() -> None:
         assert world is not None and world.vehicle is not None
         assert world.vehicle.mode == HOLD_MODE and world.vehicle.primitive.kind == Primitive.HOLD
         assert events_of(runner, "mission_end")[0]["reason"] == "operator stop"
-        states = set(world.fleet.state.state.tolist())
-        assert not states & {int(MusselState.SURFACING), int(MusselState.FLOATING)}
+        fleet = world.fleet.state
+        up = {m for m, st in zip(fleet.ids.tolist(), fleet.state.tolist(), strict=True)
+              if st in (int(MusselState.SURFACING), int(MusselState.FLOATING))}
+        (where,) = events_of(runner, "whereabouts")
+        assert up <= {int(m) for m in where["lost"]}
 
     asyncio.run(scenario())
 

@@ -213,7 +213,7 @@ def test_the_model_follows_every_apad_and_shows_the_selected_one() -> None:
     assert [(a.system_id, a.phase, a.share, a.ended) for a in snap.apads] == [
         (1, "collect", (1, 4), "apad battery"), (2, "charging wait", (2, 3), None)]
     assert list(snap.owner) == [1, 2, 2, 1]
-    assert snap.log[-1] == "00:02 aPad 1: mission_end reason=apad battery"
+    assert snap.log[-1] == "00:02 aPad 1: mission ended: apad battery"
     model.event(Event(3.0, "mission_end", {"apad": 2, "reason": "operator stop"}))
     assert model.snapshot(3.0).ended == "apad battery" and model.snapshot(3.0).phase == "collect"  # aPad 1's
 
