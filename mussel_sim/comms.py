@@ -117,7 +117,7 @@ class FleetRunner:
         self.send = send
         self.sensors: SensorField = sensors if sensors is not None else DummySensors()
         self.config = config or CommsConfig()
-        self.recorder = recorder if recorder is not None else Recorder(state.ids)
+        self.recorder = recorder if recorder is not None else Recorder(state.ids, start_us=state.time_us)
         self.on_events = on_events
         self.local = local
         self.local_batch = local_batch
@@ -175,7 +175,7 @@ class FleetRunner:
         if self.end_us is not None and now_us > self.end_us:
             return
         self.state, events = step(self.state, self._take_inputs(), self.params, self.rng, dt_us / US_PER_S)
-        self.recorder.record(self.state)
+        self.recorder.record(self.state, dt_us)
         self.last_events = events
         if self.config.report_refusals:
             self._report(events)

@@ -17,8 +17,9 @@ Within one step, in this order: release events, dock events, sink commands, surf
 (the range check uses positions at the start of the step and the aPad positions in the
 inputs), then SURFACING/SINKING timers, battery (DOCKED charges, every other state discharges:
 buoyancy motors and electronics stay on), depletion, positions (docked agents follow their aPad,
-the rest move with current and random drift) and depths. Only ACTIVE agents earn uptime; an
-agent counts as active in step k if it is ACTIVE at the end of step k.
+the rest move with current and random drift) and depths; a DEPLETED agent stays at the depth where
+its battery gave out (at the surface if it was floating). Uptime is the recorder's business
+(`mussel_sim.recorder`): an agent counts as active in step k by its state at the end of step k.
 """
 
 from __future__ import annotations

@@ -8,6 +8,12 @@ are always the steps that are multiples of the current stride, so a trace stays 
 complete for small fleets (12 aMussels x 24 h at 1 Hz is 4 MB) and bounded for large ones.
 `trace_every_steps=0` turns traces off; `trace_ids` restricts them to some aMussels.
 
+What counts as active (eq. (3) and the active count): ACTIVE, and SINKING unless
+`sinking_counts_active=False`. The paper's simulated aMussel "transitions to a discharging battery
+behaviour and becomes active" as it is released, so the 20 s it takes to reach the seabed count as
+uptime there; the other reading (measuring only once on the seabed) is the option. Every step also
+goes into `times` (`StateTimes`): the time in each state, whatever counts as active.
+
 For crash-safe checkpoints of long missions the recorder splits in two: `head()` is its fixed-size
 state (counters, stride), `rows_since(k)` the rows that grow with the mission (per-step active count
 and time, battery trace rows) added from step k on, so a checkpoint can append them to a file and
@@ -26,7 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mussel_sim.fleet_state import ACTIVE, FleetState
+from mussel_sim.fleet_state import ACTIVE, N_STATES, SINKING, FleetState
+from mussel_sim.state_time import StateTimes
 
 DEFAULT_MAX_TRACE_BYTES = 64 * 2**20
 
@@ -52,6 +59,9 @@ class RecorderHead:
     active_steps: NDArray[np.int64]
     n_steps: int
     trace_stride: int
+    sinking_counts_active: bool
+    times: StateTimes
+    last_us: int  # mission time of the last state recorded (or the start)
 
 
 @dataclass(frozen=True)
@@ -73,12 +83,22 @@ class Recorder:
         trace_every_steps: int = 1,
         trace_ids: ArrayLike | None = None,
         max_trace_bytes: int = DEFAULT_MAX_TRACE_BYTES,
+        sinking_counts_active: bool = True,
+        start_us: int = 0,
     ) -> None:
+        """`start_us`: mission time of the state before the first step (a step's length, when
+        `record` is not told it, is the time since the state recorded before)."""
         self.ids = np.asarray(ids, np.int64)
+        self.sinking_counts_active = sinking_counts_active
+        self._counts = np.zeros(N_STATES, bool)  # MusselState -> counts as active
+        self._counts[ACTIVE] = True
+        self._counts[SINKING] = sinking_counts_active
+        self.times = StateTimes.zeros(self.ids.size)
+        self._last_us = int(start_us)
         self._trace_ids_arg = None if trace_ids is None else np.asarray(trace_ids, np.int64)
         self._max_trace_bytes = int(max_trace_bytes)
         n = self.ids.size
-        self.active_steps = np.zeros(n, np.int64)  # (n,) steps each agent ended ACTIVE
+        self.active_steps = np.zeros(n, np.int64)  # (n,) steps each agent ended active
         self.n_steps = 0
         self._active_count = np.zeros(1024, np.int32)  # (capacity,) grows by doubling
         self._time_us = np.zeros(1024, np.int64)
@@ -99,9 +119,12 @@ class Recorder:
         self._trace_rows: list[NDArray[np.float32]] = []
         self._trace_steps: list[int] = []
 
-    def record(self, state: FleetState) -> None:
-        """Count one step that ended in `state` (state.ids must be this recorder's ids)."""
-        active = state.state == ACTIVE
+    def record(self, state: FleetState, dt_us: int | None = None) -> None:
+        """Count one step of `dt_us` (default: since the last state recorded) that ended in `state`
+        (state.ids must be this recorder's ids)."""
+        self.times.add(state.state, state.time_us - self._last_us if dt_us is None else dt_us)
+        self._last_us = state.time_us
+        active = self._counts[state.state]
         self.active_steps += active
         k = self.n_steps
         if k == self._active_count.size:
@@ -127,7 +150,8 @@ class Recorder:
     def head(self) -> RecorderHead:
         """The fixed-size state (a copy): what `restore` needs besides the rows."""
         return RecorderHead(self.ids, self._trace_ids_arg, self._max_trace_bytes, self.active_steps.copy(),
-                            self.n_steps, self.trace_stride)
+                            self.n_steps, self.trace_stride, self.sinking_counts_active, self.times.copy(),
+                            self._last_us)
 
     def rows_since(self, k: int) -> RecorderRows:
         """The rows of steps k, k + 1, ... recorded so far (copies; trace rows only as kept now)."""
@@ -145,10 +169,13 @@ class Recorder:
 
         `rows.trace` may hold rows that were decimated since they were taken: they are dropped here.
         """
-        rec = cls(head.ids, 1, head.trace_ids, head.max_trace_bytes)
+        rec = cls(head.ids, 1, head.trace_ids, head.max_trace_bytes, head.sinking_counts_active, head.last_us)
         n = int(head.n_steps)
         if head.active_steps.shape != rec.ids.shape or n < 0 or int(head.trace_stride) < 0:
             raise ValueError("recorder head does not fit its ids")
+        if head.times.state_us.shape != rec.times.state_us.shape:
+            raise ValueError("recorder head's state times do not fit its ids")
+        rec.times = head.times.copy()
         if rows.time_us.shape != (n,) or rows.active_count.shape != (n,):
             raise ValueError(f"{rows.time_us.size} step rows for {n} steps")
         steps = np.asarray(rows.trace_steps, np.int64)
@@ -174,13 +201,13 @@ class Recorder:
         return rec
 
     def uptime_pct(self) -> NDArray[np.float64]:
-        """Eq. (3): 100 * active steps / all steps, per agent `(n,)`."""
+        """Eq. (3): 100 * active steps / all steps, per agent `(n,)` (SINKING is active if it counts)."""
         if self.n_steps == 0:
             return np.zeros(self.ids.size)
         return 100.0 * self.active_steps / self.n_steps
 
     def active_count(self) -> NDArray[np.int32]:
-        """Number of ACTIVE aMussels at the end of each step `(n_steps,)`."""
+        """Number of aMussels active (ACTIVE, or SINKING if it counts) at the end of each step `(n_steps,)`."""
         return self._active_count[: self.n_steps].copy()
 
     def step_time_us(self) -> NDArray[np.int64]:

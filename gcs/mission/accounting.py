@@ -2,7 +2,8 @@
 
 Nothing may be lost silently: each aMussel is at a position on the seabed (its start or where it
 was redeployed, or where it is still working), on a known aPad slot (the fleet and the aPad's slot
-report agree), or reported lost with a reason.
+report agree), or reported lost with a reason. One whose battery gave out while it was called up
+stays where that happened: at the surface, or in the water on its way up; it is reported there.
 """
 
 from __future__ import annotations
@@ -19,12 +20,13 @@ from mussel_sim.vocabulary import MusselState
 
 # Farther than this from where it started or was put back, a submerged aMussel is somewhere unexpected.
 HOME_TOLERANCE_M = 10.0
+SURFACE_DEPTH_M = 0.01  # a depleted aMussel this shallow is at the surface (floating ones are at 0 m)
 
 
 @dataclass(frozen=True)
 class MusselAccount:
     mussel_id: int
-    where: str  # "seabed", "slot", "lost"
+    where: str  # "seabed", "slot", "surface" or "water" (depleted on its way up), "lost"
     detail: str  # slot number, distance from home, or the reason it is lost
 
     @property
@@ -33,9 +35,11 @@ class MusselAccount:
 
 
 def account(
-    fleet: FleetState, frame: LocalFrame, homes_deg: dict[int, tuple[float, float]], apads: dict[int, VehicleView]
+    fleet: FleetState, frame: LocalFrame, homes_deg: dict[int, tuple[float, float]], apads: dict[int, VehicleView],
+    seabed_depth_m: float | None = None,
 ) -> list[MusselAccount]:
-    """One entry per aMussel, from the fleet's own state and the aPads' slot reports."""
+    """One entry per aMussel, from the fleet's own state and the aPads' slot reports. With
+    `seabed_depth_m` a depleted aMussel above the seabed is told apart ("water") from one on it."""
     ids = [int(i) for i in fleet.ids]
     home_lat = np.array([homes_deg[i][0] for i in ids])
     home_lon = np.array([homes_deg[i][1] for i in ids])
@@ -55,8 +59,21 @@ def account(
             out.append(MusselAccount(mussel_id, "lost", f"left {state.name.lower()} at the surface"))
         else:
             off_m = float(np.hypot(fleet.x_m[k] - hx[k], fleet.y_m[k] - hy[k]))
+            where, what = "seabed", state.name.lower()
+            if state == MusselState.DEPLETED:
+                where = _depleted_where(float(fleet.depth_m[k]), seabed_depth_m)
+                what = {"surface": "depleted at the surface", "water": f"depleted {fleet.depth_m[k]:.1f} m deep",
+                        "seabed": "depleted"}[where]
             if off_m > HOME_TOLERANCE_M:
-                out.append(MusselAccount(mussel_id, "lost", f"{state.name.lower()} {off_m:.1f} m from its position"))
+                out.append(MusselAccount(mussel_id, "lost", f"{what} {off_m:.1f} m from its position"))
             else:
-                out.append(MusselAccount(mussel_id, "seabed", f"{state.name.lower()}, {off_m:.2f} m from its position"))
+                out.append(MusselAccount(mussel_id, where, f"{what}, {off_m:.2f} m from its position"))
     return out
+
+
+def _depleted_where(depth_m: float, seabed_depth_m: float | None) -> str:
+    if depth_m <= SURFACE_DEPTH_M:
+        return "surface"
+    if seabed_depth_m is not None and depth_m < seabed_depth_m - SURFACE_DEPTH_M:
+        return "water"
+    return "seabed"

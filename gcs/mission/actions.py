@@ -18,6 +18,7 @@ from gcs.mission.real_fleet import RealFleet
 from gcs.mission.swarm import FleetShares, orphans, route_conflicts
 from gcs.records.events import EventLog
 from missiontime import Clock, seconds_to_us, us_to_s
+from mussel_sim.battery import sim_minutes
 from mussel_sim.geo import distance_m
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
@@ -26,6 +27,11 @@ GOTO_SLACK_S = 60.0
 GOTO_SLOWNESS = 3.0
 # The aPad unheard this long: the loop starts nothing new (no call-up, no trip) until it is heard.
 LINK_LOST_S = 3.0
+# An aMussel is collectable only if its battery lasts until the aPad can dock it: the trip there (at
+# the aPad's speed, this much slower for acceleration and the last metres) or, if it can only be
+# called up on arrival, the trip and its rise, and this margin for the close-in and the latch.
+TRIP_SLOWNESS = 1.2
+DOCK_MARGIN_S = 10.0
 GOTO_HEARD_S = 5.0  # the aPad reports its primitive every second; five lost in a row is rare even at 40 % loss
 
 
@@ -279,7 +285,7 @@ class LoopActions:
         for m in ids:
             if not self.api.mussels[m].simulated:
                 self._note_home(m)
-            if m not in self.homes or not self._serves(m):
+            if m not in self.homes or not self._serves(m) or self._cannot_collect(m) is not None:
                 continue
             if self.api.inside_geofence(self.api.get_location(m)):
                 out.append(m)
@@ -288,6 +294,29 @@ class LoopActions:
                 where = self.api.get_location(m)
                 self._log("unreachable", mussel=m, lat=where.lat, lon=where.lon, why="outside the geofence")
         return out
+
+    def _cannot_collect(self, mussel_id: int) -> str | None:
+        """Why the aPad should not set off for this aMussel now, or None: it has depleted (below
+        3600 mV it cannot surface), it is no longer waiting on the seabed or at the surface (e.g.
+        docked elsewhere), or its battery will give out before the aPad could dock it (eq. 1 over
+        the trip, its rise and the latch: it drains the same on the seabed and at the surface, and
+        would be left in the water or at the surface, depleted)."""
+        state = self._state(mussel_id)
+        if state == MusselState.DEPLETED:
+            return "depleted"
+        if state not in (MusselState.ACTIVE, MusselState.FLOATING):
+            return f"it is {state.name.lower()}"
+        if self.real is not None:
+            distance = self._distance_to(mussel_id)
+            trip_s = TRIP_SLOWNESS * distance / self.settings.apad_speed_mps
+            rise_s = 0.0 if state == MusselState.FLOATING else self.settings.mussel_surfacing_s
+            call_up_s = 0.0 if distance <= self.settings.acoustic_range_m else trip_s
+            need_s = max(trip_s, call_up_s + rise_s) + DOCK_MARGIN_S
+            per_s = self.real.discharge.rate_per_min * sim_minutes(self.real.theta, 1.0)
+            battery = self._battery(mussel_id)
+            if battery <= per_s * need_s:
+                return f"its battery ({battery:.3f}) would give out before it could be docked ({need_s:.0f} s)"
+        return None
 
     def _free_slots(self) -> list[int]:
         return self.api.apad(self.apad_id).free_slots()

@@ -59,6 +59,8 @@ class LoopStatus:
     end_reason: EndReason | None = None
     phase_s: dict[Phase, float] = field(default_factory=dict)  # mission seconds spent in each phase so far
     dockings: list[tuple[float, int]] = field(default_factory=list)  # (mission s, aMussel id) of each dock
+    # Mission microseconds the aPad spent travelling, docking, holding (gcs.mission.time_accounting)
+    apad_time_us: dict[str, int] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -73,6 +75,7 @@ class LoopSettings:
     call_up_margin_s: float = 300.0
     poll_s: float = 0.5  # how often waits look again (mission time)
     apad_speed_mps: float = 0.5  # the aPad's cruise speed: how long a Go To may take before it is sent again
+    mussel_surfacing_s: float = 20.0  # how long an aMussel takes to rise once called up (the fleet's)
     # Bounds on retrying (lossy links, a refusing aPad): at the bound the loop logs `gave_up`,
     # leaves that aMussel or step for now, and goes on.
     goto_attempts: int = 8  # Go To commands per target (after failsafe preemptions or trip timeouts)

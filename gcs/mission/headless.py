@@ -1,7 +1,8 @@
 """Headless mission runs: one scenario in lockstep, a `RunResult` and an output folder out.
 
 The output folder holds the GCS .tlog, the aPad's own logs, the event log, `result.json` and
-`traces.npz` (active count and battery traces per step, for reports).
+`traces.npz` (active count and battery traces per step, for reports; where the time went:
+`gcs.mission.time_accounting`).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from gcs.mission.loop import EnergySharingLoop
 from gcs.mission.results import MusselResult, RunResult
 from gcs.mission.scenario import Scenario
 from gcs.mission.swarm_run import apad_rows, run_swarm
+from gcs.mission.time_accounting import ApadTimes, apad_shares, mussel_times, trace_arrays, track
 from gcs.mission.world import LOCKSTEP_EPOCH_US, LinkOptions, World, lockstep_world
 from gcs.records import checkpoint
 from mavlink_dialect.transport import UdpTransport
@@ -66,11 +68,15 @@ def run_mission(
             checkpoint.restore(world, saved)
         if progress is not None:
             world.clock.scheduler.every(10.0, lambda now_us: progress(us_to_s(now_us)), "progress", world.clock.now_us)
+        sysid = scenario.apad.system_id
+        apad_times = {sysid: saved.loop_status.apad_time_us if saved is not None else {}}
+        track(world, apad_times)
         world.api.wait_apad(timeout_s=10.0)
         world.request_telemetry()
         loop = world.mission_loop()
         if saved is not None:
             loop.status = saved.loop_status
+        loop.status.apad_time_us = apad_times[sysid]  # the same dict: a checkpoint of the status holds it
         if ckpt_files is not None:
             files = ckpt_files
             world.clock.scheduler.every(
@@ -81,9 +87,9 @@ def run_mission(
         if on_end is not None:
             on_end(world)
         result = _result(world, loop.status.cost_m, loop.status.cycles, str(end), time.perf_counter() - wall_start,
-                         out_dir, {loop.apad_id: loop}, apad_rows(world, None, loop))
+                         out_dir, {loop.apad_id: loop}, apad_rows(world, None, loop), apad_times)
         if out_dir is not None:
-            _write_outputs(world, result, out_dir)
+            _write_outputs(world, result, out_dir, apad_times)
         if ckpt_files is not None:
             ckpt_files.remove()  # finished: nothing to resume
         return result
@@ -102,13 +108,15 @@ def _run_swarm(
     try:
         if progress is not None:
             world.clock.scheduler.every(10.0, lambda now_us: progress(us_to_s(now_us)), "progress", world.clock.now_us)
+        apad_times: dict[int, ApadTimes] = {a.system_id: {} for a in scenario.apads}
+        track(world, apad_times)
         outcome = run_swarm(world)
         if on_end is not None:
             on_end(world)
         result = _result(world, outcome.cost_m, outcome.cycles, outcome.end_reason, time.perf_counter() - wall_start,
-                         out_dir, outcome.loops, apad_rows(world, outcome, None))
+                         out_dir, outcome.loops, apad_rows(world, outcome, None), apad_times)
         if out_dir is not None:
-            _write_outputs(world, result, out_dir)
+            _write_outputs(world, result, out_dir, apad_times)
         return result
     finally:
         world.close()
@@ -116,7 +124,7 @@ def _run_swarm(
 
 def _result(
     world: World, cost_m: float, cycles: int, end: str, wall_s: float, out_dir: Path | None,
-    loops: dict[int, EnergySharingLoop], apads: list[dict[str, Any]],
+    loops: dict[int, EnergySharingLoop], apads: list[dict[str, Any]], apad_times: dict[int, ApadTimes],
 ) -> RunResult:
     s = world.scenario
     rec = world.fleet.recorder
@@ -127,17 +135,19 @@ def _result(
     for sysid, loop in sorted(loops.items()):
         for t_s, mussel_id in loop.status.dockings:
             dockings.setdefault(mussel_id, []).append({"t_s": round(t_s, 2), "apad": sysid})
+    state_s, first_depleted_s = mussel_times(rec)
     mussels = [
         MusselResult(int(i), round(start_battery[int(i)], 6), round(float(u), 4),
-                     sorted(dockings.get(int(i), []), key=lambda d: d["t_s"]))
-        for i, u in zip(rec.ids, uptime, strict=True)
+                     sorted(dockings.get(int(i), []), key=lambda d: d["t_s"]), states, first)
+        for i, u, states, first in zip(rec.ids, uptime, state_s, first_depleted_s, strict=True)
     ]
+    apads = [row | apad_shares(apad_times.get(row["sysid"], {})) for row in apads]
     travelled = sum(v.state.distance_travelled_m for v in world.vehicles.values())
     stats = world.link.codec.stats
     homes = {m: (h.lat, h.lon) for m, h in world.homes.items()}
     whereabouts = [
         {"id": a.mussel_id, "where": a.where, "detail": a.detail}
-        for a in account(world.fleet.state, world.frame, homes, world.link.vehicles)
+        for a in account(world.fleet.state, world.frame, homes, world.link.vehicles, world.fleet.params.seabed_depth_m)
     ]
     vehicles = list(world.vehicles.values())  # the aPads' counters are summed over the swarm
     messages = {"gcs_sent": stats.sent, "fleet_sent": world.fleet.codec.stats.sent,
@@ -188,12 +198,12 @@ def _write_endpoints(world: World, out_dir: Path) -> None:
     (out_dir / "endpoints.json").write_text(json.dumps(ports) + "\n")
 
 
-def _write_outputs(world: World, result: RunResult, out_dir: Path) -> None:
+def _write_outputs(world: World, result: RunResult, out_dir: Path, apad_times: dict[int, ApadTimes]) -> None:
     rec = world.fleet.recorder
     steps, battery = rec.battery_trace()
-    np.savez_compressed(
-        out_dir / "traces.npz",
+    arrays: dict[str, Any] = dict(
         ids=rec.ids, step_time_us=rec.step_time_us(), active_count=rec.active_count(),
-        battery_steps=steps, battery=battery, trace_ids=rec.trace_ids,
+        battery_steps=steps, battery=battery, trace_ids=rec.trace_ids, **trace_arrays(rec, apad_times),
     )
+    np.savez_compressed(out_dir / "traces.npz", **arrays)
     (out_dir / "result.json").write_text(json.dumps(result.to_json(), indent=1) + "\n")

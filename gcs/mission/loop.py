@@ -16,6 +16,7 @@ import functools
 import numpy as np
 
 from apad_sitl.vocabulary import Latch
+from gcs.mission.accounting import SURFACE_DEPTH_M
 from gcs.mission.actions import LoopActions
 from gcs.mission.control import EndReason, LoopControl, LoopSettings, MissionEnded, Phase
 from gcs.mission.planner import CollectStrategy, CostWeights, PlanInput, plan
@@ -119,9 +120,14 @@ class EnergySharingLoop(LoopActions):
 
     def _collect(self, route: list[int]) -> None:
         self._set_phase(Phase.COLLECT)
-        for mussel_id in route:
+        route = list(route)
+        while route:
             self._check_end()  # between aMussels nothing is half done: an operator stop ends here
             self._wait_for_link()  # and nothing is lost by waiting here as long as the mission lasts
+            route = self._recheck_route(route)
+            if not route:
+                break
+            mussel_id = route.pop(0)
             free = self._free_slots()
             if not free:
                 break
@@ -142,12 +148,18 @@ class EnergySharingLoop(LoopActions):
                 self._log("skip", mussel=mussel_id,
                           why=RESHARED if not self._serves(mussel_id) else "no aPad within acoustic range")
                 continue
-            if not self._wait_until(functools.partial(self._floating, mussel_id), self.settings.surfacing_timeout_s,
-                                    interruptible=False):
+            if not self._wait_until(functools.partial(self._floating_or_depleted, mussel_id),
+                                    self.settings.surfacing_timeout_s, interruptible=False):
                 if self._taken_over(mussel_id):
                     continue
                 self._log("skip", mussel=mussel_id, why="did not surface", state=self._state(mussel_id).name)
                 self._sink(mussel_id)  # it may surface later: it must not float there forever
+                continue
+            if self._state(mussel_id) == MusselState.DEPLETED:  # no use waiting it out: it cannot move now
+                self._release(mussel_id)
+                at_surface = self.api.mussels[mussel_id].depth_m <= SURFACE_DEPTH_M
+                self._log("skipped", mussel=mussel_id,
+                          why="depleted at the surface" if at_surface else "depleted before it floated")
                 continue
             # It surfaced where it was last localised underwater, give or take drift: close in.
             if self._taken_over(mussel_id):
@@ -163,6 +175,41 @@ class EnergySharingLoop(LoopActions):
                 self._sink(mussel_id)
                 self._log("skip", mussel=mussel_id, why="docking failed")
         self.status.target_mussel = 0
+
+    def _recheck_route(self, route: list[int]) -> list[int]:
+        """Before each leg: drop every aMussel of the route that can no longer be collected (a
+        `skipped` event with the reason: depleted meanwhile, or its battery would give out before it
+        floats), and if any was dropped plan the order of the rest again, from here, with the
+        strategy (those already floating first, as planned)."""
+        keep = []
+        for mussel_id in route:
+            why = self._cannot_collect(mussel_id)
+            if why is None:
+                keep.append(mussel_id)
+            else:
+                self._log("skipped", mussel=mussel_id, why=why)
+        if len(keep) == len(route):
+            return route
+        floating = [m for m in keep if self._floating(m)]
+        rest = [self.api.mussels[m] for m in keep if m not in floating]
+        position = self.api.position(self.apad_id)
+        inp = PlanInput(
+            apads={self.apad_id: (position.lat, position.lon)},
+            capacity={self.apad_id: len(rest)},
+            mussel_ids=np.array([m.mussel_id for m in rest], np.int64),
+            lat_deg=np.array([m.location.lat for m in rest]),
+            lon_deg=np.array([m.location.lon for m in rest]),
+            battery_frac=np.array([self._battery(m.mussel_id) for m in rest]),
+        )
+        new = floating + plan(self.status.strategy, inp, self._weights)[self.apad_id] if rest else floating
+        if sorted(new) != sorted(keep):  # a strategy that would not take them all: keep the planned order
+            new = keep
+        self.status.route = new
+        self._log("replan_collection", strategy=self.status.strategy, route=new)
+        return new
+
+    def _floating_or_depleted(self, mussel_id: int) -> bool:
+        return self._state(mussel_id) in (MusselState.FLOATING, MusselState.DEPLETED)
 
     def _charging_wait(self) -> None:
         self._set_phase(Phase.CHARGING_WAIT)

@@ -25,6 +25,8 @@ class MusselResult:
     start_battery: float
     uptime_pct: float
     dockings: list[dict[str, Any]] = field(default_factory=list)  # each {"t_s", "apad"} that docked it
+    state_s: dict[str, float] = field(default_factory=dict)  # seconds in each state; they sum to the mission time
+    first_depleted_s: float | None = None  # mission time it first depleted; None: never
 
 
 @dataclass(frozen=True)
@@ -45,7 +47,9 @@ class RunResult:
     out_dir: str = ""
     messages: dict[str, int] = field(default_factory=dict)  # MAVLink counters of the run
     whereabouts: list[dict[str, Any]] = field(default_factory=list)  # every aMussel at the end (gcs.mission.accounting)
-    apads: list[dict[str, Any]] = field(default_factory=list)  # one row per aPad (gcs.mission.swarm_run.apad_rows)
+    # One row per aPad (gcs.mission.swarm_run.apad_rows), with its travelling, docking and holding shares
+    # of the mission time (gcs.mission.time_accounting).
+    apads: list[dict[str, Any]] = field(default_factory=list)
 
     def to_json(self) -> dict[str, Any]:
         return asdict(self)
@@ -87,6 +91,29 @@ def apads_table(results: list[RunResult]) -> Table | None:
                    f"{a['cost_m']:.1f}", str(a["dockings"]), str(a["cycles"]), f"{100 * a['idle_share']:.1f}",
                    str(a["end_reason"])]
             table.add_row(*([f"{r.scenario} {r.strategy} s{r.seed}"] if several else []), *row)
+    return table
+
+
+def time_table(results: list[RunResult]) -> Table | None:
+    """Where the time went, one row per run: the aMussels' mean share of the mission active, docked
+    and depleted, the first depletion, and the aPads' shares moving and holding (result.json has
+    every state, docking and each aPad); None if no run says."""
+    runs = [r for r in results if r.mussels and r.mussels[0].state_s]
+    if not runs:
+        return None
+    table = Table(title="Where the time went, % of mission", box=box.SIMPLE_HEAD, pad_edge=False, collapse_padding=True,
+                  caption="aMussels: fleet mean (the rest: on the way up or down); aPad: the rest docking")
+    for col in ("run", "active", "docked", "depleted", "1st depl.", "aPad moving", "holding"):
+        table.add_column(col, justify="left" if col == "run" else "right", no_wrap=True)
+    for r in runs:
+        def pct(state: str, r: RunResult = r) -> str:
+            return f"{100 * sum(m.state_s.get(state, 0.0) for m in r.mussels) / (len(r.mussels) * r.duration_s):.1f}"
+
+        firsts = [m.first_depleted_s for m in r.mussels if m.first_depleted_s is not None]
+        apad = [f"{100 * np.mean([a.get(k, 0.0) for a in r.apads]):.1f}" if r.apads else "-"
+                for k in ("travelling_share", "holding_share")]
+        table.add_row(f"{r.scenario} {r.strategy} s{r.seed}", pct("active"), pct("docked"), pct("depleted"),
+                      f"{min(firsts) / 60:.1f} min" if firsts else "never", *apad)
     return table
 
 

@@ -42,6 +42,7 @@ from gcs.mission.results import (
     seed_stats,
     seed_stats_table,
     shape_table,
+    time_table,
 )
 from gcs.mission.scenario import SEED_MAX, THETA_RANGE, Scenario, ScenarioError, load_scenario
 from gcs.mission.scenario_models import check_inputs
@@ -240,6 +241,9 @@ def run(args: argparse.Namespace) -> int:
         per_apad = apads_table(results)
         if per_apad is not None:
             console.print(per_apad)
+        where_time_went = time_table(results)
+        if where_time_went is not None:
+            console.print(where_time_went)
     mission_s = sum(r.duration_s for r in results)
     run_s = sum(r.wall_s for r in results)
     out_dirs = sorted({str(Path(r.out_dir).parent) for r in results})

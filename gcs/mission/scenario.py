@@ -88,6 +88,8 @@ class MissionConfig:
     redeploy_strategy: str  # a RedeployStrategy
     distance_scale: float  # planner cost scale factors
     energy_scale: float
+    # The paper counts the sinking after a release as uptime (eq. 3); false: only once on the seabed.
+    sinking_counts_active: bool = True
 
 
 @dataclass(frozen=True)
@@ -301,6 +303,7 @@ def scenario_from_data(path: Path, data: dict[str, Any]) -> Scenario:
         redeploy_strategy=RedeployStrategy(m.text("redeploy_strategy", "greedy", REDEPLOY)),
         distance_scale=m.number("distance_scale", 1.0, lo=0.0),
         energy_scale=m.number("energy_scale", 0.0, lo=0.0),
+        sinking_counts_active=m.flag("sinking_counts_active", True),
     )
     m.done()
 

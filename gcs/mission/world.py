@@ -32,6 +32,7 @@ from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, F
 from mussel_sim.fleet_state import initial_state
 from mussel_sim.geo import LocalFrame
 from mussel_sim.placement import load_area
+from mussel_sim.recorder import Recorder
 from mussel_sim.startconfig import StartConfig
 
 # .tlog stamps of lockstep runs start here (2020-06-12 00:00 UTC), so logs are repeatable.
@@ -126,6 +127,7 @@ class World:
             dock_reach_m=a.dock_reach_m,
             battery_end_v=a.battery_end_v,
             apad_speed_mps=a.speed_mps,
+            mussel_surfacing_s=s.fleet.surfacing_time_s,
         )
         clock = clock or self.clock
         api = self.api if clock is self.clock else self.api.on_clock(clock)
@@ -171,11 +173,14 @@ def build_world(
                 append=append_logs, apad_ids=apad_ids)
     events = EventLog(out_dir / "events.jsonl" if out_dir else None, append=append_logs)
     port = link.attach(None, forward=APAD_HEARS_FROM_FLEET, system_id=FLEET_SYSTEM_ID)
+    state = initial_state(config, frame, params, clock.now_us)
     fleet = FleetRunner(
-        initial_state(config, frame, params, clock.now_us), params, rng, frame,
+        state, params, rng, frame,
         Codec(FLEET_SYSTEM_ID, FLEET_COMPONENT_ID), port.send_bytes, sensor_field(scenario, area, frame),
         CommsConfig(status_rate_hz=scenario.fleet.status_rate_hz, sensors_rate_hz=scenario.fleet.sensors_rate_hz,
                     apad_ids=apad_ids, commanders=frozenset({link.codec.system_id})),
+        recorder=Recorder(state.ids, sinking_counts_active=scenario.mission.sinking_counts_active,
+                          start_us=state.time_us),
         local=port.send_local, local_batch=port.send_batch,
     )
     port.handler = fleet.handle
