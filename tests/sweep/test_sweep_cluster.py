@@ -59,14 +59,10 @@ def dask_processes(folder: Path, workers: int = 2) -> Iterator[str]:
             client.wait_for_workers(workers, timeout=START_TIMEOUT_S)
         yield address
     finally:
+        for proc in procs:  # nothing of theirs to keep: a graceful close only waits on reconnects
+            proc.kill()
         for proc in procs:
-            proc.terminate()
-        for proc in procs:
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+            proc.wait()
         log.close()
 
 
