@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import logging
 import os
+import traceback
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -24,10 +25,17 @@ class ClusterError(RuntimeError):
     """The cluster could not be started or reached (one line)."""
 
 
+@dataclass(frozen=True)
+class Failure:
+    cell: Cell
+    why: str  # one line: the exception
+    trace: str  # where it was raised, on the worker
+
+
 @dataclass
 class Outcome:
     ran: int = 0
-    failed: list[tuple[Cell, str]] = field(default_factory=list)
+    failed: list[Failure] = field(default_factory=list)
 
 
 @contextmanager
@@ -75,7 +83,8 @@ def run_cells(
             cell = futures.pop(future)
             if future.status == "error":
                 exc = future.exception()
-                outcome.failed.append((cell, f"{type(exc).__name__}: {exc}"))
+                trace = "".join(traceback.format_exception(type(exc), exc, future.traceback()))
+                outcome.failed.append(Failure(cell, f"{type(exc).__name__}: {exc}", trace))
             else:
                 on_done(cell, future.result())
                 outcome.ran += 1

@@ -10,8 +10,10 @@ from rich.console import Console
 
 from gcs.sweep import store
 from gcs.sweep.cells import Cell
-from gcs.sweep.cluster import dask_client, describe, run_cells
+from gcs.sweep.cluster import Failure, dask_client, describe, run_cells
 from gcs.sweep.spec import SweepSpec
+
+FAILED = "failed.txt"  # the tracebacks of the missions that failed in the last run
 
 
 @dataclass
@@ -19,7 +21,7 @@ class SweepOutcome:
     cells: int  # missions in the spec
     skipped: int  # already in DIR: not run again
     ran: int = 0
-    failed: list[tuple[Cell, str]] = field(default_factory=list)  # (cell, why): not written, tried again next time
+    failed: list[Failure] = field(default_factory=list)  # not written: tried again next time
     rows: int = 0  # in results.parquet
 
 
@@ -44,11 +46,23 @@ def sweep(
         outcome.ran, outcome.failed = ran.ran, ran.failed
         console.print(f"ran {ran.ran} missions in {time.perf_counter() - started:.0f} s"
                       + (f", {len(ran.failed)} failed" if ran.failed else ""))
-    for cell, why in outcome.failed:
-        console.print(f"[red]failed[/] {cell.label}: {why}")
-    failed = {c.key for c, _ in outcome.failed}
+    _write_failures(out, outcome.failed, console)
+    failed = {f.cell.key for f in outcome.failed}
     finished = [c for c in cells if c.key not in failed]
     if finished:
         outcome.rows = len(store.write_results(out, finished, spec.swept))
         console.print(f"{outcome.rows} rows in {out / 'results.parquet'} and {out / 'results.csv'}")
     return outcome
+
+
+def _write_failures(out: Path, failed: list[Failure], console: Console) -> None:
+    """Each failed mission in a line on the console; with its traceback in DIR/failed.txt."""
+    path = out / FAILED
+    if not failed:
+        path.unlink(missing_ok=True)
+        return
+    for f in failed:
+        console.print(f"[red]failed[/] {f.cell.label}: {f.why}")
+    with store.atomic(path) as tmp:
+        tmp.write_text("".join(f"{f.cell.label} (cell {f.cell.key}):\n{f.trace}\n" for f in failed), encoding="utf-8")
+    console.print(f"tracebacks in {path}")

@@ -112,3 +112,23 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path: Path, capsys: pytest.Capture
     assert "not a sweep folder" in capsys.readouterr().err
     assert main(["sweep", str(spec)]) == 2
     assert "--out DIR is required" in capsys.readouterr().err
+
+
+def test_a_failed_mission_is_listed_not_written_and_tried_again(tmp_path: Path) -> None:
+    (tmp_path / "one.toml").write_text(TINY.replace("[0.8, 0.9]", "[0.8]").replace("6m", "1m"))
+    spec = load_spec(tmp_path / "one.toml")
+    cells = make_cells(spec)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "runs").write_text("a file where --keep-runs puts the missions' folders")
+    failed = sweep(spec, cells, out, quiet(), workers=1, processes=False, keep_runs=True)
+    assert (failed.ran, failed.rows, [f.cell.key for f in failed.failed]) == (0, 0, [cells[0].key])
+    assert "Error" in failed.failed[0].why and "\n" not in failed.failed[0].why
+    assert not (out / "cells").exists() and not (out / "results.parquet").exists()
+    assert "Traceback" in (out / "failed.txt").read_text()
+
+    (out / "runs").unlink()
+    again = sweep(spec, cells, out, quiet(), workers=1, processes=False, keep_runs=True)
+    assert (again.skipped, again.ran, again.failed, again.rows) == (0, 1, [], 1)
+    assert not (out / "failed.txt").exists()
+    assert pd.read_parquet(out / "results.parquet")["run_dir"].iloc[0].startswith(str(out / "runs"))
