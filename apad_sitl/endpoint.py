@@ -44,6 +44,7 @@ from apad_sitl.streams import DEFAULT_RATES_HZ, Streams
 from apad_sitl.vehicle import VehicleState
 from apad_sitl.vocabulary import RoverMode
 from mavlink_dialect import Codec, Transport, hot, hot_decode, mavlink, signing
+from mavlink_dialect.transport import Bell, ring_on
 from missiontime import US_PER_S, Scheduler, Task
 from mussel_sim.geo import LocalFrame
 
@@ -211,6 +212,10 @@ class SitlVehicle:
 
     def fileno(self) -> int | None:
         return None if self.closed else self.transport.fileno()
+
+    def ring_on(self, bell: Bell) -> bool:
+        """The scheduler's doorbell (`missiontime.Doorbell`): rung by the transport if it can."""
+        return ring_on(self.transport, bell)
 
     def on(self, msg_id: int, handler: MessageHandler) -> None:
         """Route every received message `msg_id` to `handler` (one handler per message id)."""

@@ -112,6 +112,8 @@ def _check_few(spec: HotSpec, data: bytes, starts: list[int], ends: list[int], k
         heads.append(data[start + 4:start + 7])
         if keep_raw:
             raw.append(data[start:end])
+    if not payloads:  # the common case (heartbeats, commands): no numpy at all
+        return _empty(spec, [] if keep_raw else None), len(starts)
     rec = np.frombuffer(bytearray(b"".join(payloads)), spec.dtype)  # our own copy: writeable
     head = np.frombuffer(b"".join(heads), np.uint8).reshape(len(heads), 3)
     frames = HotFrames({f: rec[f] for f in spec.fieldnames}, head[:, 1].copy(), head[:, 2].copy(), head[:, 0].copy(),
@@ -191,15 +193,28 @@ class SharedDecode:
 
 
 def _frames_of(encoded: hot.Encoded) -> HotFrames:
-    """What decoding an encoded batch's frames gives, from the records they were packed from."""
-    n = len(encoded.records)
-    frames = HotFrames(
-        {f: encoded.records[f] for f in encoded.spec.fieldnames},
-        np.full(n, encoded.system_id, np.uint8), np.full(n, encoded.component_id, np.uint8),
-        ((encoded.first_seq + np.arange(n)) % 256).astype(np.uint8), encoded.frames,
+    """What decoding an encoded batch's frames gives, from the records they were packed from; read-only."""
+    n, first = len(encoded.records), encoded.first_seq
+    records = encoded.records.view()
+    records.flags.writeable = False  # so are the field views taken from it
+    return HotFrames(
+        {f: records[f] for f in encoded.spec.fieldnames},
+        np.frombuffer(bytes([encoded.system_id]) * n, np.uint8),
+        np.frombuffer(bytes([encoded.component_id]) * n, np.uint8),
+        np.frombuffer(bytes((first + k) & 0xFF for k in range(n)), np.uint8), encoded.frames,
     )
-    _read_only(frames)
-    return frames
+
+
+_EMPTY: dict[HotSpec, np.ndarray] = {}
+
+
+def _empty(spec: HotSpec, raw: list[bytes] | None) -> HotFrames:
+    """No frames of `spec` (read-only, shared: there is nothing in them to change)."""
+    rec = _EMPTY.get(spec)
+    if rec is None:
+        rec = _EMPTY[spec] = np.frombuffer(b"", spec.dtype)
+    none = np.frombuffer(b"", np.uint8)
+    return HotFrames({f: rec[f] for f in spec.fieldnames}, none, none, none, raw)
 
 
 def _read_only(frames: HotFrames) -> None:

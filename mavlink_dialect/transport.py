@@ -58,6 +58,12 @@ class Transport(Protocol):
     def close(self) -> None: ...
 
 
+class Bell(Protocol):
+    """What an in-memory end rings on each delivery (`missiontime.Doorbell`)."""
+
+    rings: int
+
+
 class MemoryTransport:
     """One end of an in-memory pair; `send` appends to the peer's inbox. Used in lockstep."""
 
@@ -70,6 +76,7 @@ class MemoryTransport:
         self.peer: MemoryTransport | None = None
         self.closed = False
         self.dropped: Counter[str] = Counter()  # datagrams this end never received, by reason
+        self.bell: Bell | None = None  # rung on every delivery into `inbox` (see `ring_on`)
 
     def send(self, data: bytes) -> None:
         peer = self.peer
@@ -78,6 +85,8 @@ class MemoryTransport:
                 peer.dropped["inbox_full"] += 1
                 return
             peer.inbox.append(bytes(data))
+            if peer.bell is not None:
+                peer.bell.rings += 1
 
     def receive(self) -> list[bytes]:
         if not self.inbox:  # the common case in a lockstep drain: return without copying
@@ -91,6 +100,15 @@ class MemoryTransport:
 
     def close(self) -> None:
         self.closed = True
+
+
+def ring_on(transport: Transport, bell: Bell) -> bool:
+    """Have `transport` ring `bell` on every delivery into it; True if nothing reaches it otherwise (an
+    in-memory end whose peer is one too, no subclass that might fill the inbox its own way)."""
+    if type(transport) is MemoryTransport and type(transport.peer) is MemoryTransport:
+        transport.bell = bell
+        return True
+    return False
 
 
 def memory_pair(label: str = "mem") -> tuple[MemoryTransport, MemoryTransport]:

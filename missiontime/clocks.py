@@ -67,6 +67,21 @@ class Poller(Protocol):
     def fileno(self) -> int | None: ...
 
 
+class Doorbell:
+    """Counts deliveries into in-memory inboxes (`mavlink_dialect.transport.MemoryTransport` rings it).
+
+    A poller that offers `ring_on(bell) -> bool` and answers True receives nothing but what rings the
+    bell. When every poller of a scheduler does, its drain polls only if the bell rang since all
+    inboxes were last seen empty: most lockstep instants (a physics step) deliver nothing, and
+    polling every receiver for nothing was a tenth of a run.
+    """
+
+    __slots__ = ("rings",)
+
+    def __init__(self) -> None:
+        self.rings = 0
+
+
 @dataclass
 class Scheduler:
     """Periodic tasks plus receive pollers; the clocks decide how time passes between them.
@@ -83,6 +98,10 @@ class Scheduler:
     # in `drains_cut`, and time goes on (the tasks run, the next drain takes up the rest).
     strict_drain: bool = True
     drains_cut: int = 0
+    bell: Doorbell = field(default_factory=Doorbell, repr=False)
+    _rung: dict[int, bool] = field(default_factory=dict, repr=False)  # id(poller) -> rings the bell
+    _all_rung: bool = field(default=True, repr=False)
+    _quiet_at: int = -1  # the bell's count when every inbox was last seen empty; -1: not known
 
     def every(self, period_s: float, callback: Callable[[int], None], name: str, start_us: int = 0) -> Task:
         period_us = seconds_to_us(period_s)
@@ -109,11 +128,18 @@ class Scheduler:
             heapq.heappush(self._queue, (task.next_us, task.order, task.generation, task))
 
     def add_poller(self, poller: Poller) -> None:
+        ring_on = getattr(poller, "ring_on", None)
+        self._rung[id(poller)] = bool(ring_on(self.bell)) if ring_on is not None else False
         self.pollers.append(poller)
+        self._all_rung = all(self._rung.values())
+        self._quiet_at = -1
 
     def remove_poller(self, poller: Poller) -> None:
         if poller in self.pollers:
             self.pollers.remove(poller)
+            if poller not in self.pollers:
+                self._rung.pop(id(poller), None)
+                self._all_rung = all(self._rung.values())
 
     def _head(self) -> Task | None:
         """The next task to run, dropping stale and inactive queue entries."""
@@ -149,12 +175,24 @@ class Scheduler:
     def drain(self) -> None:
         """Poll every receiver until nothing more arrives (in-memory delivery is immediate)."""
         pollers = self.pollers
-        for _ in range(MAX_DRAIN_ROUNDS):
-            progressed = False
-            for poller in pollers:
-                progressed |= poller.poll()
-            if not progressed:
-                return
+        if self._all_rung:
+            bell = self.bell
+            for _ in range(MAX_DRAIN_ROUNDS):
+                mark = bell.rings
+                if mark == self._quiet_at:
+                    return  # nothing delivered since every inbox was empty
+                for poller in pollers:
+                    poller.poll()
+                if bell.rings == mark:  # each inbox emptied and none filled meanwhile
+                    self._quiet_at = mark
+                    return
+        else:
+            for _ in range(MAX_DRAIN_ROUNDS):
+                progressed = False
+                for poller in pollers:
+                    progressed |= poller.poll()
+                if not progressed:
+                    return
         if self.strict_drain:
             raise RuntimeError("lockstep livelock: messages kept arriving within one instant")
         self.drains_cut += 1

@@ -25,6 +25,7 @@ its battery gave out (at the surface if it was floating). Uptime is the recorder
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -154,6 +155,7 @@ def step(
 
     # --- SURFACING / SINKING timers (a command given now has already run for this step) ----
     trans = np.flatnonzero((st == SURFACING) | (st == SINKING))
+    trans_at_start = trans.size
     floating = resumed = trans[:0]
     if trans.size:
         timer[trans] -= dt_s
@@ -167,9 +169,11 @@ def step(
     # --- battery and depletion ---------------------------------------------------------------
     docked_mask = st == DOCKED
     u = step_battery(state.battery_frac, docked_mask, params.discharge, params.charge, params.theta, dt_s)
-    newly_depleted = np.flatnonzero((u <= 0.0) & ~docked_mask & (st != DEPLETED))
-    st[newly_depleted] = DEPLETED
-    timer[newly_depleted] = 0.0
+    empty = u <= 0.0
+    newly_depleted = np.flatnonzero(empty & ~docked_mask & (st != DEPLETED)) if empty.any() else _NONE
+    if newly_depleted.size:
+        st[newly_depleted] = DEPLETED
+        timer[newly_depleted] = 0.0
 
     # --- positions ---------------------------------------------------------------------------
     x = state.x_m.copy()
@@ -200,7 +204,8 @@ def step(
     # ACTIVE on the seabed, FLOATING/DOCKED at the surface, DEPLETED where it stopped; in transit linear.
     fixed = _depth_lut(params.seabed_depth_m)[st]
     depth = np.where(np.isnan(fixed), state.depth_m, fixed)
-    trans = np.flatnonzero((st == SURFACING) | (st == SINKING))
+    if trans.size:  # still in transit: the timers' agents that neither arrived nor ran flat
+        trans = trans[(st[trans] == SURFACING) | (st[trans] == SINKING)]
     if trans.size:
         t = timer[trans]
         up = st[trans] == SURFACING
@@ -211,6 +216,8 @@ def step(
         )
         depth[trans] = params.seabed_depth_m * np.clip(frac_down, 0.0, 1.0)
 
+    for fresh in (x, y, depth, u, st, timer, dock_apad, dock_slot):
+        fresh.flags.writeable = False  # ours alone: FleetState keeps them as they are, no view needed
     new_state = FleetState(
         ids=ids,
         x_m=x,
@@ -224,25 +231,39 @@ def step(
         time_us=state.time_us + round(dt_s * US_PER_S),
         step_index=state.step_index + 1,
     )
-    events = StepEvents(
-        surface_accepted_ids=ids[applied.surfaced],
-        surface_refused_out_of_range_ids=ids[applied.refused_range],
-        surface_refused_depleted_ids=ids[applied.refused_depleted],
-        ignored_command_ids=ids[applied.ignored],
-        unknown_ids=applied.unknown,
-        docked_ids=ids[applied.docked],
-        docked_submerged_ids=ids[applied.submerged],
-        released_ids=ids[applied.released],
-        floating_ids=ids[floating],
-        resumed_ids=ids[resumed],
-        depleted_ids=ids[newly_depleted],
-    )
+    if not (applied is _NOTHING and trans_at_start == 0 and newly_depleted.size == 0 and ids.dtype == _NO_IDS.dtype):
+        events = StepEvents(
+            surface_accepted_ids=ids[applied.surfaced],
+            surface_refused_out_of_range_ids=ids[applied.refused_range],
+            surface_refused_depleted_ids=ids[applied.refused_depleted],
+            ignored_command_ids=ids[applied.ignored],
+            unknown_ids=applied.unknown,
+            docked_ids=ids[applied.docked],
+            docked_submerged_ids=ids[applied.submerged],
+            released_ids=ids[applied.released],
+            floating_ids=ids[floating],
+            resumed_ids=ids[resumed],
+            depleted_ids=ids[newly_depleted],
+        )
+    else:  # most steps: nothing happened (the same empty arrays, without eleven indexings)
+        events = _NO_EVENTS
     return new_state, events
 
 
+_NO_IDS: NDArray[np.uint32] = np.zeros(0, np.uint32)
+_NO_IDS.flags.writeable = False
+_NO_EVENTS = StepEvents(
+    surface_accepted_ids=_NO_IDS, surface_refused_out_of_range_ids=_NO_IDS, surface_refused_depleted_ids=_NO_IDS,
+    ignored_command_ids=_NO_IDS, unknown_ids=EMPTY_IDS, docked_ids=_NO_IDS, docked_submerged_ids=_NO_IDS,
+    released_ids=_NO_IDS, floating_ids=_NO_IDS, resumed_ids=_NO_IDS, depleted_ids=_NO_IDS,
+)
+
+
+@cache
 def _depth_lut(seabed_depth_m: float) -> NDArray[np.float64]:
     lut = np.full(N_STATES, np.nan)
     lut[ACTIVE] = seabed_depth_m
     lut[FLOATING] = 0.0
     lut[DOCKED] = 0.0
+    lut.flags.writeable = False  # cached: shared by every step
     return lut

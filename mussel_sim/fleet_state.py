@@ -47,7 +47,9 @@ EMPTY_IDS: NDArray[np.int64] = np.zeros(0, np.int64)
 
 
 def _ids(values: ArrayLike | None) -> NDArray[np.int64]:
-    return EMPTY_IDS if values is None else np.asarray(values, dtype=np.int64).reshape(-1)
+    if values is None or (isinstance(values, list) and not values):  # most steps' inputs: nothing
+        return EMPTY_IDS
+    return np.asarray(values, dtype=np.int64).reshape(-1)
 
 
 @dataclass(frozen=True)
@@ -108,9 +110,13 @@ class FleetState:
     step_index: int = 0
 
     def __post_init__(self) -> None:
-        # Read-only views: a model bug that writes into a previous state fails loudly.
+        # Read-only views: a model bug that writes into a previous state fails loudly. An array that
+        # is read-only already (the step's own new arrays, made so) is kept as it is.
         for name in _STATE_ARRAYS:
-            view = np.asarray(getattr(self, name)).view()
+            value = getattr(self, name)
+            if type(value) is np.ndarray and not value.flags.writeable:
+                continue
+            view = np.asarray(value).view()
             view.flags.writeable = False
             object.__setattr__(self, name, view)
 

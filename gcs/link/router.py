@@ -29,6 +29,7 @@ from gcs.link.registry import VehicleRegistry, VehicleView
 from gcs.link.telemetry import GCS_COMPONENT_ID, GCS_SYSTEM_ID, CommandAck, MusselView, Rejected, read
 from mavlink_dialect import Codec, Transport, hot, mavlink
 from mavlink_dialect.tlog import TlogWriter
+from mavlink_dialect.transport import Bell, ring_on
 from missiontime import Clock, seconds_to_us
 
 # 2 Hz: the aPad holds after FS_GCS_TIMEOUT (3 s) of silence, so 1 Hz would tolerate only two lost
@@ -124,6 +125,10 @@ class _TransportPoller:
 
     def fileno(self) -> int | None:
         return self.transport.fileno()
+
+    def ring_on(self, bell: Bell) -> bool:
+        """The scheduler's doorbell (`missiontime.Doorbell`): rung by the transport if it can."""
+        return ring_on(self.transport, bell)
 
 
 class Link:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from mavlink_dialect.transport import Bell, MemoryTransport, memory_pair, ring_on
 from missiontime import Scheduler, VirtualClock, WallClock
 
 
@@ -124,3 +125,60 @@ def test_wall_clock_rephases_a_task_after_a_long_stall_instead_of_a_burst() -> N
     wall.now_s += 30.0  # the laptop was suspended
     clock.sleep(0.05)
     assert ticks[:2] == [0, 100_000] and len(ticks) == 3  # one run after the stall, not 300
+
+
+class EchoEnd:
+    """A poller on one end of an in-memory pair that answers every datagram with `echoes` more."""
+
+    def __init__(self, transport: MemoryTransport, echoes: int = 0) -> None:
+        self.transport, self.echoes = transport, echoes
+        self.polls: int = 0
+        self.got: list[bytes] = []
+
+    def poll(self) -> bool:
+        self.polls += 1
+        data = self.transport.receive()
+        for d in data:
+            self.got.append(d)
+            if self.echoes:
+                self.echoes -= 1
+                self.transport.send(d + b"'")
+        return bool(data)
+
+    def fileno(self) -> int | None:
+        return None
+
+    def ring_on(self, bell: Bell) -> bool:
+        return ring_on(self.transport, bell)
+
+
+def test_a_drain_polls_in_memory_ends_only_after_a_delivery_and_until_none_is_left() -> None:
+    clock = VirtualClock()
+    a_end, b_end = memory_pair()
+    a, b = EchoEnd(a_end, echoes=2), EchoEnd(b_end, echoes=3)
+    clock.scheduler.add_poller(a)
+    clock.scheduler.add_poller(b)
+    clock.scheduler.every(1.0, lambda t: a_end.send(b"x"), "sender", 500_000)
+    clock.scheduler.every(0.1, lambda t: None, "physics")  # instants that deliver nothing
+    clock.sleep(2.0)
+    # Each echo came back within its instant, however long the exchange ...
+    assert b.got == [b"x", b"x''", b"x''''", b"x"] and a.got == [b"x'", b"x'''", b"x'''''"]
+    # ... and the 19 quiet instants polled nobody: the first drain (nothing known yet), four rounds at
+    # 0.5 s (the exchange) and one at 1.5 s (one delivery, no answer).
+    assert a.polls == b.polls == 6
+
+
+def test_one_poller_without_a_doorbell_makes_every_drain_poll() -> None:
+    clock = VirtualClock()
+    a_end, b_end = memory_pair()
+    a, b = EchoEnd(a_end), EchoEnd(b_end)
+    counting = CountingPoller(0)
+    for poller in (a, b, counting):
+        clock.scheduler.add_poller(poller)
+    clock.scheduler.every(0.1, lambda t: None, "physics")
+    clock.sleep(1.0)
+    assert a.polls == counting.polls > 10
+    clock.scheduler.remove_poller(counting)
+    before = a.polls
+    clock.sleep(1.0)
+    assert a.polls - before <= 1  # the rest ring: quiet instants poll nobody again
