@@ -2,12 +2,18 @@
 
 from __future__ import annotations
 
+import operator
+import struct
 from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from typing import Any
 
 from mavlink_dialect import signing
 from mavlink_dialect import subcultron as mavlink
+
+if mavlink.mcrf4xx is None:  # pragma: no cover - pymavlink requires fastcrc
+    raise ImportError("mavlink_dialect needs fastcrc (pymavlink's CRC)")
+crc16 = mavlink.mcrf4xx  # CRC-16/MCRF4XX, pymavlink's own choice
 
 HEADER_V2_LEN = mavlink.HEADER_LEN_V2
 CRC_LEN = 2
@@ -45,10 +51,23 @@ class Codec:
 
     def encode(self, msg: mavlink.MAVLink_message) -> bytes:
         """Pack `msg` with this party's ids and the next sequence number."""
-        buf = msg.pack(self.mav)
-        self.mav.seq = (self.mav.seq + 1) % 256
+        mav = self.mav
+        plain = _PLAIN.get(type(msg)) if not mav.signing.sign_outgoing else None
+        if plain is None:
+            buf = bytes(msg.pack(mav))
+        else:  # what msg.pack does, without its generic steps (a third of the time)
+            payload = plain.unpacker.pack(*plain.values(msg))
+            cut = payload.rstrip(b"\0") or payload[:1]
+            buf = frame(plain.msg_id, plain.crc_extra, cut, mav.seq, mav.srcSystem, mav.srcComponent)
+            packed: Any = msg  # what pymavlink's _pack leaves on the message (the stub leaves them out)
+            packed._payload = cut
+            packed._header = mavlink.MAVLink_header(plain.msg_id, 0, 0, len(cut), mav.seq, mav.srcSystem,
+                                                    mav.srcComponent)
+            packed._msgbuf = bytearray(buf)
+            packed._crc = buf[-2] | buf[-1] << 8
+        mav.seq = (mav.seq + 1) % 256
         self.stats.sent += 1
-        return bytes(buf)
+        return buf
 
     def next_seq(self, n: int) -> int:
         """Take `n` consecutive sequence numbers for frames packed elsewhere (`hot`); returns the first."""
@@ -95,6 +114,14 @@ class Codec:
         if self.mav.buf_len() == 0 and _single_v2_frame(data):
             # One whole frame per datagram is the common case: skip pymavlink's byte-stream
             # state machine (a quarter of the parse time) and let its decode check the rest.
+            plain = _PLAIN_IDS.get(data[7] | data[8] << 8 | data[9] << 16) if data[2] == 0 else None
+            if plain is not None and self.mav.signing.secret_key is None:
+                msg = plain.decode(data)
+                if msg is None:
+                    self.stats.bad_data += 1
+                    return []
+                self.stats.received += 1
+                return [msg]
             try:
                 msgs = [self.mav.decode(bytearray(data))]
             except mavlink.MAVError:
@@ -113,6 +140,61 @@ class Codec:
                 good.append(msg)
         self.stats.received += len(good)
         return good
+
+
+def frame(msg_id: int, crc_extra: int, payload: bytes, seq: int, system_id: int, component_id: int) -> bytes:
+    """An unsigned MAVLink 2 frame around `payload` (trailing zeros already cut), as pymavlink packs it."""
+    body = _HEADER.pack(mavlink.PROTOCOL_MARKER_V2, len(payload), 0, 0, seq, system_id, component_id,
+                        msg_id & 0xFFFF, msg_id >> 16) + payload
+    return body + crc16(bytes([crc_extra]), crc16(body[1:])).to_bytes(2, "little")
+
+
+_HEADER = struct.Struct("<BBBBBBBHB")  # MAVLink_header.pack's layout
+
+
+class _Plain:
+    """A message of scalar fields only (no arrays, no strings): packed and parsed here with its own
+    struct, byte for byte and object for object what pymavlink's generic pack and decode give
+    (tests/unit/test_codec.py compares both on every such message of the dialect)."""
+
+    def __init__(self, cls: type[mavlink.MAVLink_message]) -> None:
+        self.cls, self.msg_id, self.crc_extra = cls, int(cls.id), int(cls.crc_extra)
+        self.unpacker: struct.Struct = cls.unpacker
+        names = cls.ordered_fieldnames
+        getter = operator.attrgetter(*names)
+        self.values: Callable[[Any], tuple[Any, ...]] = getter if len(names) > 1 else lambda m: (getter(m),)
+        self.orders = cls.orders
+        self.extra = bytes([self.crc_extra])
+
+    @staticmethod
+    def of(cls: type[mavlink.MAVLink_message]) -> _Plain | None:
+        if any(cls.array_lengths) or "s" in cls.unpacker.format or "c" in cls.unpacker.format:
+            return None
+        return _Plain(cls)
+
+    def decode(self, data: bytes) -> mavlink.MAVLink_message | None:
+        """One whole unsigned frame of this message (checked by the caller); None if its CRC is wrong."""
+        crc = data[-2] | data[-1] << 8
+        if crc16(self.extra, crc16(data[1:-2])) != crc:
+            return None
+        size = self.unpacker.size
+        payload = data[HEADER_V2_LEN:-2]
+        if len(payload) != size:  # zeros cut by the sender come back; a longer one is cut (pymavlink's rule)
+            payload = payload.ljust(size, b"\0")[:size]
+        t = self.unpacker.unpack(payload)
+        msg: Any = self.cls(*[t[i] for i in self.orders])  # Any: the stub leaves pymavlink's private fields out
+        msg._signed = False
+        msg._msgbuf = buf = bytearray(data)
+        msg._payload = buf[6:-2]  # sic: pymavlink's decode takes [6:], a MAVLink 1 header's length
+        msg._crc = crc
+        msg._header = mavlink.MAVLink_header(self.msg_id, 0, 0, data[1], data[4], data[5], data[6])
+        return msg
+
+
+_PLAIN: dict[type[mavlink.MAVLink_message], _Plain] = {}
+if not mavlink.MAVLINK_IGNORE_CRC:  # pymavlink told to accept bad CRCs: its own decode does that
+    _PLAIN = {cls: plain for cls in mavlink.mavlink_map.values() if (plain := _Plain.of(cls)) is not None}
+_PLAIN_IDS = {plain.msg_id: plain for plain in _PLAIN.values()}
 
 
 def _single_v2_frame(data: bytes) -> bool:

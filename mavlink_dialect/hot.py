@@ -26,11 +26,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from mavlink_dialect import subcultron as mavlink
-from mavlink_dialect.codec import Codec
+from mavlink_dialect.codec import Codec, crc16, frame
 
-if mavlink.mcrf4xx is None:  # pragma: no cover - pymavlink requires fastcrc
-    raise ImportError("mavlink_dialect.hot needs fastcrc (pymavlink's CRC)")
-crc = mavlink.mcrf4xx  # pymavlink's own choice (fastcrc, a dependency of pymavlink)
+crc = crc16  # pymavlink's own choice (fastcrc, a dependency of pymavlink)
 
 HEADER = mavlink.HEADER_LEN_V2  # magic, len, incompat, compat, seq, sys, comp, msgid24
 OVERHEAD = HEADER + 2  # + CRC16
@@ -161,7 +159,6 @@ def pack_records(spec: HotSpec, columns: Mapping[str, ArrayLike]) -> np.ndarray:
 # Below this many messages, struct per message beats numpy's fixed cost per call (a 12-aMussel pool's
 # statuses: 3x); the numpy path wins from about this many on (bay120's 120, stress240's 240).
 FEW_ROWS = 64
-_HEADER = struct.Struct("<BBBBBBBHB")  # MAVLink_header.pack's layout
 
 
 @dataclass(frozen=True)
@@ -250,14 +247,8 @@ def _struct_payloads(spec: HotSpec, columns: Mapping[str, ArrayLike]) -> list[by
 
 def _frames_few(spec: HotSpec, payloads: list[bytes], first: int, system_id: int, component_id: int) -> list[bytes]:
     """One frame per payload, as `MAVLink_message._pack` makes it: trailing zeros cut (one byte kept)."""
-    extra = bytes([spec.crc_extra])
-    low, high = spec.msg_id & 0xFFFF, spec.msg_id >> 16
-    frames = []
-    for k, payload in enumerate(payloads):
-        cut = payload.rstrip(b"\0") or payload[:1]
-        body = _HEADER.pack(MAGIC_V2, len(cut), 0, 0, (first + k) & 0xFF, system_id, component_id, low, high) + cut
-        frames.append(body + crc(extra, crc(body[1:])).to_bytes(2, "little"))
-    return frames
+    return [frame(spec.msg_id, spec.crc_extra, payload.rstrip(b"\0") or payload[:1], (first + k) & 0xFF,
+                  system_id, component_id) for k, payload in enumerate(payloads)]
 
 
 def _frames_many(spec: HotSpec, rec: np.ndarray, first: int, system_id: int, component_id: int) -> list[bytes]:

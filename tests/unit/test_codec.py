@@ -2,7 +2,14 @@
 
 from __future__ import annotations
 
+import copy
+import random
+import re
+import struct
+from typing import Any
+
 from mavlink_dialect import Codec, mavlink
+from mavlink_dialect import codec as codec_module
 from mussel_sim.vocabulary import MusselState
 
 
@@ -59,3 +66,61 @@ def test_one_broken_frame_per_datagram_is_counted_and_the_next_still_parses() ->
     assert rx.decode(bytes(broken)) == []
     assert rx.stats.bad_data == 1
     assert [m.mussel_id for m in rx.decode(tx.encode(status(9)))] == [9]
+
+
+# ---- the plain path: messages of scalar fields packed and parsed without pymavlink's generic steps ----
+
+PLAIN = sorted(codec_module._PLAIN.values(), key=lambda p: p.msg_id)
+_RANGES = {"b": (-128, 127), "B": (0, 255), "h": (-(2**15), 2**15 - 1), "H": (0, 2**16 - 1),
+           "i": (-(2**31), 2**31 - 1), "I": (0, 2**32 - 1), "q": (-(2**63), 2**63 - 1), "Q": (0, 2**64 - 1)}
+
+
+def _draw(plain: codec_module._Plain, rng: random.Random, zeros: float) -> mavlink.MAVLink_message:
+    """A message of `plain`'s class with random fields (each 0 with probability `zeros`: cut payloads)."""
+    codes = re.findall(r"[a-zA-Z]", plain.unpacker.format)
+    wire: dict[str, float] = {}
+    for name, code in zip(plain.cls.ordered_fieldnames, codes, strict=True):
+        if rng.random() < zeros:
+            wire[name] = 0
+        elif code in "fd":
+            wire[name] = rng.choice([struct.unpack("<f", struct.pack("<f", rng.uniform(-1e6, 1e6)))[0], -0.0, 1.5])
+        else:
+            wire[name] = rng.randint(*_RANGES[code])
+    return plain.cls(**wire)
+
+
+def _state(msg: mavlink.MAVLink_message) -> tuple[object, ...]:
+    m: Any = msg
+    fields = tuple(struct.pack("<d", v) if isinstance(v, float) else v for v in (getattr(m, f) for f in m._fieldnames))
+    return (type(m), fields, bytes(m._msgbuf), type(m._msgbuf), bytes(m._payload), type(m._payload), m._crc,
+            vars(m._header), m._signed, m._link_id)
+
+
+def test_every_plain_message_packs_and_parses_as_pymavlink_does() -> None:
+    assert len(PLAIN) > 100  # the dialect's scalar messages (HEARTBEAT, GLOBAL_POSITION_INT, COMMAND_LONG ...)
+    rng = random.Random(7)
+    for plain in PLAIN:
+        for zeros in (0.0, 0.5, 1.0):
+            ours, ref = Codec(rng.randint(1, 255), rng.randint(0, 255)), mavlink.MAVLink(None, 0, 0)
+            ref.srcSystem, ref.srcComponent, ref.seq = ours.system_id, ours.component_id, rng.randint(0, 255)
+            ours.mav.seq = ref.seq
+            msg, twin = _draw(plain, rng, zeros), None
+            twin = copy.deepcopy(msg)
+            frame = ours.encode(msg)
+            assert frame == bytes(twin.pack(ref)), plain.cls.msgname
+            assert _state(msg)[2:] == _state(twin)[2:]  # what pack leaves on the message
+            rx = Codec(250, 190)
+            got = rx.decode(frame)
+            assert len(got) == 1 and _state(got[0]) == _state(ref.decode(bytearray(frame))), plain.cls.msgname
+
+
+def test_a_plain_frame_with_a_broken_crc_or_a_signing_receiver_goes_pymavlinks_way() -> None:
+    tx = Codec(1, 1)
+    broken = bytearray(tx.encode(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 4, 3)))
+    broken[-2] ^= 0x01
+    rx = Codec(250, 190)
+    assert rx.decode(bytes(broken)) == [] and rx.stats.bad_data == 1
+    strict = Codec(250, 190)
+    strict.enable_signing(bytes(32), 0, lambda: 1)
+    assert strict.decode(tx.encode(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 4, 3))) == []  # unsigned: refused
+    assert strict.signing_rejects == 1
