@@ -2,11 +2,13 @@
 
 Nested dicts become dotted columns (`uptime.avg`, `messages.gcs_sent`). A list of records (one
 per aMussel, one per aPad) is summarised: `mussels.n`, and per numeric field its mean, min and
-max over the list (`mussels.uptime_pct.min`); a list inside a record counts its items
-(`mussels.dockings` -> how many per aMussel, then summarised); a short word field counts each
-word (`whereabouts.where=seabed`). A list of numbers gets n, mean, min, max. Identifiers (`id`,
-`sysid`, `*_id`) are not figures and are left out of the summaries. New fields of result.json
-(per-state seconds, per-aPad shares) become columns with no change here.
+max over the list (`mussels.uptime_pct.min`, `mussels.state_s.floating.max`); a list inside a
+record counts its items (`mussels.dockings`: how many per aMussel, then summarised); None is no
+value (`first_depleted_s` of an aMussel that never depleted: `mussels.first_depleted_s.min` is
+the run's first depletion, empty if none did); a short word field counts each word
+(`whereabouts.where=seabed`). A list of numbers gets n, mean, min, max. Identifiers (`id`,
+`sysid`, `*_id`) are not figures and are left out. New fields of result.json become columns with
+no change here.
 """
 
 from __future__ import annotations
@@ -53,7 +55,7 @@ def _summarise_list(name: str, items: list[Any]) -> Row:
                 continue
             values: list[Any] = [r.get(key) for r in records]
             numbers = [v for v in values if _is_number(v)]
-            if numbers:
+            if numbers or all(v is None for v in values):  # None: not yet (e.g. never depleted); columns kept
                 row |= _stats(f"{name}.{key}", numbers)
             else:
                 for word in sorted({v for v in values if isinstance(v, str) and WORD.match(v)}):

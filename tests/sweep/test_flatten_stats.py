@@ -36,6 +36,8 @@ def test_fields_nobody_told_the_sweep_about_become_columns() -> None:
     assert row["mussels.state_s.active.mean"] == 20.0 and row["mussels.state_s.floating.max"] == 2.0
     assert row["mussels.dockings.max"] == 1.0  # a list in a record: its length
     assert row["mussels.first_depleted_s.min"] == 700.0  # None (never depleted) is left out of the summary
+    nobody = flatten({"mussels": [{"first_depleted_s": None}, {"first_depleted_s": None}]})
+    assert nobody["mussels.first_depleted_s.min"] is None  # the column is there all the same
     assert row["apads.share.travelling.mean"] == 0.25 and row["apads.mussels.max"] == 2.0
     assert row["whereabouts.where=seabed"] == 1 and row["whereabouts.where=lost"] == 1
     assert not any("detail" in k for k in row)  # a sentence is not a category
