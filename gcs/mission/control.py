@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 
 from gcs.mission.scenario import MissionConfig
+from mussel_sim.battery import DEFAULT_CHARGE, DEFAULT_DISCHARGE
 
 
 class Phase(StrEnum):
@@ -76,6 +77,8 @@ class LoopSettings:
     poll_s: float = 0.5  # how often waits look again (mission time)
     apad_speed_mps: float = 0.5  # the aPad's cruise speed: how long a Go To may take before it is sent again
     mussel_surfacing_s: float = 20.0  # how long an aMussel takes to rise once called up (the fleet's)
+    mussel_discharge: str = DEFAULT_DISCHARGE  # the fleet's battery profiles (strategies plan with them)
+    mussel_charge: str = DEFAULT_CHARGE
     # Bounds on retrying (lossy links, a refusing aPad): at the bound the loop logs `gave_up`,
     # leaves that aMussel or step for now, and goes on.
     goto_attempts: int = 8  # Go To commands per target (after failsafe preemptions or trip timeouts)

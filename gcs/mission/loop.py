@@ -19,10 +19,12 @@ from apad_sitl.vocabulary import Latch
 from gcs.mission.accounting import SURFACE_DEPTH_M
 from gcs.mission.actions import LoopActions
 from gcs.mission.control import EndReason, LoopControl, LoopSettings, MissionEnded, Phase
-from gcs.mission.planner import CollectStrategy, CostWeights, PlanInput, plan
+from gcs.mission.rolling_loop import charged, outlook, rolling_round
+from gcs.mission.strategies import CollectStrategy, CostWeights, PlanInput, plan, traits
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
 RESHARED = "another aPad's since the fleet was re-shared"
+REPLAN_S = 10.0
 
 __all__ = ["EndReason", "EnergySharingLoop", "LoopControl", "LoopSettings", "MissionEnded", "Phase"]
 
@@ -47,10 +49,15 @@ class EnergySharingLoop(LoopActions):
             if resume:
                 self._recover()
             while True:
+                if traits(self.status.strategy).rolling:
+                    rolling_round(self)  # the rolling policy's own turn (gcs.mission.rolling_loop)
+                    continue
                 self._idle_wait()
                 route = self._plan_collection()
                 if route:
                     self._collect(route)
+                elif not self._docked():
+                    self._sleep(REPLAN_S)  # the strategy takes none of the pool yet: look again later
                 if self._docked():
                     self._charging_wait()
                     self._redeploy(self._plan_redeployment())
@@ -102,21 +109,30 @@ class EnergySharingLoop(LoopActions):
         self._set_phase(Phase.PLAN_COLLECT)
         self._take_strategy_switch()
         orphaned = self._orphans()[:len(self._free_slots())]
-        candidates = [self.api.mussels[m] for m in self._candidates()]
-        position = self.api.position(self.apad_id)
-        inp = PlanInput(
-            apads={self.apad_id: (position.lat, position.lon)},
-            capacity={self.apad_id: len(self._free_slots()) - len(orphaned)},
-            mussel_ids=np.array([m.mussel_id for m in candidates], np.int64),
-            lat_deg=np.array([m.location.lat for m in candidates]),
-            lon_deg=np.array([m.location.lon for m in candidates]),
-            battery_frac=np.array([self._battery(m.mussel_id) for m in candidates]),
-        )
-        route = orphaned + plan(self.status.strategy, inp, self._weights)[self.apad_id]
+        route = orphaned + self._collection_route(len(orphaned))
         self.status.route = route
         self._log("plan_collection", strategy=self.status.strategy, route=route,
                   **({"orphans": orphaned} if orphaned else {}))
         return route
+
+    def _collection_route(self, reserved: int = 0) -> list[int]:
+        """The strategy's route over the charging pool for the free slots but `reserved`."""
+        inp = self._collection_input(self._candidates(), len(self._free_slots()) - reserved)
+        return plan(self.status.strategy, inp, self._weights)[self.apad_id]
+
+    def _collection_input(self, ids: list[int], capacity: int) -> PlanInput:
+        """A planning step over these aMussels where they are now, from where the aPad is now."""
+        views = [self.api.mussels[m] for m in ids]
+        position = self.api.position(self.apad_id)
+        return PlanInput(
+            apads={self.apad_id: (position.lat, position.lon)},
+            capacity={self.apad_id: capacity},
+            mussel_ids=np.array(ids, np.int64),
+            lat_deg=np.array([m.location.lat for m in views]),
+            lon_deg=np.array([m.location.lon for m in views]),
+            battery_frac=np.array([self._battery(m) for m in ids]),
+            outlook=outlook(self.settings, self.clock.time()),
+        )
 
     def _collect(self, route: list[int]) -> None:
         self._set_phase(Phase.COLLECT)
@@ -191,16 +207,8 @@ class EnergySharingLoop(LoopActions):
         if len(keep) == len(route):
             return route
         floating = [m for m in keep if self._floating(m)]
-        rest = [self.api.mussels[m] for m in keep if m not in floating]
-        position = self.api.position(self.apad_id)
-        inp = PlanInput(
-            apads={self.apad_id: (position.lat, position.lon)},
-            capacity={self.apad_id: len(rest)},
-            mussel_ids=np.array([m.mussel_id for m in rest], np.int64),
-            lat_deg=np.array([m.location.lat for m in rest]),
-            lon_deg=np.array([m.location.lon for m in rest]),
-            battery_frac=np.array([self._battery(m.mussel_id) for m in rest]),
-        )
+        rest = [m for m in keep if m not in floating]
+        inp = self._collection_input(rest, len(rest))
         new = floating + plan(self.status.strategy, inp, self._weights)[self.apad_id] if rest else floating
         if sorted(new) != sorted(keep):  # a strategy that would not take them all: keep the planned order
             new = keep
@@ -214,17 +222,12 @@ class EnergySharingLoop(LoopActions):
     def _charging_wait(self) -> None:
         self._set_phase(Phase.CHARGING_WAIT)
         self._command(self.api.hold)
-        threshold = self.settings.mission.charged_threshold
+        self._wait_until(lambda: all(charged(self, m) for m in self._docked().values()))
 
-        def charged() -> bool:
-            return all(self._battery(m) >= threshold for m in self._docked().values())
-
-        self._wait_until(charged)
-
-    def _plan_redeployment(self) -> list[tuple[int, int]]:
-        """Route of (slot, aMussel id) back to the original positions."""
+    def _plan_redeployment(self, only: set[int] | None = None) -> list[tuple[int, int]]:
+        """Route of (slot, aMussel id) back to the original positions (of those docked, or of `only`)."""
         self._set_phase(Phase.PLAN_REDEPLOY)
-        docked = self._docked()  # slot -> mussel
+        docked = {s: m for s, m in self._docked().items() if only is None or m in only}  # slot -> mussel
         ids = list(docked.values())
         for m in ids:
             self._note_home(m)  # one docked with no home known (e.g. held since a crash): back to here

@@ -128,6 +128,8 @@ class World:
             battery_end_v=a.battery_end_v,
             apad_speed_mps=a.speed_mps,
             mussel_surfacing_s=s.fleet.surfacing_time_s,
+            mussel_discharge=s.fleet.discharge,
+            mussel_charge=s.fleet.charge,
         )
         clock = clock or self.clock
         api = self.api if clock is self.clock else self.api.on_clock(clock)

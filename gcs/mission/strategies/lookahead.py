@@ -1,0 +1,86 @@
+"""Look-ahead: choose this trip's load by what it does to the next trip, with the charging model."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gcs.mission.strategies.base import CollectStrategy, CostWeights, Plan, PlanInput, Traits, strategy
+from gcs.mission.strategies.routing import metres_matrix
+from gcs.mission.strategies.urgency import needs_charge, slack_s, time_to_depletion_s
+
+SHORTLIST = 8  # loads are drawn from this many candidates of least slack (<= 2080 ordered loads)
+METRE_S = 1.0  # a metre of travel weighs as much as a second of aMussel time lost
+UNDOCK_S = 10.0  # at each stop of the redeployment besides travel
+
+
+def _with_apad(inp: PlanInput, apad: tuple[float, float], pick: NDArray[np.intp]) -> NDArray[np.float64]:
+    """Metres between the aPad (row/column 0) and the shortlisted candidates. Shape (k + 1, k + 1)."""
+    return metres_matrix(np.concatenate(([apad[0]], inp.lat_deg[pick])), np.concatenate(([apad[1]], inp.lon_deg[pick])))
+
+
+def _score(inp: PlanInput, loads: NDArray[np.intp], metres: NDArray[np.float64], short: NDArray[np.intp],
+           needy: NDArray[np.intp], capacity: int) -> NDArray[np.float64]:
+    """Predicted cost of each ordered load (rows of `loads`, shortlist positions) over two trips:
+    aMussel seconds depleted before their trip comes, seconds charged aMussels wait on the slots for
+    the slowest, and metres travelled (`METRE_S`). Shape (n_loads,)."""
+    o = inp.outlook
+    n, k = loads.shape
+    stops = np.concatenate((np.zeros((n, 1), np.intp), loads + 1), axis=1)
+    legs_m = metres[stops[:, :-1], stops[:, 1:]]  # (n, k)
+    dock_s = np.cumsum(legs_m / o.speed_mps + o.stop_s, axis=1)
+    ttd = time_to_depletion_s(inp)
+    member_ttd = ttd[short[loads]]
+    lost = np.maximum(np.minimum(dock_s, o.time_left_s) - member_ttd, 0.0).sum(axis=1)
+    at_dock = np.maximum(member_ttd - dock_s, 0.0) * o.drain_per_s
+    target = np.minimum(o.charged_frac, o.drain_per_s * (o.time_left_s - dock_s) + 0.05)
+    ready_s = dock_s + o.charge_time_s(at_dock, np.maximum(target, at_dock))
+    release_s = ready_s.max(axis=1)
+    waited = (release_s[:, None] - ready_s).sum(axis=1)
+    trip_m = legs_m.sum(axis=1)
+    next_trip_s = release_s + trip_m / o.speed_mps + UNDOCK_S * k
+    # The next trip: the rest of the needy, least time to depletion first, one leg each.
+    member = np.zeros((n, len(inp.mussel_ids)), bool)
+    np.put_along_axis(member, short[loads], True, axis=1)
+    rest = np.sort(np.where(member[:, needy], np.inf, ttd[needy]), axis=1)  # (n, m)
+    leg_s = np.median(metres[1:, 1:]) / o.speed_mps + o.stop_s if len(short) > 1 else o.stop_s
+    rank = np.arange(rest.shape[1])
+    pickup_s = next_trip_s[:, None] + (np.minimum(rank, capacity - 1) + 1) * leg_s
+    second = rest[:, :capacity]
+    charge_s = o.charge_time_s(np.where(np.isfinite(second), o.drain_per_s * np.maximum(second - next_trip_s[:, None],
+                                                                                         0.0), 1.0)).max(axis=1)
+    later = rank >= capacity  # beyond the next trip: after its charging and its redeployment
+    pickup_s = np.where(later, pickup_s + charge_s[:, None] + capacity * leg_s, pickup_s)
+    due = np.isfinite(rest)
+    lost_rest = np.where(due, np.maximum(np.minimum(pickup_s, o.time_left_s) - np.where(due, rest, 0.0), 0.0), 0.0)
+    return lost + waited + lost_rest.sum(axis=1) + METRE_S * trip_m
+
+
+@strategy(CollectStrategy.LOOKAHEAD, Traits(release_early=True))
+def lookahead(inp: PlanInput, weights: CostWeights) -> Plan:
+    """The load and order, of up to a load of the SHORTLIST least-slack candidates that would deplete
+    before the end, whose two trips (this one, and the next one taking the most urgent of the rest
+    after this one's charging, timed with the charge profile) cost least (`_score`)."""
+    plan: Plan = {}
+    free = needs_charge(inp)
+    for apad_id in sorted(inp.apads):
+        capacity = inp.capacity.get(apad_id, 0)
+        needy = np.flatnonzero(free)
+        if capacity <= 0 or needy.size == 0:
+            plan[apad_id] = []
+            continue
+        apad = inp.apads[apad_id]
+        short = needy[np.argsort(slack_s(inp, *apad)[needy], kind="stable")[:SHORTLIST]]
+        metres = _with_apad(inp, apad, short)
+        best: tuple[float, list[int]] = (np.inf, [])
+        for size in range(1, min(capacity, len(short)) + 1):
+            loads = np.array(list(itertools.permutations(range(len(short)), size)), np.intp)
+            score = _score(inp, loads, metres, short, needy, capacity)
+            i = int(np.argmin(score))
+            if score[i] < best[0]:
+                best = (float(score[i]), [int(short[j]) for j in loads[i]])
+        free[best[1]] = False
+        plan[apad_id] = [int(inp.mussel_ids[j]) for j in best[1]]
+    return plan

@@ -1,0 +1,71 @@
+"""Prize-collecting routes, solved exactly with OR-Tools CP-SAT: which candidates, in which order.
+
+One aPad leaves its position, visits at most `capacity` candidates and may end anywhere. Each
+candidate left out costs its `prize` (metres the aPad would travel to take it); the solver
+minimises metres travelled plus prizes forgone, and proves it. The model is one circuit
+constraint (`add_circuit`) over the aPad, the candidates and an open end reached at no cost:
+a candidate's self-loop taken means it is skipped. The routing library's local search finds a
+route 10 m longer than the best in some draws of 10 aMussels; CP-SAT on these <= 26 nodes is
+exact in tens of milliseconds.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+from ortools.sat.python import cp_model
+
+from mussel_sim.geo import distance_m
+
+SCALE = 100  # the solver works in integers: centimetres
+TIME_LIMIT_S = 5.0  # a safety bound only (the search proves the optimum long before); then its best
+
+
+def metres_matrix(lat_deg: NDArray[np.float64], lon_deg: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Geodesic metres between every pair of points. Shape (n, n)."""
+    i, j = np.meshgrid(np.arange(len(lat_deg)), np.arange(len(lat_deg)), indexing="ij")
+    return distance_m(lat_deg[i].ravel(), lon_deg[i].ravel(), lat_deg[j].ravel(), lon_deg[j].ravel()).reshape(i.shape)
+
+
+def best_route(start: tuple[float, float], lat_deg: NDArray[np.float64], lon_deg: NDArray[np.float64],
+               prize_m: NDArray[np.float64], capacity: int) -> list[int]:
+    """Indices of the candidates to visit, in order, from `start`. Candidates with no prize are never
+    worth a detour and are left out before the solver sees them."""
+    keep = np.flatnonzero(prize_m > 0)
+    if capacity <= 0 or keep.size == 0:
+        return []
+    n = len(keep)
+    metres = np.rint(metres_matrix(np.concatenate(([start[0]], lat_deg[keep])),
+                                   np.concatenate(([start[1]], lon_deg[keep]))) * SCALE).astype(int)
+    prize = np.rint(prize_m[keep] * SCALE).astype(int)
+    end = n + 1  # nodes: 0 the aPad, 1..n the candidates, n + 1 the open end
+    model = cp_model.CpModel()
+    arcs: list[tuple[int, int, cp_model.LiteralT]] = []
+    objective: list[cp_model.LinearExprT] = []
+    visit = [model.new_bool_var(f"visit{k}") for k in range(1, n + 1)]
+    for k in range(1, n + 1):
+        arcs.append((k, k, ~visit[k - 1]))  # the self-loop: skipped
+        objective.append(int(prize[k - 1]) * (1 - visit[k - 1]))
+        arcs.append((k, end, model.new_bool_var("")))
+    for a in range(n + 1):
+        for b in range(1, n + 1):
+            if a != b:
+                x = model.new_bool_var(f"{a}>{b}")
+                arcs.append((a, b, x))
+                objective.append(int(metres[a, b]) * x)
+    arcs.append((0, end, model.new_bool_var("")))  # visit nobody
+    arcs.append((end, 0, model.new_constant(1)))
+    model.add_circuit(arcs)
+    model.add(sum(visit) <= capacity)
+    model.minimize(sum(objective))
+    solver = cp_model.CpSolver()
+    solver.parameters.num_workers = 1  # deterministic
+    solver.parameters.max_time_in_seconds = TIME_LIMIT_S
+    if solver.solve(model) not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
+        return []
+    succ = {a: b for a, b, lit in arcs if a != b and solver.boolean_value(lit)}
+    route, node = [], succ[0]
+    while node != end:
+        route.append(int(keep[node - 1]))
+        node = succ[node]
+    return route
