@@ -1,11 +1,13 @@
 """Real-time factor of headless lockstep missions, and where the time goes.
 
 For each scenario: one 40-minute mission in lockstep (SITL aPad, fleet and GCS on one virtual
-clock, every message really encoded and parsed), timed without a profiler (best of --repeat),
-then once under cProfile to split the time into disjoint parts: MAVLink encode, MAVLink parse,
-fleet model step, planner, SITL physics, and everything else (scheduler, routing, handlers).
-bay120 is a swarm (5 aPads, one loop each in its own thread, `missiontime.processes`): every thread
-is profiled, and the time threads spend parked waiting for their turn is left out of the split.
+clock, every message really encoded and parsed), timed without instruments (best of --repeat,
+wall seconds and, less sensitive to a busy machine, CPU seconds), then once more with the parts
+timed: MAVLink encode, MAVLink parse, fleet model step, planner, SITL physics, and everything else
+(scheduler, routing, handlers, the mission loop). Each part's time excludes the other parts it
+calls (a physics step that announces a change counts its encoding as encode). bay120 is a swarm
+(5 aPads, one loop each as a greenlet of `missiontime.processes`): the parts are timed by wrapping
+their functions, which works across the greenlets' switches (cProfile's call stack does not).
 
     .venv/bin/python bench/scenario_speed.py [--repeat N] [--scenarios pool12 bay24 stress240 bay120]
 """
@@ -13,12 +15,13 @@ is profiled, and the time threads spend parked waiting for their turn is left ou
 from __future__ import annotations
 
 import argparse
-import cProfile
-import pstats
-import threading
+import importlib
+import sys
 import time
-from collections.abc import Iterator
+from collections import defaultdict
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from typing import Any
 
 from rich.console import Console
 from rich.table import Table
@@ -26,65 +29,83 @@ from rich.table import Table
 from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
 
-# label -> (file suffix, function name) entry points whose cumulative times do not overlap:
-# one message at a time (codec.py) and the bulk messages' batch path (hot.py, hot_decode.py) together.
+# label -> (module, attribute) of the functions timed as that part: the one-message codec and the
+# bulk messages' batch path together, the fleet model, the planner, the aPad's physics task.
 PARTS: dict[str, tuple[tuple[str, str], ...]] = {
-    "MAVLink encode": (("mavlink_dialect/codec.py", "encode"), ("mavlink_dialect/hot.py", "encode_batch")),
-    "MAVLink parse": (("mavlink_dialect/codec.py", "decode"), ("mavlink_dialect/hot_decode.py", "decode_datagrams")),
-    "fleet step": (("mussel_sim/fleet.py", "step"),),
-    "planner": (("gcs/mission/planner.py", "plan"),),
-    "SITL physics": (("apad_sitl/endpoint.py", "_physics"),),
+    "MAVLink encode": (("mavlink_dialect.codec", "Codec.encode"), ("mavlink_dialect.hot", "encode_batch")),
+    "MAVLink parse": (("mavlink_dialect.codec", "Codec.decode"), ("mavlink_dialect.hot_decode", "SharedDecode.decode"),
+                      ("mavlink_dialect.hot_decode", "decode_datagrams")),
+    "fleet step": (("mussel_sim.fleet", "step"),),
+    "planner": (("gcs.mission.strategies", "plan"),),
+    "SITL physics": (("apad_sitl.endpoint", "SitlVehicle._physics"),),
 }
 
 
-def timed(name: str, repeat: int) -> tuple[float, float, int]:
-    """(best wall seconds, mission seconds, messages encoded) of one mission."""
+def timed(name: str, repeat: int) -> tuple[float, float, float, int]:
+    """(best wall seconds, best CPU seconds, mission seconds, messages encoded) of one mission."""
     scenario = load_scenario(name)
-    best = float("inf")
+    best_wall = best_cpu = float("inf")
     for _ in range(repeat):
-        start = time.perf_counter()
+        wall, cpu = time.perf_counter(), time.process_time()
         result = run_mission(scenario)
-        best = min(best, time.perf_counter() - start)
-    messages = sum(result.messages.values())
-    return best, scenario.mission.duration_s, messages
+        best_wall, best_cpu = min(best_wall, time.perf_counter() - wall), min(best_cpu, time.process_time() - cpu)
+    messages = sum(v for k, v in result.messages.items() if k.endswith("_sent"))
+    return best_wall, best_cpu, scenario.mission.duration_s, messages
 
 
-# Where a swarm's threads wait for their turn (missiontime.processes): idle, not work.
-IDLE = ("~", 0, "<method 'acquire' of '_thread.lock' objects>")
+class PartTimes:
+    """Seconds spent in each part, the time of parts called inside another part left to them."""
+
+    def __init__(self) -> None:
+        self.seconds: defaultdict[str, float] = defaultdict(float)
+        self._inner = [0.0]  # per open call: seconds of parts called inside it
+
+    def wrap(self, label: str, fn: Callable[..., Any]) -> Callable[..., Any]:
+        def part(*args: Any, **kwargs: Any) -> Any:
+            self._inner.append(0.0)
+            start = time.perf_counter()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                spent = time.perf_counter() - start
+                self.seconds[label] += spent - self._inner.pop()
+                self._inner[-1] += spent
+
+        return part
 
 
 @contextmanager
-def threads_profiled(profilers: list[cProfile.Profile]) -> Iterator[None]:
-    """Profile every thread started meanwhile (cProfile sees only the thread that enables it)."""
-    original = threading.Thread.run
-
-    def run(thread: threading.Thread) -> None:
-        profilers.append(profiler := cProfile.Profile())
-        profiler.runcall(original, thread)
-
-    threading.Thread.run = run  # type: ignore[method-assign,assignment]
+def parts_timed(times: PartTimes) -> Iterator[None]:
+    """Every reference to a part's function (`from m import f` copies too) replaced by a timed one."""
+    undo: list[tuple[Any, str, Any]] = []
+    for label, entries in PARTS.items():
+        for module_name, attr in entries:
+            owner: Any = importlib.import_module(module_name)
+            *path, name = attr.split(".")
+            for step in path:
+                owner = getattr(owner, step)
+            original = getattr(owner, name)
+            wrapped = times.wrap(label, original)
+            holders = [owner] if path else [m for m in list(sys.modules.values()) if getattr(m, name, None) is original]
+            for holder in holders:
+                undo.append((holder, name, original))
+                setattr(holder, name, wrapped)
     try:
         yield
     finally:
-        threading.Thread.run = original  # type: ignore[method-assign]
+        for holder, name, original in reversed(undo):
+            setattr(holder, name, original)
 
 
-def profile_parts(name: str) -> dict[str, float]:
-    """Fraction of profiled time (all threads, waits for a turn left out) per part, plus "other"."""
+def split_parts(name: str) -> dict[str, float]:
+    """Fraction of one mission's wall time per part, plus "other"."""
     scenario = load_scenario(name)
-    profilers = [cProfile.Profile()]
-    with threads_profiled(profilers):
-        profilers[0].runcall(run_mission, scenario)
-    merged = pstats.Stats(profilers[0])
-    for profiler in profilers[1:]:
-        merged.add(profiler)
-    stats = merged.stats  # type: ignore[attr-defined]
-    stats.pop(IDLE, None)
-    total = sum(tt for (_, _, tt, _, _) in stats.values())  # (calls, prim calls, self, cumulative, callers)
-    parts = {}
-    for label, entries in PARTS.items():
-        parts[label] = sum(ct for (file, _, fn), (_, _, _, ct, _) in stats.items()
-                           if any(fn == func and file.endswith(suffix) for suffix, func in entries)) / total
+    times = PartTimes()
+    with parts_timed(times):
+        start = time.perf_counter()
+        run_mission(scenario)
+        total = time.perf_counter() - start
+    parts = {label: times.seconds[label] / total for label in PARTS}
     parts["other"] = max(0.0, 1.0 - sum(parts.values()))
     return parts
 
@@ -96,16 +117,17 @@ def main() -> int:
     args = parser.parse_args()
 
     speed = Table(title="Lockstep missions: real-time factor (40 min of mission time each)")
-    for col in ("scenario", "wall s", "real-time factor", "messages", "msg/s wall"):
+    for col in ("scenario", "wall s", "real-time factor", "CPU s", "RTF on CPU time", "messages", "msg/s wall"):
         speed.add_column(col, justify="left" if col == "scenario" else "right")
-    split = Table(title="Where the time goes (share of profiled time)")
+    split = Table(title="Where the time goes (share of one mission's wall time)")
     split.add_column("scenario")
     for label in [*PARTS, "other"]:
         split.add_column(label, justify="right")
     for name in args.scenarios:
-        wall, mission, messages = timed(name, args.repeat)
-        speed.add_row(name, f"{wall:.2f}", f"{mission / wall:,.0f}", f"{messages:,}", f"{messages / wall:,.0f}")
-        parts = profile_parts(name)
+        wall, cpu, mission, messages = timed(name, args.repeat)
+        speed.add_row(name, f"{wall:.2f}", f"{mission / wall:,.0f}", f"{cpu:.2f}", f"{mission / cpu:,.0f}",
+                      f"{messages:,}", f"{messages / wall:,.0f}")
+        parts = split_parts(name)
         split.add_row(name, *(f"{parts[label]:.0%}" for label in [*PARTS, "other"]))
     console = Console(width=130)
     console.print(speed)
