@@ -181,8 +181,10 @@ class ConsoleModel:
         mussel_ids: NDArray[np.int64] | None = None,
         outline: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
         apad_ids: Sequence[int] = (),
+        sinking_counts_active: bool = True,
     ) -> None:
-        """`apad_ids`: every aPad to follow (default `apad_id` alone), the first one selected."""
+        """`apad_ids`: every aPad to follow (default `apad_id` alone), the first one selected;
+        `sinking_counts_active` as the scenario's option (the recorder counts uptime the same way)."""
         self.registry = registry
         self.apad_id = apad_id
         self.apad_ids = tuple(apad_ids) or (apad_id,)
@@ -191,6 +193,7 @@ class ConsoleModel:
         self.source = source
         self.outline = outline or (np.zeros(0), np.zeros(0))
         self.ids = np.zeros(0, np.int64) if mussel_ids is None else np.sort(np.asarray(mussel_ids, np.int64))
+        self.measuring = [MusselState.ACTIVE, MusselState.SINKING] if sinking_counts_active else [MusselState.ACTIVE]
         n = self.ids.size
         self.active_samples = np.zeros(n, np.int64)
         self.samples = 0
@@ -254,9 +257,9 @@ class ConsoleModel:
         self._own_version += 1
 
     def sample(self, t_s: float) -> None:
-        """One point on every plot; uptime counts ACTIVE samples (eq. 3 over the mission so far)."""
+        """One point on every plot; uptime counts measuring samples (eq. 3 over the mission so far)."""
         cols = self.fleet()
-        active = cols.state == MusselState.ACTIVE
+        active = np.isin(cols.state, self.measuring)
         self.active_samples += active
         self.samples += 1
         views = [self.registry.vehicles.get(a) for a in self.apad_ids]

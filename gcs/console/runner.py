@@ -186,6 +186,7 @@ class ConsoleRunner:
         model = ConsoleModel(
             world.link.registry, s.apad.system_id, s.mission.pool_threshold, s.mission.duration_s, source,
             world.start.ids.astype(np.int64), area_outline(load_area(s.fleet.area).geometry), apad_ids=self.apad_ids,
+            sinking_counts_active=s.mission.sinking_counts_active,
         )
         model.strategy = s.mission.collect_strategy  # until the loop says otherwise
         if self.config.resume is not None:

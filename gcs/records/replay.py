@@ -152,7 +152,8 @@ def load_replay(path: str | Path, scenario: str | Path | None = None) -> Replay:
             raise ReplayError(f"{found.fleet.area}: bad area: {exc}") from None
         model = ConsoleModel(registry, found.apad.system_id, found.mission.pool_threshold,
                              found.mission.duration_s, str(files.folder), ids, outline,
-                             apad_ids=[a.system_id for a in found.apads])
+                             apad_ids=[a.system_id for a in found.apads],
+                             sinking_counts_active=found.mission.sinking_counts_active)
     else:
         model = ConsoleModel(registry, apad_id, 0.8, us_to_s(stream[-1][0] - t0_us), str(files.folder), ids)
     events = read_events(files.events)

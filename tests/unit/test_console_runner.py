@@ -54,6 +54,17 @@ def test_model_classes_uptime_and_copies() -> None:
     assert list(model.snapshot(2.0).mussel_ids) == [1, 2, 3, 4, 9]
 
 
+def test_model_counts_sinking_as_the_results_do() -> None:
+    """The console's uptime reads as result.json's: sinking after release counts unless the scenario says not."""
+    for counts, expected in ((True, [100.0, 100.0]), (False, [100.0, 0.0])):
+        registry = VehicleRegistry()
+        model = ConsoleModel(registry, 1, 0.8, 60.0, "test", np.array([1, 2]), sinking_counts_active=counts)
+        _status(registry, 1, 0.9, MusselState.ACTIVE)
+        _status(registry, 2, 0.9, MusselState.SINKING)
+        model.sample(0.0)
+        assert list(model.snapshot(0.0).uptime_pct) == expected
+
+
 def test_model_counts_cycles_and_strategy_from_events() -> None:
     model = ConsoleModel(VehicleRegistry(), 1, 0.8, 60.0, "test")
     for kind, fields in (("mission_start", {"strategy": "cautious"}), ("phase", {"phase": "idle wait"}),
