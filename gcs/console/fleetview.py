@@ -28,6 +28,7 @@ from mussel_sim.vocabulary import MusselState
 
 STATE_NAMES = {int(s): s.name.lower() for s in MusselState}
 HEADER = f"{'id':>5}  {'state':<9} {'battery %':>9} {'uptime %':>9}"
+SWARM_HEADER = f"{HEADER} {'aPad':>5}"  # with several aPads: whose share each aMussel is
 _STATE_AT, _STATE_END = 7, 16  # where the state column sits in a row's text
 
 
@@ -116,13 +117,17 @@ class FleetTable(ScrollView, can_focus=True):
         colour = MARKER_COLOURS[int(self._marker_class[i])]
         text = (f"{int(snap.mussel_ids[i]):>5}  {STATE_NAMES.get(state, '?'):<9} "
                 f"{'-' if np.isnan(battery) else f'{100 * battery:.1f}':>9} {snap.uptime_pct[i]:>9.1f}")
+        if len(snap.apads) > 1:
+            owner = int(snap.owner[i]) if i < snap.owner.size else 0
+            text += f" {owner if owner else '-':>5}"
         return text, colour
 
     def render_line(self, y: int) -> Strip:
         width = self.scrollable_content_region.width
         styles = self._row_styles()
         if y == 0:
-            return Strip([Segment(HEADER.ljust(width)[:width], styles["header"])], width)
+            header = SWARM_HEADER if self.snapshot is not None and len(self.snapshot.apads) > 1 else HEADER
+            return Strip([Segment(header.ljust(width)[:width], styles["header"])], width)
         i = int(self.scroll_offset.y) + y - 1
         row = self._row(i)
         self._texts[y] = row  # type: ignore[assignment]

@@ -15,6 +15,7 @@ from tui_helpers import screen_text, wait_for
 from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.vocabulary import Primitive
 from gcs.console.app import LiveConsole
+from gcs.console.fleetview import FleetTable
 from gcs.console.runner import ConsoleConfig, ConsoleRunner
 from gcs.console.widgets import APAD_COLOURS
 from gcs.mission.scenario import load_scenario
@@ -54,6 +55,10 @@ def test_both_apads_shown_with_their_shares_and_the_keys_command_the_selected_on
             text = screen_text(app)
             assert "◆ aPad 1  selected of 2" in text and f"share {len(share2)}" in text
             assert "share     " + " ".join(map(str, sorted(share1))) in text
+            table = app.query_one(FleetTable)
+            assert table.render_line(0).text.split()[-1] == "aPad"  # the fleet table says whose each aMussel is
+            first = int(snap.mussel_ids[0])
+            assert table.render_line(1).text.split()[-1] == str(1 if first in share1 else 2)
             assert APAD_COLOURS[1].lower() in app.export_screenshot().lower()  # aPad 2's own colour
             assert "a Next aPad" in text  # in the footer, and in the help
             app.action_help()
