@@ -21,9 +21,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gcs.mission.headless import run_mission, run_stem
-from gcs.mission.planner import COLLECT
 from gcs.mission.scenario import Scenario, ScenarioError, load_scenario, scenario_from_data
 from gcs.mission.scenario_models import check_inputs
+from gcs.mission.strategies import COLLECT, STRATEGIES
 from gcs.mission.world import World
 from gcs.sweep.spec import SweepSpec, Value
 from missiontime import US_PER_S
@@ -48,8 +48,8 @@ class Cell:
 
 
 def registered_strategies() -> tuple[str, ...]:
-    """Every collect strategy the planner knows now (a new one is in the next sweep of "all")."""
-    return tuple(str(s) for s in COLLECT)
+    """Every collect strategy registered now, in the enum's order (a new one is in the next sweep of "all")."""
+    return tuple(str(s) for s in COLLECT if s in STRATEGIES)
 
 
 def make_cells(spec: SweepSpec) -> list[Cell]:
