@@ -205,19 +205,22 @@ def _frames_of(encoded: hot.Encoded) -> HotFrames:
     )
 
 
-_EMPTY: dict[HotSpec, np.ndarray] = {}
+_EMPTY: dict[HotSpec, tuple[dict[str, np.ndarray], np.ndarray]] = {}
 
 
 def _empty(spec: HotSpec, raw: list[bytes] | None) -> HotFrames:
-    """No frames of `spec` (read-only, shared: there is nothing in them to change)."""
-    rec = _EMPTY.get(spec)
-    if rec is None:
-        rec = _EMPTY[spec] = np.frombuffer(b"", spec.dtype)
-    none = np.frombuffer(b"", np.uint8)
-    return HotFrames({f: rec[f] for f in spec.fieldnames}, none, none, none, raw)
+    """No frames of `spec`: read-only columns, made once per spec (there is nothing in them to change)."""
+    made = _EMPTY.get(spec)
+    if made is None:
+        rec = np.frombuffer(b"", spec.dtype)
+        made = _EMPTY[spec] = ({f: rec[f] for f in spec.fieldnames}, np.frombuffer(b"", np.uint8))
+    fields, none = made
+    return HotFrames(fields, none, none, none, raw)
 
 
 def _read_only(frames: HotFrames) -> None:
+    if not len(frames):
+        return  # `_empty`'s: read-only already
     for column in (*frames.fields.values(), frames.src_system, frames.src_component, frames.seq):
         column.flags.writeable = False
 
