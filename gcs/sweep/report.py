@@ -85,12 +85,16 @@ def _cells(r: pd.Series, sep: str = " ± ") -> list[str]:
 
 
 def rich_table(table: pd.DataFrame, title: str) -> Table:
-    out = Table(title=f"{title}: means with 95 % intervals", box=box.SIMPLE_HEAD,
+    """Narrow enough for 80 columns with the strategies' names; a longer configuration folds."""
+    out = Table(title=f"{title}: means with 95 % intervals", box=box.SIMPLE_HEAD, pad_edge=False,
                 caption="* on the Pareto front of its scenario (avg and min uptime up, cost down)")
-    for name in ("scenario", "config", "n", *(c[0] for c in COLUMNS), "front"):
-        text = name in ("scenario", "config")
-        out.add_column(name, justify="left" if text else "right", no_wrap=name != "config")
-    for _, r in table.iterrows():  # narrow: the table fits 80 columns with a strategy's name
+    longest = max((len(str(c)) for c in table["config"]), default=6)
+    for name in ("scenario", "config", "n", *(c[0] for c in COLUMNS), "*"):
+        if name == "config":
+            out.add_column(name, min_width=min(longest, 24), overflow="fold")
+        else:
+            out.add_column(name, justify="left" if name == "scenario" else "right", no_wrap=True)
+    for _, r in table.iterrows():
         out.add_row(str(r["scenario"]), str(r["config"]), str(r["n"]), *_cells(r, "±"), "*" if r["front"] else "",
                     style="bold" if r["front"] else None)
     return out
