@@ -302,7 +302,7 @@ def scenario_from_data(path: Path, data: dict[str, Any]) -> Scenario:
         collect_strategy=CollectStrategy(m.text("collect_strategy", "cautious", COLLECT)),
         redeploy_strategy=RedeployStrategy(m.text("redeploy_strategy", "greedy", REDEPLOY)),
         distance_scale=m.number("distance_scale", 1.0, lo=0.0),
-        energy_scale=m.number("energy_scale", 0.0, lo=0.0),
+        energy_scale=m.number("energy_scale", 40.0, lo=0.0),  # weighted: metres per battery lacking (strategies.md)
         sinking_counts_active=m.flag("sinking_counts_active", True),
     )
     m.done()

@@ -20,8 +20,8 @@ def weighted(inp: PlanInput, weights: CostWeights) -> Plan:
 
     The scale factors trade metres for charge: with `distance_scale = 1` an `energy_scale` of E
     makes an aMussel lacking 10 % more charge worth going 0.1 E metres further. E = 0 is greedy;
-    E far above the pool's spread of distances is cautious. The shipped E = 60 (the scenario's
-    `mission.energy_scale`) lets a 20 % battery difference outweigh 12 m, about a third of the pool:
+    E far above the pool's spread of distances is cautious. The shipped E = 40 (the scenario's
+    `mission.energy_scale`) lets a 25 % battery difference outweigh 10 m, a third of the pool:
     near neighbours are taken together unless one is much lower.
     """
     return sequence(

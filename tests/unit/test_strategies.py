@@ -1,0 +1,130 @@
+"""The strategies beyond the paper on hand-built layouts where the right answer is known."""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from gcs.mission.strategies import COLLECT, STRATEGIES, CostWeights, Outlook, PlanInput, plan, route_length_m, traits
+from gcs.mission.strategies.routing import best_route, metres_matrix
+from mussel_sim.battery import charge_profile, discharge_profile, step_battery
+from mussel_sim.geo import LocalFrame
+
+FRAME = LocalFrame(43.94, 15.44)
+PAPER = Outlook()  # theta 30: a full battery lasts 1918 s of mission time
+DRAIN = PAPER.drain_per_s
+
+
+def layout(xy_m: list[tuple[float, float]], battery: list[float], capacity: int = 4,
+           outlook: Outlook = PAPER) -> PlanInput:
+    x, y = np.array(xy_m, float).T
+    lat, lon = FRAME.to_geodetic(x, y)
+    alat, alon = FRAME.to_geodetic(0.0, 0.0)
+    return PlanInput({1: (float(alat), float(alon))}, {1: capacity}, np.arange(1, len(xy_m) + 1),
+                     lat, lon, np.array(battery, float), outlook)
+
+
+def length(inp: PlanInput, route: list[int]) -> float:
+    stops = [(float(inp.lat_deg[m - 1]), float(inp.lon_deg[m - 1])) for m in route]
+    return route_length_m(inp.apads[1], stops)
+
+
+def test_every_strategy_is_registered_under_its_name() -> None:
+    assert set(STRATEGIES) == set(COLLECT)
+    assert traits("rolling").rolling and not traits("cautious").rolling
+    assert not traits("cautious").release_early and traits("least_slack").release_early
+
+
+def test_the_charging_model_times_the_fleet_model() -> None:
+    """Outlook.charge_time_s (planning) against mussel_sim's battery stepping (the simulated fleet)."""
+    u, steps = np.array([0.1]), 0
+    while u[0] < PAPER.charged_frac:
+        u = step_battery(u, np.array([True]), discharge_profile("active"), charge_profile("secondary"),
+                         PAPER.theta, 1.0)
+        steps += 1
+    assert PAPER.charge_time_s(0.1) == pytest.approx(steps, abs=1.5)
+    assert PAPER.charge_time_s(0.995) == 0.0
+
+
+def test_least_slack_takes_the_one_about_to_deplete_even_far_away() -> None:
+    # A near aMussel with half a battery, a far one (60 m, 2 min away) with minutes left.
+    inp = layout([(5, 0), (60, 0)], [0.5, 0.12], capacity=1, outlook=replace(PAPER, time_left_s=2000.0))
+    assert plan("least_slack", inp) == {1: [2]}
+    assert plan("greedy", inp) == {1: [1]}
+
+
+def test_least_slack_leaves_those_that_last_to_the_end() -> None:
+    # 600 s left: 0.5 lasts 959 s, 0.2 lasts 384 s.
+    inp = layout([(5, 0), (10, 0)], [0.5, 0.2], outlook=replace(PAPER, time_left_s=600.0))
+    assert plan("least_slack", inp) == {1: [2]}
+    assert plan("rolling", inp) == {1: [2]}
+    assert plan("route_optimal", inp) == {1: [2]}
+    assert plan("lookahead", inp) == {1: [2]}
+    late = layout([(5, 0)], [0.5], outlook=replace(PAPER, time_left_s=300.0))
+    for name in ("least_slack", "rolling", "route_optimal", "lookahead"):
+        assert plan(name, late) == {1: []}, name
+
+
+def test_route_optimal_beats_nearest_next_on_the_same_load() -> None:
+    # On a line: nearest next goes 1 m east, 3 m back west, 9 m on west, then 21 m east (34 m).
+    # Finishing the east first and sweeping west once is 31 m.
+    inp = layout([(1, 0), (-2, 0), (10, 0), (-11, 0)], [0.3] * 4)
+    greedy, best = plan("greedy", inp)[1], plan("route_optimal", inp)[1]
+    assert sorted(best) == sorted(greedy) == [1, 2, 3, 4]
+    assert length(inp, greedy) == pytest.approx(34.0, abs=0.1)
+    assert length(inp, best) == pytest.approx(31.0, abs=0.1)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_route_is_exact_against_every_ordered_load(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n, capacity = 7, 3
+    x, y = rng.uniform(-30, 30, n), rng.uniform(-25, 25, n)
+    lat, lon = FRAME.to_geodetic(x, y)
+    prize = rng.uniform(0, 60, n)
+    start = (43.94, 15.44)
+    metres = metres_matrix(np.concatenate(([start[0]], lat)), np.concatenate(([start[1]], lon)))
+
+    def cost(route: tuple[int, ...]) -> float:
+        stops = [0, *(k + 1 for k in route)]
+        return float(sum(metres[a, b] for a, b in itertools.pairwise(stops)) + prize.sum() - prize[list(route)].sum())
+
+    best = min(cost(r) for k in range(capacity + 1) for r in itertools.permutations(range(n), k))
+    assert cost(tuple(best_route(start, lat, lon, prize, capacity))) == pytest.approx(best, abs=0.02)
+
+
+def test_route_optimal_prefers_a_compact_load_among_equals() -> None:
+    # Five in equal need: four close together east, one alone far west: the cluster is taken.
+    inp = layout([(10, 0), (11, 2), (12, 0), (11, -2), (-25, 0)], [0.3] * 5)
+    assert sorted(plan("route_optimal", inp)[1]) == [1, 2, 3, 4]
+
+
+def test_lookahead_takes_the_one_that_cannot_wait_for_the_next_trip() -> None:
+    # One slot. Near: 0.5 (16 min left). Far, 40 m away: 0.15 (4.8 min). Taking the near one first,
+    # the far one would deplete while the near one charges.
+    inp = layout([(3, 0), (40, 0)], [0.5, 0.15], capacity=1, outlook=replace(PAPER, time_left_s=2400.0))
+    assert plan("lookahead", inp) == {1: [2]}
+
+
+def test_lookahead_does_not_hold_a_nearly_full_one_for_an_empty_one() -> None:
+    # Two slots. One nearly flat, one at 0.75, both needing a charge before the end; a third far
+    # away with time to spare. Charging 0.75 beside the flat one would keep it ~8 min on the slot
+    # waiting; the look-ahead sends the flat one alone, or with a partner of similar need.
+    inp = layout([(5, 0), (6, 0), (30, 0)], [0.1, 0.75, 0.12], capacity=2,
+                 outlook=replace(PAPER, time_left_s=2400.0))
+    assert 2 not in plan("lookahead", inp)[1]
+
+
+def test_weighted_differs_from_greedy_and_cautious_with_the_shipped_scales() -> None:
+    from gcs.mission.scenario import load_scenario
+
+    mission = load_scenario("pool12").mission
+    weights = CostWeights(mission.distance_scale, mission.energy_scale)
+    # Near 0.7, middle 0.6, far 0.2: greedy goes near first, cautious far first, weighted the middle.
+    inp = layout([(3, 0), (8, 0), (25, 0)], [0.7, 0.55, 0.2], capacity=1)
+    assert plan("greedy", inp)[1] == [1]
+    assert plan("cautious", inp)[1] == [3]
+    assert plan("weighted", inp, weights)[1] == [2]
