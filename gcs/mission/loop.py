@@ -56,8 +56,9 @@ class EnergySharingLoop(LoopActions):
                 route = self._plan_collection()
                 if route:
                     self._collect(route)
-                elif not self._docked():
-                    self._sleep(REPLAN_S)  # the strategy takes none of the pool yet: look again later
+                elif not self._docked():  # the strategy takes none of the pool yet: look again later
+                    self._set_phase(Phase.IDLE_WAIT)
+                    self._sleep(REPLAN_S)
                 if self._docked():
                     self._charging_wait()
                     self._redeploy(self._plan_redeployment())
@@ -110,9 +111,10 @@ class EnergySharingLoop(LoopActions):
         self._take_strategy_switch()
         orphaned = self._orphans()[:len(self._free_slots())]
         route = orphaned + self._collection_route(len(orphaned))
+        if route or self.status.route:  # one event for a run of empty plans (a strategy waiting)
+            self._log("plan_collection", strategy=self.status.strategy, route=route,
+                      **({"orphans": orphaned} if orphaned else {}))
         self.status.route = route
-        self._log("plan_collection", strategy=self.status.strategy, route=route,
-                  **({"orphans": orphaned} if orphaned else {}))
         return route
 
     def _collection_route(self, reserved: int = 0) -> list[int]:
