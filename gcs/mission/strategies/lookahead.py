@@ -51,8 +51,9 @@ def _score(inp: PlanInput, loads: NDArray[np.intp], metres: NDArray[np.float64],
     second = rest[:, :capacity]
     charge_s = o.charge_time_s(np.where(np.isfinite(second), o.drain_per_s * np.maximum(second - next_trip_s[:, None],
                                                                                          0.0), 1.0)).max(axis=1)
-    later = rank >= capacity  # beyond the next trip: after its charging and its redeployment
-    pickup_s = np.where(later, pickup_s + charge_s[:, None] + capacity * leg_s, pickup_s)
+    # Beyond the next trip, a coarse queue: trips of `capacity` at the next one's period.
+    period_s = charge_s + 2 * capacity * leg_s
+    pickup_s = pickup_s + (rank // capacity)[None, :] * period_s[:, None]
     due = np.isfinite(rest)
     lost_rest = np.where(due, np.maximum(np.minimum(pickup_s, o.time_left_s) - np.where(due, rest, 0.0), 0.0), 0.0)
     return lost + waited + lost_rest.sum(axis=1) + METRE_S * trip_m
