@@ -137,7 +137,10 @@ def test_a_real_sitl_process_clamps_a_1_us_interval(tmp_path: Path) -> None:
     stamps = [m.time_boot_ms for m in msgs if m.get_type() == "ATTITUDE"]
     span_ms = stamps[-1] - stamps[0]
     print(f"\nATTITUDE after a 1 us interval: {len(stamps)} in {span_ms} ms of the aPad's time")
-    assert span_ms > 1000 and len(stamps) <= span_ms // 20 + 1  # at most 50 Hz by the aPad's own clock
+    # At most 50 Hz by the aPad's own clock. A stream that fell behind on a loaded machine catches up
+    # with a burst stamped at one instant: the first stamp's burst bounds how late the stream began.
+    first_burst = stamps.count(stamps[0])
+    assert span_ms > 1000 and len(stamps) <= span_ms // 20 + first_burst + 1
 
 
 # ---- UDP peers -----------------------------------------------------------------------------------
