@@ -27,7 +27,7 @@ from gcs.console.linkbar import LinkBar
 from gcs.console.model import Snapshot
 from gcs.console.runner import ConsoleRunner, DockMussel, GoToMussel, Hold, UndockMussel
 from gcs.console.widgets import LEGEND, Chart, ConsoleFooter, EventLog, FleetTable, MapView, StatusPanel
-from gcs.mission.planner import COLLECT
+from gcs.mission.strategies import COLLECT
 from gcs.records.replay import Replay
 from mussel_sim.vocabulary import MusselState
 

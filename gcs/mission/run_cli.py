@@ -33,7 +33,6 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from gcs.link.faultproxy import LinkFaults
 from gcs.mission import flags
 from gcs.mission.headless import run_mission, run_stem
-from gcs.mission.planner import COLLECT
 from gcs.mission.results import (
     RunResult,
     apads_table,
@@ -46,6 +45,7 @@ from gcs.mission.results import (
 )
 from gcs.mission.scenario import SEED_MAX, THETA_RANGE, Scenario, ScenarioError, load_scenario
 from gcs.mission.scenario_models import check_inputs
+from gcs.mission.strategies import COLLECT
 from gcs.mission.world import LinkOptions
 from gcs.records import checkpoint, rundirs
 from gcs.records.checkpoint import CHECKPOINT_NAME, CheckpointError

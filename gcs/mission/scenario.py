@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from gcs.mission.planner import COLLECT, REDEPLOY, CollectStrategy, RedeployStrategy
+from gcs.mission.strategies import COLLECT, REDEPLOY, CollectStrategy, RedeployStrategy
 from missiontime.durations import WEEK_S, parse_duration_s
 from mussel_sim.battery import CHARGE_PROFILES, DISCHARGE_PROFILES
 

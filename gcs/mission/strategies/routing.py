@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
-from ortools.sat.python import cp_model
 
 from mussel_sim.geo import distance_m
 
@@ -31,6 +30,8 @@ def best_route(start: tuple[float, float], lat_deg: NDArray[np.float64], lon_deg
                prize_m: NDArray[np.float64], capacity: int) -> list[int]:
     """Indices of the candidates to visit, in order, from `start`. Candidates with no prize are never
     worth a detour and are left out before the solver sees them."""
+    from ortools.sat.python import cp_model  # here: importing OR-Tools takes a second every `vil` would pay
+
     keep = np.flatnonzero(prize_m > 0)
     if capacity <= 0 or keep.size == 0:
         return []
