@@ -7,13 +7,20 @@ import itertools
 import numpy as np
 from numpy.typing import NDArray
 
-from gcs.mission.strategies.base import CollectStrategy, CostWeights, Plan, PlanInput, Traits, strategy
+from gcs.mission.strategies.base import CollectStrategy, CostWeights, Outlook, Plan, PlanInput, Traits, strategy
 from gcs.mission.strategies.routing import metres_matrix
 from gcs.mission.strategies.urgency import needs_charge, slack_s, time_to_depletion_s
 
 SHORTLIST = 8  # loads are drawn from this many candidates of least slack (<= 2080 ordered loads)
 METRE_S = 1.0  # a metre of travel weighs as much as a second of aMussel time lost
 UNDOCK_S = 10.0  # at each stop of the redeployment besides travel
+
+
+def _depleted_s(o: Outlook, reached_s: NDArray[np.float64], ttd_s: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Seconds depleted of aMussels reached at `reached_s` that deplete at `ttd_s`: one reached too late
+    cannot surface any more, so it is down from its depletion to the end (or for a battery's life)."""
+    end_s = min(o.time_left_s, 1.0 / o.drain_per_s)
+    return np.where(reached_s > ttd_s, np.maximum(end_s - ttd_s, 0.0), 0.0)
 
 
 def _with_apad(inp: PlanInput, apad: tuple[float, float], pick: NDArray[np.intp]) -> NDArray[np.float64]:
@@ -33,7 +40,7 @@ def _score(inp: PlanInput, loads: NDArray[np.intp], metres: NDArray[np.float64],
     dock_s = np.cumsum(legs_m / o.speed_mps + o.stop_s, axis=1)
     ttd = time_to_depletion_s(inp)
     member_ttd = ttd[short[loads]]
-    lost = np.maximum(np.minimum(dock_s, o.time_left_s) - member_ttd, 0.0).sum(axis=1)
+    lost = _depleted_s(o, dock_s, member_ttd).sum(axis=1)
     at_dock = np.maximum(member_ttd - dock_s, 0.0) * o.drain_per_s
     target = np.minimum(o.charged_frac, o.drain_per_s * (o.time_left_s - dock_s) + 0.05)
     ready_s = dock_s + o.charge_time_s(at_dock, np.maximum(target, at_dock))
@@ -55,7 +62,7 @@ def _score(inp: PlanInput, loads: NDArray[np.intp], metres: NDArray[np.float64],
     period_s = charge_s + 2 * capacity * leg_s
     pickup_s = pickup_s + (rank // capacity)[None, :] * period_s[:, None]
     due = np.isfinite(rest)
-    lost_rest = np.where(due, np.maximum(np.minimum(pickup_s, o.time_left_s) - np.where(due, rest, 0.0), 0.0), 0.0)
+    lost_rest = np.where(due, _depleted_s(o, pickup_s, np.where(due, rest, 0.0)), 0.0)
     return lost + waited + lost_rest.sum(axis=1) + METRE_S * trip_m
 
 
