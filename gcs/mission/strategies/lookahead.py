@@ -31,8 +31,8 @@ def _with_apad(inp: PlanInput, apad: tuple[float, float], pick: NDArray[np.intp]
 def _score(inp: PlanInput, loads: NDArray[np.intp], metres: NDArray[np.float64], short: NDArray[np.intp],
            needy: NDArray[np.intp], capacity: int) -> NDArray[np.float64]:
     """Predicted cost of each ordered load (rows of `loads`, shortlist positions) over two trips:
-    aMussel seconds depleted before their trip comes, seconds charged aMussels wait on the slots for
-    the slowest, and metres travelled (`METRE_S`). Shape (n_loads,)."""
+    aMussel seconds depleted (to the end, for one whose trip comes too late), seconds charged
+    aMussels wait on the slots for the slowest, and metres travelled (`METRE_S`). Shape (n_loads,)."""
     o = inp.outlook
     n, k = loads.shape
     stops = np.concatenate((np.zeros((n, 1), np.intp), loads + 1), axis=1)
