@@ -17,7 +17,9 @@ from numpy.typing import NDArray
 from mussel_sim.geo import distance_m
 
 SCALE = 100  # the solver works in integers: centimetres
-TIME_LIMIT_S = 5.0  # a safety bound only (the search proves the optimum long before); then its best
+# A safety bound only (the search proves the optimum long before), then its best so far. In CP-SAT's
+# deterministic time, not wall time: a loaded machine must not change a plan (sweeps repeat rows exactly).
+WORK_LIMIT = 5.0
 
 
 def metres_matrix(lat_deg: NDArray[np.float64], lon_deg: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -61,7 +63,7 @@ def best_route(start: tuple[float, float], lat_deg: NDArray[np.float64], lon_deg
     model.minimize(sum(objective))
     solver = cp_model.CpSolver()
     solver.parameters.num_workers = 1  # deterministic
-    solver.parameters.max_time_in_seconds = TIME_LIMIT_S
+    solver.parameters.max_deterministic_time = WORK_LIMIT
     if solver.solve(model) not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
         return []
     succ = {a: b for a, b, lit in arcs if a != b and solver.boolean_value(lit)}
