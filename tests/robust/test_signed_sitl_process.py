@@ -34,7 +34,8 @@ def test_a_signing_sitl_process_ignores_a_stray_unsigned_gcs(tmp_path: Path) -> 
     port = free_udp_port()
     env = {**os.environ, signing.KEY_ENV: "biograd 2020"}
     proc = subprocess.Popen([sys.executable, "-m", "gcs.cli", "sitl", "--listen", f"udp:127.0.0.1:{port}",
-                             "--duration", "30s"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=env, text=True)
+                             "--duration", "30s"],
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=env, text=True)
     try:
         assert proc.stdout is not None and "listening on" in proc.stdout.readline()
         arm = mavlink.MAVLink_command_long_message(1, 1, mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 0, 0, 0, 0, 0, 0, 0, 0)
