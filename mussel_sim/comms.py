@@ -35,7 +35,7 @@ from mavlink_dialect import Codec, hot, mavlink
 from mavlink_dialect.transport import Transport
 from missiontime import US_PER_S, Scheduler, Task
 from mussel_sim.battery import to_millivolts
-from mussel_sim.fleet import step
+from mussel_sim.fleet import apply_latches, step
 from mussel_sim.fleet_state import FleetInputs, FleetParams, FleetState, StepEvents
 from mussel_sim.geo import LocalFrame
 from mussel_sim.recorder import Recorder
@@ -145,7 +145,8 @@ class FleetRunner:
         """Step first (so a publish at the same instant shows the new state), then publish.
 
         With `end_us` the model takes no step past that mission time: a run's uptime covers
-        exactly its duration even if the mission loop finishes a dock after the end.
+        exactly its duration even if the mission loop finishes a dock after the end (the latch
+        events after it still apply, with no time passing: `fleet.apply_latches`).
         """
         cfg = self.config
         self.end_us = end_us
@@ -173,6 +174,8 @@ class FleetRunner:
         if dt_us <= 0:  # a repeated instant must not step the model twice
             return
         if self.end_us is not None and now_us > self.end_us:
+            if self._dock or self._release:  # a dock or undock the aPad finished after the end
+                self.state = apply_latches(self.state, self._take_inputs(), self.params)  # commands: no use now
             return
         self.state, events = step(self.state, self._take_inputs(), self.params, self.rng, dt_us / US_PER_S)
         self.recorder.record(self.state, dt_us)

@@ -24,7 +24,7 @@ its battery gave out (at the surface if it was floating). Uptime is the recorder
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 
 import numpy as np
@@ -248,6 +248,21 @@ def step(
     else:  # most steps: nothing happened (the same empty arrays, without eleven indexings)
         events = _NO_EVENTS
     return new_state, events
+
+
+def apply_latches(state: FleetState, inputs: FleetInputs, params: FleetParams) -> FleetState:
+    """The aPads' latch events of `inputs` (release, dock) alone, with no time passing: for after
+    the model's last step, when an aPad still finishes a dock or an undock (a latch is a fact the
+    fleet must show). A released agent starts sinking from where it is, a docked one is at the
+    surface; batteries, positions and the other agents stay as the last step left them."""
+    st, timer = state.state.copy(), state.timer_s.copy()
+    dock_apad, dock_slot = state.dock_apad.copy(), state.dock_slot.copy()
+    latches = FleetInputs(dock_ids=inputs.dock_ids, dock_apad=inputs.dock_apad, dock_slot=inputs.dock_slot,
+                          release_ids=inputs.release_ids)
+    applied = _apply_commands(state, latches, params, st, timer, dock_apad, dock_slot)
+    depth = state.depth_m.copy()
+    depth[applied.docked] = 0.0  # on the aPad (one released sinks from the surface: its depth is 0 already)
+    return replace(state, state=st, timer_s=timer, dock_apad=dock_apad, dock_slot=dock_slot, depth_m=depth)
 
 
 _NO_IDS: NDArray[np.uint32] = np.zeros(0, np.uint32)

@@ -61,6 +61,7 @@ class LoopActions:
         self.unreachable: set[int] = set()  # aMussels found outside the geofence (logged once)
         self.shares = shares
         self.real = real  # estimates of real aMussels between their sparse reports
+        self._leaving: set[int] = set()  # let go in this redeployment, not yet seen off the slot (`_finish`)
         self._phase_since_s = clock.time()
 
     # --- primitives with waiting ------------------------------------------------------------
@@ -264,11 +265,21 @@ class LoopActions:
             raise MissionEnded(EndReason.APAD_BATTERY)
 
     def _finish(self) -> None:
-        """Leave the aPad holding (a dock in progress was already waited out)."""
+        """Leave the aPad holding (a dock in progress was already waited out), and see every aMussel
+        this redeployment let go reported off its slot: the simulated fleet applies a release at its
+        next step, so one whose latch report it heard only in the last instant (e.g. the RELEASING
+        report lost, the OPEN one heard by the fleet and the GCS at once) would end docked on an open
+        slot. Bounded; at the bound a `gave_up` event names them (the account reports them lost)."""
         try:
             self.api.hold(self.apad_id)
         except CommandError as exc:
             self._log("command_failed", what=str(exc))
+
+        def still_docked() -> list[int]:
+            return sorted(m for m in self._leaving if self._state(m) == MusselState.DOCKED)
+
+        if not self._wait_until(lambda: not still_docked(), self.settings.surfacing_timeout_s, interruptible=False):
+            self._log("gave_up", what="seeing released aMussels leave their slots", mussels=still_docked())
 
     # --- fleet knowledge, from what the GCS has heard ---------------------------------------
 

@@ -250,7 +250,9 @@ class EnergySharingLoop(LoopActions):
 
     def _redeploy(self, route: list[tuple[int, int]]) -> None:
         self._set_phase(Phase.REDEPLOY)
+        self._leaving.clear()
         for slot, mussel_id in route:
+            self._check_end()  # between legs: no trip starts after the end (the rest stay on their slots)
             self.status.target_mussel = mussel_id
             self._wait_for_link()
             if not self._go_to(self.homes[mussel_id]):
@@ -260,6 +262,7 @@ class EnergySharingLoop(LoopActions):
                 if self.api.mussels[mussel_id].simulated:  # a local party: the command cannot be lost
                     self._command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
                     self._release(mussel_id)
+                    self._leaving.add(mussel_id)  # not waited for here: the next leg gives it time
                 else:
                     self._sink(mussel_id)  # over a radio: seen to leave the surface (releases the claim)
                 self._log("released", mussel=mussel_id, slot=slot)
