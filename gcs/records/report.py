@@ -42,7 +42,8 @@ Draw = Callable[[RunData, Path], "Path | None"]
 # file, drawing (None: nothing to draw for this run), title, how to read it
 FIGURES: tuple[tuple[str, Draw, str, str], ...] = (
     ("uptime.png", figs.uptime_png, "Uptime per aMussel",
-     "The share of mission steps each aMussel was active (eq. 3), the dashed line the average. The number "
+     "The share of mission steps each aMussel was measuring (eq. 3: active, and sinking after its release "
+     "unless the scenario says otherwise), the dashed line the average. The number "
      "in a bar counts its dockings; a hatched bar was never collected; a cross above a bar marks an aMussel "
      "that ran flat, with its minutes depleted. In a swarm the bar's colour is the aPad whose share it was."),
     ("active.png", figs.active_png, "Active aMussels over time",
