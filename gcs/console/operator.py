@@ -1,17 +1,21 @@
 """The operator's commands to an aPad, and how the console carries them out through the aPad API.
 
-The commands are plain values the UI puts on the runner's queue; `execute` runs one on the world
-thread (or on an aPad loop's process, with that loop's API on its clock). `leave_holding` is what
-quitting does, in a bounded time: hold every aPad and send the floating aMussels back down.
+The commands are plain values the UI puts on the runner's `CommandQueue` (any thread); the queue
+serves them on the world thread (or on an aPad loop's process, with that loop's API on its clock),
+each run by `execute`, and logs them with the operator's other actions. `leave_holding` is what
+quitting does, in a bounded time: hold every aPad and send the floating aMussels back down;
+`log_whereabouts` then says where every aMussel was left.
 """
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 
 from apad_sitl.vocabulary import Latch, Primitive, Progress
 from gcs.api import ApadApi, CommandError
+from gcs.mission.accounting import account
 from gcs.mission.world import World
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
@@ -94,6 +98,67 @@ def execute(api: ApadApi, apad: int, command: OperatorCommand, name: str = "aPad
     raise AssertionError(command)
 
 
+class CommandQueue:
+    """The operator's commands (each for an aPad) and other actions, queued by the UI from any thread;
+    carried out and logged on a world thread only. `swarm`: several aPads (events name the aPad)."""
+
+    def __init__(self, swarm: bool) -> None:
+        self.swarm = swarm
+        self._commands: list[tuple[int, OperatorCommand]] = []  # (target aPad, command)
+        self._operator_events: list[tuple[str, dict[str, object]]] = []  # from the UI, logged on the world thread
+        self._to_sink: dict[int, int] = {}  # aMussel -> the aPad to relay its sink command
+        self._lock = threading.Lock()
+
+    def put(self, apad: int, command: OperatorCommand) -> None:
+        with self._lock:
+            self._commands.append((apad, command))
+
+    def log(self, action: str, fields: dict[str, object]) -> None:
+        """An operator action for the event log (written by `flush`)."""
+        with self._lock:
+            self._operator_events.append((action, fields))
+
+    def serve(self, world: World, api: ApadApi, serving: int | None, running: Callable[[int], bool],
+              notice: Callable[[str], None]) -> None:
+        """Run queued operator commands through `api`: those for aPad `serving`, and those whose aPad
+        has no loop `running` to serve them (all when None)."""
+        with self._lock:
+            take = [c for c in self._commands if serving in (None, c[0]) or not running(c[0])]
+            self._commands = [c for c in self._commands if not any(c is t for t in take)]
+        for sysid, command in take:
+            action, fields = action_of(command)
+            who = {"apad": sysid} if self.swarm else {}
+            try:
+                words, more = execute(api, sysid, command, f"aPad {sysid}" if self.swarm else "aPad")
+                notice(words)
+                world.events.emit(world.clock.time(), "operator", action=action, **who, **fields, **more)
+            except (CommandError, LookupError, Refused) as exc:
+                why = words_of(exc)
+                notice(f"refused: {why}" if isinstance(exc, Refused) else f"refused: {action}: {why}")
+                result = {"result": str(exc)} if isinstance(exc, CommandError) else {}
+                world.events.emit(world.clock.time(), "refused", action=action, **who, **fields, why=why, **result)
+                if isinstance(command, DockMussel) and isinstance(exc, CommandError):
+                    self._to_sink[command.mussel_id] = sysid  # called up for a dock refused: not left afloat
+
+    def sink_refused(self, world: World) -> None:
+        """aMussels the operator called up for a dock that was refused: sent down once they float
+        (a surfacing one takes no sink command); forgotten if they went anywhere else."""
+        for mussel_id, sysid in list(self._to_sink.items()):
+            state = world.api.mussels[mussel_id].state if mussel_id in world.api.mussels else None
+            if state == MusselState.FLOATING:
+                world.api.command_mussel(mussel_id, MusselCommand.SINK, sysid)
+                world.events.emit(world.clock.time(), "operator_sink", mussel=mussel_id, why="its dock was refused")
+            if state != MusselState.SURFACING:
+                del self._to_sink[mussel_id]
+
+    def flush(self, world: World) -> None:
+        """Log the operator's actions the UI queued."""
+        with self._lock:
+            taken, self._operator_events = self._operator_events, []
+        for action, fields in taken:
+            world.events.emit(world.clock.time(), "operator", action=action, **fields)
+
+
 def docking(world: World, apad: int) -> bool:
     """Whether aPad `apad` is in the middle of a dock or undock (never to be interrupted)."""
     view = world.link.vehicles.get(apad)
@@ -125,6 +190,18 @@ def leave_holding(world: World, notice: Callable[[str], None]) -> list[int]:
             api.command_mussel(mussel_id, MusselCommand.SINK, heard[0])
     world.clock.sleep(QUIT_FLUSH_S)  # let the last commands go out before the link closes
     return sorted(m for m, state in up.items() if state != MusselState.FLOATING)
+
+
+def log_whereabouts(world: World, surfacing: list[int]) -> None:
+    """Where every aMussel is as the console quits: on the seabed, on a slot, or lost (and why);
+    `surfacing`: those still rising, left to float (they take no sink command before they float)."""
+    homes = {m: (h.lat, h.lon) for m, h in world.homes.items()}
+    accounts = account(world.fleet.state, world.frame, homes, world.link.vehicles)
+    world.events.emit(world.clock.time(), "whereabouts",
+                      seabed=[a.mussel_id for a in accounts if a.where == "seabed"],
+                      slot=[a.mussel_id for a in accounts if a.where == "slot"],
+                      lost={str(a.mussel_id): a.detail for a in accounts if a.lost},
+                      **({"left_surfacing": surfacing} if surfacing else {}))
 
 
 __all__ = ["CommandError", "DockMussel", "GoToMussel", "Hold", "OperatorCommand", "Refused", "UndockMussel", "execute"]

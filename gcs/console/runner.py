@@ -32,23 +32,20 @@ import time
 
 import numpy as np
 
-from gcs.api import ApadApi, CommandError
+from gcs.api import ApadApi
 from gcs.console.config import ConsoleConfig, ResumePoint, open_world
 from gcs.console.link_health import Level, LinkHealth, LossWindow, link_health
 from gcs.console.model import END_WORDS, ConsoleModel, Snapshot, area_outline
 from gcs.console.operator import (
+    CommandQueue,
     DockMussel,
     GoToMussel,
     Hold,
     OperatorCommand,
-    Refused,
     UndockMussel,
-    action_of,
-    execute,
     leave_holding,
-    words_of,
+    log_whereabouts,
 )
-from gcs.mission.accounting import account
 from gcs.mission.loop import EnergySharingLoop, LoopControl
 from gcs.mission.swarm_run import SwarmOutcome, run_loops, share_fleet
 from gcs.mission.world import World
@@ -57,7 +54,6 @@ from gcs.records.checkpoint import CHECKPOINT_NAME, CHECKPOINT_PERIOD_S, Checkpo
 from gcs.records.events import EVENTS_NAME, Event
 from missiontime import PacedClock, Task, mm_ss, seconds_to_us, us_to_s
 from mussel_sim.placement import load_area
-from mussel_sim.vocabulary import MusselCommand, MusselState
 
 PUBLISH_PERIOD_S = 0.1  # the UI redraws at 10 Hz at most
 SAMPLE_PERIOD_S = 1.0  # one point on the plots per second of mission time
@@ -78,8 +74,7 @@ class ConsoleRunner:
         self.error: str | None = None
         self.finished = threading.Event()
         self._controls: dict[int, LoopControl] = {}  # a swarm's loops' own, following `control`
-        self._commands: list[tuple[int, OperatorCommand]] = []  # (target aPad, command)
-        self._commands_lock = threading.Lock()
+        self._commands = CommandQueue(swarm=len(self.apad_ids) > 1)
         self._quit = threading.Event()
         self._quit_now = threading.Event()
         self._notice = "connecting" if config.connect else "starting the SITL aPad"
@@ -95,8 +90,6 @@ class ConsoleRunner:
         self._listening_us = 0
         self._restarts: dict[int, int] = {}
         self._lost: dict[str, bool] = {}
-        self._to_sink: dict[int, int] = {}  # aMussel -> the aPad to relay its sink command
-        self._operator_events: list[tuple[str, dict[str, object]]] = []  # from the UI, logged on the world thread
         self._mission_started = False
 
     @property
@@ -108,8 +101,7 @@ class ConsoleRunner:
     def submit(self, command: OperatorCommand) -> None:
         """Queue an operator command for the selected aPad; it pauses the loops first."""
         self.set_paused(True)
-        with self._commands_lock:
-            self._commands.append((self.selected, command))
+        self._commands.put(self.selected, command)
 
     def select_apad(self, sysid: int | None = None) -> int:
         """Pick the aPad the commands act on (None: the next one); the one picked."""
@@ -133,8 +125,7 @@ class ConsoleRunner:
 
     def log_operator(self, action: str, **fields: object) -> None:
         """An operator action for the event log (written on the world thread, within a tenth of a second)."""
-        with self._commands_lock:
-            self._operator_events.append((action, fields))
+        self._commands.log(action, fields)
 
     def mission_running(self) -> bool:
         """Whether a loop runs (started and not ended): quitting then interrupts a mission."""
@@ -202,7 +193,7 @@ class ConsoleRunner:
             world.request_telemetry(apad_id=sysid)
         self._notice = "loop paused: press p to start" if self.control.paused else ""
         while self.control.paused and not self._quit.is_set():
-            self._serve(world.api, None)
+            self._serve(world, world.api, None)
             clock.sleep(PUBLISH_PERIOD_S)
         if not self._quit.is_set():
             self._notice = ""
@@ -212,11 +203,10 @@ class ConsoleRunner:
             why = END_WORDS.get(end, end)
             self._notice = f"mission ended at {mm_ss(clock.time())}: {why}; the aPad holds (q quits)"
         while not self._quit.is_set():  # telemetry and manual commands go on until the operator quits
-            self._serve(world.api, None)
+            self._serve(world, world.api, None)
             clock.sleep(PUBLISH_PERIOD_S)
-        self._flush_operator(world)
-        left = leave_holding(world, self._set_notice)
-        self._log_whereabouts(world, left)
+        self._commands.flush(world)
+        log_whereabouts(world, leave_holding(world, self._set_notice))
 
     def _run_one(self, world: World) -> str:
         """One aPad: its loop on the world's clock, checkpointed; the reason it ended."""
@@ -255,7 +245,7 @@ class ConsoleRunner:
             if wanted is not None and wanted != loop.status.strategy:
                 with control.lock:
                     control.strategy = wanted  # taken at its next planning step
-        self._serve(loop.api, sysid)
+        self._serve(world, loop.api, sysid)
         return self._quit_now.is_set()
 
     def _start_checkpoints(self, world: World, loop: EnergySharingLoop) -> Task | None:
@@ -284,17 +274,6 @@ class ConsoleRunner:
             except (ValueError, KeyError, TypeError, AttributeError):
                 continue  # the console's history is for show; the mission does not depend on it
 
-    def _log_whereabouts(self, world: World, surfacing: list[int]) -> None:
-        """Where every aMussel is as the console quits: on the seabed, on a slot, or lost (and why);
-        `surfacing`: those still rising, left to float (they take no sink command before they float)."""
-        homes = {m: (h.lat, h.lon) for m, h in world.homes.items()}
-        accounts = account(world.fleet.state, world.frame, homes, world.link.vehicles)
-        world.events.emit(world.clock.time(), "whereabouts",
-                          seabed=[a.mussel_id for a in accounts if a.where == "seabed"],
-                          slot=[a.mussel_id for a in accounts if a.where == "slot"],
-                          lost={str(a.mussel_id): a.detail for a in accounts if a.lost},
-                          **({"left_surfacing": surfacing} if surfacing else {}))
-
     def _wait_for_apads(self, world: World) -> bool:
         for sysid in self.apad_ids:
             while True:
@@ -315,48 +294,10 @@ class ConsoleRunner:
         loop = self.loops.get(sysid)
         return loop is not None and loop.status.end_reason is None
 
-    def _serve(self, api: ApadApi, serving: int | None) -> None:
+    def _serve(self, world: World, api: ApadApi, serving: int | None) -> None:
         """Run queued operator commands through `api` (a world thread only): those for aPad
         `serving`, and those whose aPad has no loop running to serve them (all when None)."""
-        with self._commands_lock:
-            take = [c for c in self._commands if serving in (None, c[0]) or not self._running(c[0])]
-            self._commands = [c for c in self._commands if not any(c is t for t in take)]
-        for sysid, command in take:
-            action, fields = action_of(command)
-            who = {"apad": sysid} if self.swarm else {}
-            try:
-                self._notice, more = execute(api, sysid, command, f"aPad {sysid}" if self.swarm else "aPad")
-                self._emit("operator", action=action, **who, **fields, **more)
-            except (CommandError, LookupError, Refused) as exc:
-                why = words_of(exc)
-                self._notice = f"refused: {why}" if isinstance(exc, Refused) else f"refused: {action}: {why}"
-                result = {"result": str(exc)} if isinstance(exc, CommandError) else {}
-                self._emit("refused", action=action, **who, **fields, why=why, **result)
-                if isinstance(command, DockMussel) and isinstance(exc, CommandError):
-                    self._to_sink[command.mussel_id] = sysid  # called up for a dock refused: not left afloat
-
-    def _sink_refused(self, world: World) -> None:
-        """aMussels the operator called up for a dock that was refused: sent down once they float
-        (a surfacing one takes no sink command); forgotten if they went anywhere else."""
-        for mussel_id, sysid in list(self._to_sink.items()):
-            state = world.api.mussels[mussel_id].state if mussel_id in world.api.mussels else None
-            if state == MusselState.FLOATING:
-                world.api.command_mussel(mussel_id, MusselCommand.SINK, sysid)
-                world.events.emit(world.clock.time(), "operator_sink", mussel=mussel_id, why="its dock was refused")
-            if state != MusselState.SURFACING:
-                del self._to_sink[mussel_id]
-
-    def _emit(self, kind: str, **fields: object) -> None:
-        world = self.world
-        if world is not None:
-            world.events.emit(world.clock.time(), kind, **fields)
-
-    def _flush_operator(self, world: World) -> None:
-        """Log the operator's actions the UI queued (a world thread only)."""
-        with self._commands_lock:
-            taken, self._operator_events = self._operator_events, []
-        for action, fields in taken:
-            world.events.emit(world.clock.time(), "operator", action=action, **fields)
+        self._commands.serve(world, api, serving, self._running, self._set_notice)
 
     def _watch_links(self, world: World, now_us: int) -> None:
         """The links' health for the UI, and an event (and a notice) for every aPad restart seen."""
@@ -399,9 +340,9 @@ class ConsoleRunner:
         model, world = self._model, self.world
         if model is None or world is None:
             return
-        self._flush_operator(world)
+        self._commands.flush(world)
         self._watch_links(world, now_us)
-        self._sink_refused(world)
+        self._commands.sink_refused(world)
         events = world.events.events
         fresh: list[Event] = []
         for ev in reversed(events):
