@@ -22,7 +22,8 @@ import numpy as np
 
 from apad_sitl.vocabulary import N_SLOTS, Latch
 from gcs.console.app import ConsoleApp
-from gcs.console.model import ConsoleModel, Snapshot, area_outline
+from gcs.console.model import ConsoleModel, area_outline
+from gcs.console.snapshot import Snapshot
 from gcs.link.fleet_table import MusselBatch
 from gcs.link.registry import VehicleRegistry
 from gcs.link.telemetry import DEG_E7, Heartbeat, Position, SlotView

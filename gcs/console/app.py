@@ -24,8 +24,8 @@ from textual.reactive import reactive
 from gcs.console.confirm import ConfirmQuit, QuitChoice
 from gcs.console.help import HelpScreen
 from gcs.console.linkbar import LinkBar
-from gcs.console.model import Snapshot
 from gcs.console.runner import ConsoleRunner, DockMussel, GoToMussel, Hold, UndockMussel
+from gcs.console.snapshot import Snapshot
 from gcs.console.widgets import LEGEND, Chart, ConsoleFooter, EventLog, FleetTable, MapView, StatusPanel
 from gcs.mission.strategies import COLLECT
 from gcs.records.replay import Replay

@@ -35,7 +35,7 @@ import numpy as np
 from gcs.api import ApadApi
 from gcs.console.config import ConsoleConfig, ResumePoint, open_world
 from gcs.console.link_health import Level, LinkHealth, LossWindow, link_health
-from gcs.console.model import END_WORDS, ConsoleModel, Snapshot, area_outline
+from gcs.console.model import END_WORDS, ConsoleModel, area_outline
 from gcs.console.operator import (
     CommandQueue,
     DockMussel,
@@ -46,6 +46,7 @@ from gcs.console.operator import (
     leave_holding,
     log_whereabouts,
 )
+from gcs.console.snapshot import Snapshot
 from gcs.mission.loop import EnergySharingLoop, LoopControl
 from gcs.mission.swarm_run import SwarmOutcome, run_loops, share_fleet
 from gcs.mission.world import World

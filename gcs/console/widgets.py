@@ -35,7 +35,7 @@ from gcs.console.colours import (
 )
 from gcs.console.fleetview import FleetTable
 from gcs.console.mapview import MapView
-from gcs.console.model import ApadSnapshot, Snapshot
+from gcs.console.snapshot import ApadSnapshot, Snapshot
 from missiontime import mm_ss
 from mussel_sim.vocabulary import MusselState
 

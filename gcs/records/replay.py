@@ -20,7 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from gcs.console.model import ConsoleModel, Snapshot, area_outline
+from gcs.console.model import ConsoleModel, area_outline
+from gcs.console.snapshot import Snapshot
 from gcs.link import telemetry
 from gcs.link.registry import VehicleRegistry
 from gcs.link.router import GCS_SYSTEM_ID

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from gcs.console.model import Snapshot
+from gcs.console.snapshot import Snapshot
 from gcs.mission.scenario import Scenario
 from gcs.records.events import Event
 from gcs.records.replay import ReplayError, find_scenario, load_replay, read_events, run_files

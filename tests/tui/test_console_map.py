@@ -20,7 +20,8 @@ from tui_helpers import screen_text, wait_for
 
 from apad_sitl.vocabulary import Latch
 from gcs.console.app import ConsoleApp
-from gcs.console.model import ConsoleModel, Snapshot, area_outline
+from gcs.console.model import ConsoleModel, area_outline
+from gcs.console.snapshot import Snapshot
 from gcs.link.registry import VehicleRegistry
 from gcs.link.telemetry import DEG_E7, Heartbeat, MusselView, Position, SlotView
 from gcs.mission.scenario import load_scenario

@@ -12,8 +12,9 @@ import pytest
 
 from apad_sitl.vocabulary import Primitive
 from gcs.console.canvas import BrailleCanvas
-from gcs.console.model import ConsoleModel, MarkerColour
+from gcs.console.model import ConsoleModel
 from gcs.console.runner import ConsoleConfig, ConsoleRunner, Hold, PacedClock, UndockMussel
+from gcs.console.snapshot import MarkerColour
 from gcs.link import telemetry
 from gcs.link.registry import VehicleRegistry
 from gcs.mission.scenario import load_scenario
