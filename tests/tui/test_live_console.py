@@ -42,7 +42,7 @@ def test_map_and_table_appear_and_q_leaves_the_apad_holding() -> None:
         async with app.run_test(size=SIZE) as pilot:
             await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.apad_lat_deg is not None
                            and runner.snapshot.hist_t_s.size > 0)
-            await pilot.pause(0.3)
+            await wait_for(pilot, lambda: "loop paused" in screen_text(app))  # drawn by a later frame on a slow machine
             text = screen_text(app)
             assert "Map" in text and "◆" in text and "●" in text  # area, aPad, aMussels
             assert "battery %" in text and "uptime %" in text
