@@ -8,8 +8,10 @@ Pure models (dt in, no clock, no I/O):
 Edges:
     messages.py    MAVLink messages built from model state (what an ArduRover boat sends)
     logs.py        the aPad's own .tlog and JSON-lines event log
-    endpoint.py    SitlVehicle: the MAVLink vehicle's core (models, codec, poll loop, dispatch),
-                   driven by a Scheduler, with one part per capability:
+    endpoint.py    SitlVehicle: the MAVLink vehicle's core (state, codec, poll loop, dispatch),
+                   driven by a Scheduler, with one part per capability, each built with only
+                   what it uses (host.py: the narrow PartHost and the words of commands;
+                   state.py: ApadState, the shared state that reports its changes; dege7.py):
         commands.py          the command protocol and the MAV_CMD table
         streams.py           telemetry streams and requested messages
         modes.py             HOLD / GUIDED, arming, the GCS failsafe

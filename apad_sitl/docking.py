@@ -1,13 +1,14 @@
 """Docking: the table of aMussel fixes the aPad has heard, and the dialect's Dock and Undock commands.
 
-`MusselTable` keeps the latest AMUSSEL_STATUS of each aMussel as received (degE7, state) and turns
+`MusselFixTable` keeps the latest AMUSSEL_STATUS of each aMussel as received (degE7, state) and turns
 it into local metres only when a dock asks (most aMussels are never docked by this aPad). It
 validates what it takes, once: an id in 1..MAX_MUSSEL_ID, latitude and longitude in range, a known
 MusselState; anything else is dropped and counted ("invalid:AMUSSEL_STATUS:lat"). `update` takes
 one message; `update_many` takes the columns of a batch decoder.
 
 Dock (slot, aMussel id) and Undock (slot, expected aMussel id or 0) go to the primitives model;
-its refusal travels in COMMAND_ACK.result_param2 and as a STATUSTEXT.
+its refusal travels in COMMAND_ACK.result_param2 and as a STATUSTEXT. `slots_changed` is a listener
+of the primitive (the core's wiring): it logs every slot that changed and reports a failed dock.
 """
 
 from __future__ import annotations
@@ -15,21 +16,20 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Iterator, Mapping
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from apad_sitl import primitives as prim
-from apad_sitl.commands import ACCEPT, DENIED, Command, Reply, whole
+from apad_sitl.geofence import Geofence
+from apad_sitl.host import ACCEPT, DENIED, Command, CommandRegistry, PartHost, Reply, whole
 from apad_sitl.primitives import REFUSAL_TEXT, MusselFix, PrimitiveState, Refusal
+from apad_sitl.state import ApadState
 from apad_sitl.vocabulary import N_SLOTS, Latch, Primitive, Progress
 from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
 from mussel_sim.geo import LocalFrame
 from mussel_sim.vocabulary import MusselState
-
-if TYPE_CHECKING:
-    from apad_sitl.endpoint import SitlVehicle
 
 MAX_MUSSEL_ID = 0xFFFF  # AMUSSEL_STATUS.mussel_id is a uint16; 0 is no aMussel
 MAX_LAT_E7 = 90 * 10**7
@@ -39,7 +39,7 @@ _STATES = frozenset(KNOWN_STATES.tolist())
 STATUS = "AMUSSEL_STATUS"
 
 
-class MusselTable(Mapping[int, MusselFix]):
+class MusselFixTable(Mapping[int, MusselFix]):
     """Latest valid AMUSSEL_STATUS per aMussel id; converted to local metres lazily, only when asked."""
 
     def __init__(self, frame: LocalFrame, dropped: Counter[str] | None = None) -> None:
@@ -120,7 +120,7 @@ def checked_statuses(
     lon_e7: NDArray[np.integer[Any]],
     state: NDArray[np.integer[Any]],
 ) -> CheckedStatuses:
-    """`MusselTable.update_many`'s checks, apart from any table."""
+    """`MusselFixTable.update_many`'s checks, apart from any table."""
     columns = [np.asarray(a) for a in (ids, lat_e7, lon_e7, state)]
     n = columns[0].shape[0] if columns[0].ndim == 1 else -1
     for a in columns:
@@ -155,14 +155,23 @@ def checked_statuses(
 
 
 class Docking:
-    """The vehicle's docking part: feeds the aMussel table, runs Dock and Undock, reports the latches."""
+    """The vehicle's docking part: feeds the aMussel table, runs Dock and Undock, reports the latches.
 
-    def __init__(self, vehicle: SitlVehicle) -> None:
-        self._v = vehicle
-        self.mussels = MusselTable(vehicle.frame, vehicle.dropped)
-        vehicle.on(mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS, self._on_amussel_status)
-        vehicle.commands.register(MAV_CMD_APAD_DOCK, self._cmd_dock, stateful=True)
-        vehicle.commands.register(MAV_CMD_APAD_UNDOCK, self._cmd_undock, stateful=True)
+    `mussels` is the vehicle's table (its physics reads it too); `geofence` (None: none) is the water
+    an Undock must be over.
+    """
+
+    def __init__(
+        self, host: PartHost, apad: ApadState, commands: CommandRegistry, mussels: MusselFixTable,
+        geofence: Geofence | None,
+    ) -> None:
+        self._host = host
+        self._apad = apad
+        self._geofence = geofence
+        self.mussels = mussels
+        host.on(mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS, self._on_amussel_status)
+        commands.register(MAV_CMD_APAD_DOCK, self._cmd_dock, stateful=True)
+        commands.register(MAV_CMD_APAD_UNDOCK, self._cmd_undock, stateful=True)
 
     def _on_amussel_status(self, msg: Any) -> None:
         self.mussels.update(msg.mussel_id, msg.lat, msg.lon, msg.state)
@@ -181,17 +190,18 @@ class Docking:
         if isinstance(checked, Reply):
             return checked
         slot, mussel_id = checked
-        v = self._v
-        held = v.primitive.slot_state(slot)
+        apad = self._apad
+        held = apad.primitive.slot_state(slot)
         if held.mussel_id == mussel_id and held.latch in (Latch.CLOSING, Latch.LATCHED) and not self._docking(
                 slot, mussel_id):
             return self._redock(slot, mussel_id, held.latch)
-        new, refusal = prim.dock(v.primitive, slot, mussel_id, v.state.x_m, v.state.y_m, self.mussels, v.params)
+        new, refusal = prim.dock(apad.primitive, slot, mussel_id, apad.state.x_m, apad.state.y_m, self.mussels,
+                                 apad.params)
         return self._result("Dock", slot, mussel_id, new, refusal)
 
     def _docking(self, slot: int, mussel_id: int) -> bool:
         """Whether the Dock of this aMussel into this slot is the primitive in force (a repeat changes nothing)."""
-        p = self._v.primitive
+        p = self._apad.primitive
         return p.kind == Primitive.DOCK and (p.slot, p.mussel_id) == (slot, mussel_id)
 
     def _redock(self, slot: int, mussel_id: int, latch: Latch) -> Reply:
@@ -199,12 +209,12 @@ class Docking:
         latch still closing is a Dock to follow again (its report ends it, done or failed); a latched one
         is refused, "slot occupied" (the slot holds it from before: e.g. a script run twice), so the
         Dock is never accepted with nothing to report on it."""
-        v = self._v
+        apad = self._apad
         if latch == Latch.LATCHED:
-            return self._result("Dock", slot, mussel_id, v.primitive, Refusal.SLOT_OCCUPIED)
-        hx, hy = prim.hold_point(v.primitive, v.state.x_m, v.state.y_m)
-        v.set_primitive(replace(v.primitive, kind=Primitive.DOCK, progress=Progress.IN_PROGRESS, target_x_m=hx,
-                                target_y_m=hy, speed_mps=0.0, radius_m=0.0, slot=slot, mussel_id=mussel_id))
+            return self._result("Dock", slot, mussel_id, apad.primitive, Refusal.SLOT_OCCUPIED)
+        hx, hy = prim.hold_point(apad.primitive, apad.state.x_m, apad.state.y_m)
+        apad.set_primitive(replace(apad.primitive, kind=Primitive.DOCK, progress=Progress.IN_PROGRESS, target_x_m=hx,
+                                   target_y_m=hy, speed_mps=0.0, radius_m=0.0, slot=slot, mussel_id=mussel_id))
         return ACCEPT
 
     def _cmd_undock(self, cmd: Command) -> Reply:
@@ -212,12 +222,12 @@ class Docking:
         if isinstance(checked, Reply):
             return checked
         slot, mussel_id = checked
-        v = self._v
-        if v.geofence is not None and not v.geofence.contains(v.state.x_m, v.state.y_m):
-            v.statustext(mavlink.MAV_SEVERITY_WARNING, f"Undock slot {slot} refused: not over water")
-            v.event("geofence", what="undock", slot=slot)
+        host, apad = self._host, self._apad
+        if self._geofence is not None and not self._geofence.contains(apad.state.x_m, apad.state.y_m):
+            host.statustext(mavlink.MAV_SEVERITY_WARNING, f"Undock slot {slot} refused: not over water")
+            host.event("geofence", what="undock", slot=slot)
             return Reply(DENIED)
-        new, refusal = prim.undock(v.primitive, slot, mussel_id, v.state.x_m, v.state.y_m, v.params)
+        new, refusal = prim.undock(apad.primitive, slot, mussel_id, apad.state.x_m, apad.state.y_m, apad.params)
         return self._result("Undock", slot, mussel_id, new, refusal)
 
     def _refuse(self, what: str, cmd: Command, refusal: Refusal, field: str) -> Reply:
@@ -230,25 +240,25 @@ class Docking:
         if refusal is not None:
             self._warn(what, slot, mussel_id, refusal)
             return Reply(DENIED, int(refusal))
-        self._v.set_primitive(new)
+        self._apad.set_primitive(new)
         return ACCEPT
 
     def _warn(self, what: str, slot: int, mussel_id: int, refusal: Refusal) -> None:
-        self._v.statustext(mavlink.MAV_SEVERITY_WARNING,
-                           f"{what} slot {slot} aMussel {mussel_id}: {REFUSAL_TEXT[refusal]}")
+        self._host.statustext(mavlink.MAV_SEVERITY_WARNING,
+                              f"{what} slot {slot} aMussel {mussel_id}: {REFUSAL_TEXT[refusal]}")
 
     def slots_changed(self, old: PrimitiveState, new: PrimitiveState) -> None:
         """Log every slot that changed; a latch that reopened while closing is a failed dock."""
-        v = self._v
+        host = self._host
         for i, (a, b) in enumerate(zip(old.slots, new.slots, strict=True)):
             if (a.mussel_id, a.latch, a.charging) == (b.mussel_id, b.latch, b.charging):
                 continue
             slot = i + 1
-            v.event("slot", slot=slot, mussel_id=b.mussel_id, latch=b.latch.name, charging=b.charging)
+            host.event("slot", slot=slot, mussel_id=b.mussel_id, latch=b.latch.name, charging=b.charging)
             if a.latch == Latch.CLOSING and b.latch == Latch.OPEN:
                 text = f"Dock slot {slot} aMussel {a.mussel_id} failed: out of reach"
-                v.statustext(mavlink.MAV_SEVERITY_WARNING, text)
-                v.event("dock_failed", slot=slot, mussel_id=a.mussel_id, reason="out of reach")
+                host.statustext(mavlink.MAV_SEVERITY_WARNING, text)
+                host.event("dock_failed", slot=slot, mussel_id=a.mussel_id, reason="out of reach")
 
 
 def _shown(value: float) -> int:

@@ -1,8 +1,9 @@
 """The SITL aPad as a MAVLink vehicle: one system on one transport, driven by the scheduler.
 
-`SitlVehicle` is the core: the models (vehicle, primitives, params), the codec and transport, the
-physics task, the poll loop and the dispatch of each decoded message to the handler a part
-registered for it. The parts, one capability each, like MAVSDK's plugins on one `System`:
+`SitlVehicle` is the core: the aPad's state (`ApadState`: hull, primitive, mode, arming, speed
+override, params), the codec and transport, the physics task, the poll loop and the dispatch of each
+decoded message to the handler a part registered for it. The parts, one capability each, like
+MAVSDK's plugins on one `System`:
 
     commands.py          COMMAND_LONG / COMMAND_INT, retransmissions, COMMAND_ACK; the MAV_CMD table
     streams.py           telemetry streams, SET_MESSAGE_INTERVAL, REQUEST_MESSAGE, on-change status
@@ -11,6 +12,11 @@ registered for it. The parts, one capability each, like MAVSDK's plugins on one 
     docking.py           the aMussel fix table, Dock and Undock
     param_server.py      the PARAM protocol (and MAVLink FTP, NAKed)
     mission_protocol.py  an empty mission list
+
+A part never sees this class: it is built with the `PartHost` this class is (`host.py`: receive,
+send, log, count, the time), the `ApadState`, the command table if it answers commands, and the
+plain values it needs. Parts do not call each other: what follows a change of the state is wired
+here, as listeners of the state, in an order the .tlogs record (`_wire`).
 
 Nothing received may end the vehicle: a message that fails validation is dropped and counted by
 reason in `dropped` ("invalid:COMMAND_INT:x"), and an exception a handler still raises is caught
@@ -23,32 +29,34 @@ messages between tasks. Lat/lon <-> metres goes through `LocalFrame` around home
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from apad_sitl import messages as msgs
 from apad_sitl import primitives as prim
 from apad_sitl import vehicle as veh
-from apad_sitl.commands import Command, CommandTable
-from apad_sitl.docking import CheckedStatuses, Docking, MusselTable, checked_statuses
+from apad_sitl.commands import CommandTable
+from apad_sitl.dege7 import DegE7
+from apad_sitl.docking import CheckedStatuses, Docking, MusselFixTable, checked_statuses
 from apad_sitl.geofence import Geofence
+from apad_sitl.host import MessageHandler
 from apad_sitl.logs import VehicleLog
 from apad_sitl.mission_protocol import MissionProtocol
-from apad_sitl.modes import Modes
+from apad_sitl.modes import Modes, mode_name
 from apad_sitl.navigation import Navigation
 from apad_sitl.param_server import ParamServer
 from apad_sitl.params import ApadParams, with_param
 from apad_sitl.primitives import PrimitiveState
+from apad_sitl.state import ApadState
 from apad_sitl.streams import DEFAULT_RATES_HZ, Streams
 from apad_sitl.vehicle import VehicleState
-from apad_sitl.vocabulary import RoverMode
 from mavlink_dialect import Codec, Transport, hot, hot_decode, mavlink, signing
 from mavlink_dialect.transport import Bell, ring_on
 from missiontime import US_PER_S, Scheduler, Task
 from mussel_sim.geo import LocalFrame
 
-__all__ = ["DEFAULT_RATES_HZ", "PHYSICS_HZ", "Command", "Geofence", "MusselTable", "SitlVehicle"]
+__all__ = ["DEFAULT_RATES_HZ", "PHYSICS_HZ", "Geofence", "MusselFixTable", "SitlVehicle"]
 
 PHYSICS_HZ = 10.0
 # One for every vehicle of the process: the aPads of a swarm get the same status datagrams (hot_decode.SharedDecode).
@@ -64,7 +72,6 @@ def _checked(split: hot_decode.Split) -> CheckedStatuses:
         f = split.hot.fields
         last = _last_checked = split.hot, checked_statuses(f["mussel_id"], f["lat"], f["lon"], f["state"])
     return last[1]
-MessageHandler = Callable[[Any], None]  # a decoded pymavlink message in
 
 
 class SitlVehicle:
@@ -93,7 +100,6 @@ class SitlVehicle:
         is the water area as a (lat, lon) ring: Go To targets outside it and undocking outside it are refused.
         """
         self.transport = transport
-        self.params = with_param(params, "SYSID_THISMAV", system_id)
         self.system_id = system_id
         self.component_id = component_id
         self.codec = Codec(system_id, component_id)
@@ -106,12 +112,8 @@ class SitlVehicle:
         self.current_mps = current_mps  # (east, north) m/s; scenarios may change it at run time
         self.physics_hz = physics_hz
 
-        # The vehicle's state (what a checkpoint saves); the parts change it.
-        self.state = VehicleState()
-        self.primitive = PrimitiveState()
-        self.mode: int = RoverMode.HOLD
-        self.armed = True  # boots armed so a mission script needs no arming step
-        self.speed_override_mps = 0.0  # DO_CHANGE_SPEED for later Go Tos; 0: SPEED_MAX
+        # The aPad's state (what a checkpoint saves); the parts change it.
+        self.apad = ApadState(with_param(params, "SYSID_THISMAV", system_id))
         self.now_us = 0
         self.closed = False
         self.dropped: Counter[str] = Counter()  # received messages dropped, by reason
@@ -122,21 +124,42 @@ class SitlVehicle:
         self._handlers: dict[int, MessageHandler] = {}
         self.log: VehicleLog | None = None
 
-        # The parts. Each registers its message and command handlers here.
-        self.commands = CommandTable(self)
-        self.streams = Streams(self, rates_hz)
-        self.modes = Modes(self)
-        self.navigation = Navigation(self)
-        self.docking = Docking(self)
-        self.param_server = ParamServer(self)
+        # The parts, each built with what it uses; each registers its message and command handlers.
+        apad = self.apad
+        self.mussels = MusselFixTable(self.frame, self.dropped)
+        target_e7 = DegE7(self.frame)  # the target a Go To commanded, echoed by PRIMITIVE_STATUS
+        self.commands = CommandTable(self, apad)
+        self.streams = Streams(self, apad, self.commands, self.frame, system_id, rates_hz, target_e7)
+        self.modes = Modes(self, apad, self.commands)
+        self.navigation = Navigation(self, apad, self.commands, self.frame, self.geofence, target_e7)
+        self.docking = Docking(self, apad, self.commands, self.mussels, self.geofence)
+        self.param_server = ParamServer(self, apad)
         self.mission_protocol = MissionProtocol(self)
-        self.mussels: MusselTable = self.docking.mussels
+        self._wire()
 
         if log_dir is not None:
-            self.log = VehicleLog(Path(log_dir), f"apad{system_id}", log_epoch_us, append=log_append)
+            self.log = VehicleLog(Path(log_dir), system_id, log_epoch_us, append=log_append)
         # Logged at attach, stamped with the mission time then (a resumed mission's aPad starts late).
         self._start_fields = {"system_id": system_id, "home_lat_deg": home_lat_deg, "home_lon_deg": home_lon_deg,
                               "current_mps": list(current_mps)}
+
+    def _wire(self) -> None:
+        """What follows a change of the aPad's state, in this order: the event log, then the slots'
+        bookkeeping, then the telemetry that announces it."""
+        apad = self.apad
+        apad.on_primitive(self._log_primitive)
+        apad.on_primitive(self.docking.slots_changed)  # "slot" events; a failed dock's warning
+        apad.on_primitive(self.streams.primitive_changed)  # PRIMITIVE_STATUS, DOCK_SLOT_STATUS at once
+        apad.on_mode(lambda mode: self.event("mode", mode=mode_name(mode)))
+        apad.on_mode(lambda mode: self.streams.send_heartbeat())  # consoles show the new mode now
+        apad.on_armed(lambda armed: self.event("arm" if armed else "disarm"))
+        apad.on_armed(lambda armed: self.streams.send_heartbeat())
+
+    def _log_primitive(self, old: PrimitiveState, new: PrimitiveState) -> None:
+        if (new.kind, new.progress) != (old.kind, old.progress) or new.slot != old.slot:
+            self.event("primitive", primitive=new.kind.name, progress=new.progress.name,
+                       slot=new.slot, mussel_id=new.mussel_id,
+                       target_x_m=round(new.target_x_m, 3), target_y_m=round(new.target_y_m, 3))
 
     # ------------------------------------------------------------------ lifecycle
 
@@ -181,6 +204,58 @@ class SitlVehicle:
     # ------------------------------------------------------------------ state for embedders and tests
 
     @property
+    def params(self) -> ApadParams:
+        return self.apad.params
+
+    @params.setter
+    def params(self, value: ApadParams) -> None:
+        self.apad.params = value
+
+    @property
+    def state(self) -> VehicleState:
+        return self.apad.state
+
+    @state.setter
+    def state(self, value: VehicleState) -> None:
+        self.apad.state = value
+
+    @property
+    def primitive(self) -> PrimitiveState:
+        """The running primitive and the slots; `set_primitive` changes it."""
+        return self.apad.primitive
+
+    def set_primitive(self, new: PrimitiveState) -> None:
+        """Swap in a new primitive state; logged and announced (on-change telemetry) by the listeners."""
+        self.apad.set_primitive(new)
+
+    @property
+    def mode(self) -> int:
+        return self.apad.mode
+
+    @mode.setter
+    def mode(self, value: int) -> None:
+        """Silently, as a checkpoint's restore does; the parts change it with `ApadState.set_mode`."""
+        self.apad.mode = value
+
+    @property
+    def armed(self) -> bool:
+        return self.apad.armed
+
+    @armed.setter
+    def armed(self, value: bool) -> None:
+        """Silently, as a checkpoint's restore does; the parts change it with `ApadState.set_armed`."""
+        self.apad.armed = value
+
+    @property
+    def speed_override_mps(self) -> float:
+        """DO_CHANGE_SPEED for later Go Tos; 0: SPEED_MAX."""
+        return self.apad.speed_override_mps
+
+    @speed_override_mps.setter
+    def speed_override_mps(self, value: float) -> None:
+        self.apad.speed_override_mps = value
+
+    @property
     def position_deg(self) -> tuple[float, float]:
         """(lat_deg, lon_deg) of the aPad now."""
         lat_e7, lon_e7 = self.streams.position_e7.of(self.state.x_m, self.state.y_m)
@@ -198,15 +273,6 @@ class SitlVehicle:
     def last_gcs_heartbeat_us(self) -> int | None:
         """Mission time of the last GCS HEARTBEAT; None if no GCS was ever heard."""
         return self.modes.last_gcs_heartbeat_us
-
-    @property
-    def _speed_override_mps(self) -> float:
-        """The old name of `speed_override_mps`; gcs/records/checkpoint.py saves and restores it."""
-        return self.speed_override_mps
-
-    @_speed_override_mps.setter
-    def _speed_override_mps(self, value: float) -> None:
-        self.speed_override_mps = value
 
     # ------------------------------------------------------------------ poller and dispatch
 
@@ -277,6 +343,10 @@ class SitlVehicle:
         """Count a received `message` dropped (or refused) because `field` holds no legal value."""
         self.dropped[f"invalid:{message}:{field}"] += 1
 
+    def count_unsupported(self, message: str) -> None:
+        """Count a received `message` that asks for something the aPad does not do."""
+        self.dropped[f"unsupported:{message}"] += 1
+
     # ------------------------------------------------------------------ physics
 
     def _physics(self, now_us: int) -> None:
@@ -287,12 +357,13 @@ class SitlVehicle:
         dt_s = (now_us - last) / US_PER_S
         if self.log is not None and now_us // US_PER_S != last // US_PER_S:
             self.log.flush()  # once a second of mission time: a killed process loses little
-        if self.params.fs_gcs_enable:
+        apad = self.apad
+        if apad.params.fs_gcs_enable:
             self.modes.check_failsafe()
-        p = self.params
-        setpoint = prim.velocity_setpoint(self.primitive, self.state, p) if self.armed else (0.0, 0.0)
-        self.state = veh.step(self.state, setpoint, p, self.current_mps, dt_s)
-        self.set_primitive(prim.step(self.primitive, self.state.x_m, self.state.y_m, self.mussels, p, dt_s))
+        p = apad.params
+        setpoint = prim.velocity_setpoint(apad.primitive, apad.state, p) if apad.armed else (0.0, 0.0)
+        apad.state = state = veh.step(apad.state, setpoint, p, self.current_mps, dt_s)
+        apad.set_primitive(prim.step(apad.primitive, state.x_m, state.y_m, self.mussels, p, dt_s))
 
     # ------------------------------------------------------------------ what the parts share
 
@@ -305,21 +376,6 @@ class SitlVehicle:
     def statustext(self, severity: int, text: str) -> None:
         self.send(msgs.statustext(severity, text))
 
-    def event(self, event: str, **fields: Any) -> None:
+    def event(self, event: str, /, **fields: Any) -> None:
         if self.log is not None:
             self.log.event(self.now_us, event, **fields)
-
-    def set_primitive(self, new: PrimitiveState) -> None:
-        """Swap in a new primitive state; log and announce what changed (on-change telemetry)."""
-        old, self.primitive = self.primitive, new
-        if new is old:
-            return
-        if (new.kind, new.progress) != (old.kind, old.progress) or new.slot != old.slot:
-            self.event("primitive", primitive=new.kind.name, progress=new.progress.name,
-                       slot=new.slot, mussel_id=new.mussel_id,
-                       target_x_m=round(new.target_x_m, 3), target_y_m=round(new.target_y_m, 3))
-        self.docking.slots_changed(old, new)
-        if not self.closed:
-            self.streams.announce()
-
-    _set_primitive = set_primitive  # the old name; gcs/records/checkpoint.py calls it

@@ -10,26 +10,40 @@ signing timestamps beside them (`signing_path`, see `mavlink_dialect.signing_sta
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 from mavlink_dialect.tlog import TlogWriter
-from missiontime import seconds_to_us, us_to_s
+from missiontime import us_to_s
 
-EVENTS_SUFFIX = ".events.jsonl"
+
+def tlog_path(log_dir: Path, system_id: int) -> Path:
+    """aPad `system_id`'s .tlog in `log_dir` (the aPad names its own logs; a run folder asks it)."""
+    return log_dir / f"apad{system_id}.tlog"
+
+
+def events_path(log_dir: Path, system_id: int) -> Path:
+    return log_dir / f"apad{system_id}.events.jsonl"
+
+
+def signing_path(log_dir: Path, system_id: int) -> Path:
+    return log_dir / f"apad{system_id}.signing.json"
 
 
 class VehicleLog:
-    def __init__(self, log_dir: Path, stem: str, epoch_us: int = 0, append: bool = False) -> None:
+    """Both logs of one aPad. `muted`: nothing reaches the files (a resumed lockstep mission
+    replaying what they already hold)."""
+
+    def __init__(self, log_dir: Path, system_id: int, epoch_us: int = 0, append: bool = False) -> None:
         """`append` continues existing logs (the mission resumed after a GCS crash)."""
         log_dir.mkdir(parents=True, exist_ok=True)
-        self.tlog_path = log_dir / f"{stem}.tlog"
-        self.events_path = log_dir / f"{stem}{EVENTS_SUFFIX}"
-        self.signing_path = log_dir / f"{stem}.signing.json"
+        self.tlog_path = tlog_path(log_dir, system_id)
+        self.events_path = events_path(log_dir, system_id)
+        self.signing_path = signing_path(log_dir, system_id)
         self.epoch_us = epoch_us
         self._tlog = TlogWriter(self.tlog_path, epoch_us, append)
         self._events = open(self.events_path, "a" if append else "w", encoding="utf-8")  # noqa: SIM115
+        self.muted = False
 
     def message(self, time_us: int, frame: bytes | bytearray) -> None:
         self._tlog.write(time_us, bytes(frame))
@@ -38,9 +52,19 @@ class VehicleLog:
         self._tlog.write_many(time_us, frames)
 
     def event(self, time_us: int, event: str, **fields: Any) -> None:
+        if self.muted:
+            return
         record = {"t_s": round(us_to_s(time_us), 6), "event": event, **fields}
         self._events.write(json.dumps(record, separators=(",", ":")) + "\n")
         self._events.flush()  # events are rare and the ones before a crash matter most
+
+    def mute(self, muted: bool) -> None:
+        self.muted = self._tlog.muted = muted
+
+    def sizes(self) -> dict[Path, int]:
+        """How long each log is now, everything written flushed first (what a checkpoint keeps)."""
+        events = self.events_path.stat().st_size if self._events.closed else self._events.tell()
+        return {self.tlog_path: self._tlog.size(), self.events_path: events}
 
     def flush(self) -> None:
         self._tlog.flush()
@@ -51,17 +75,3 @@ class VehicleLog:
             self._events.close()
 
 
-def event_records(path: Path) -> Iterator[tuple[int, int, bool]]:
-    """Each line of an aPad event log as (mission time in us, its length in bytes, whether it is whole):
-    what `gcs.records.checkpoint.cut_logs` needs to cut the log back to a checkpoint. A line a crash
-    cut short (no newline, or not a record) is not whole; nothing is read past it."""
-    with path.open("rb") as f:
-        for line in f:
-            try:
-                record = json.loads(line) if line.endswith(b"\n") else None
-                t_us = seconds_to_us(float(record["t_s"])) if isinstance(record, dict) else None
-            except (ValueError, KeyError, TypeError):
-                t_us = None
-            yield (t_us or 0, len(line), t_us is not None)
-            if t_us is None:
-                return

@@ -3,8 +3,9 @@
 HOLD runs Hold Position; GUIDED takes Go To targets (and holds until one comes). DO_SET_MODE and
 the legacy SET_MODE message switch between them; COMPONENT_ARM_DISARM arms (the aPad boots armed).
 The failsafe: with FS_GCS_ENABLE, a GCS heard once and then silent for FS_GCS_TIMEOUT makes a busy
-aPad hold where it is; a Dock or Undock's latch carries on. Mode and arming are the vehicle's
-state (`vehicle.mode`, `vehicle.armed`); this part changes them.
+aPad hold where it is; a Dock or Undock's latch carries on. Mode and arming are the aPad's state
+(`ApadState.mode`, `.armed`); this part changes them with `set_mode` and `set_armed`, and whoever
+listens (the event log, the HEARTBEAT sent at once) is the core's wiring, not this part's business.
 
 Timing: each GCS heartbeat moves a one-shot deadline task to FS_GCS_TIMEOUT after it, so HOLD comes
 FS_GCS_TIMEOUT after the last heartbeat with no check period on top (the physics tick at 10 Hz
@@ -16,17 +17,15 @@ failsafe can come that much early, never late.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from apad_sitl import messages as msgs
 from apad_sitl import primitives as prim
-from apad_sitl.commands import ACCEPT, DENY, Command, Reply, invalid, whole
+from apad_sitl.host import ACCEPT, DENY, Command, CommandRegistry, PartHost, Reply, invalid, whole
+from apad_sitl.state import ApadState
 from apad_sitl.vocabulary import Primitive, Progress, RoverMode
 from mavlink_dialect import mavlink
 from missiontime import US_PER_S, Scheduler, Task
-
-if TYPE_CHECKING:
-    from apad_sitl.endpoint import SitlVehicle
 
 UINT8_MAX = 0xFF
 UINT32_MAX = 0xFFFF_FFFF
@@ -44,16 +43,17 @@ def mode_name(mode: int) -> str:
 class Modes:
     """The vehicle's mode part; also answers GCS heartbeats (the failsafe's input)."""
 
-    def __init__(self, vehicle: SitlVehicle) -> None:
-        self._v = vehicle
+    def __init__(self, host: PartHost, apad: ApadState, commands: CommandRegistry) -> None:
+        self._host = host
+        self._apad = apad
         self.last_gcs_heartbeat_us: int | None = None  # mission time of the last GCS HEARTBEAT
         self.failsafe_active = False
         self._scheduler: Scheduler | None = None
         self._deadline: Task | None = None
-        vehicle.on(mavlink.MAVLINK_MSG_ID_HEARTBEAT, self._on_heartbeat)
-        vehicle.on(mavlink.MAVLINK_MSG_ID_SET_MODE, self._on_set_mode)
-        vehicle.commands.register(mavlink.MAV_CMD_DO_SET_MODE, self._cmd_set_mode, stateful=True)
-        vehicle.commands.register(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, self._cmd_arm, stateful=True)
+        host.on(mavlink.MAVLINK_MSG_ID_HEARTBEAT, self._on_heartbeat)
+        host.on(mavlink.MAVLINK_MSG_ID_SET_MODE, self._on_set_mode)
+        commands.register(mavlink.MAV_CMD_DO_SET_MODE, self._cmd_set_mode, stateful=True)
+        commands.register(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, self._cmd_arm, stateful=True)
 
     def attach(self, scheduler: Scheduler, start_us: int, name: str) -> None:
         """The failsafe's deadline task, idle until a GCS heartbeat sets it."""
@@ -63,31 +63,24 @@ class Modes:
 
     # ------------------------------------------------------------------ modes
 
-    def set_mode(self, mode: RoverMode) -> None:
-        v = self._v
-        if mode != v.mode:
-            v.event("mode", mode=mode_name(mode))
-            v.mode = mode
-            v.streams.send_heartbeat()  # consoles show the new mode now, not up to a second later
-
     def enter_hold(self) -> None:
         """HOLD mode running Hold Position: at the point already held, else where the hull is.
 
         A Dock or Undock in progress gives way to Hold, its latch carries on.
         """
-        v = self._v
-        self.set_mode(RoverMode.HOLD)
-        p = v.primitive
+        apad = self._apad
+        apad.set_mode(RoverMode.HOLD)
+        p = apad.primitive
         if p.kind != Primitive.HOLD:
-            hx, hy = prim.hold_point(p, v.state.x_m, v.state.y_m)
-            v.set_primitive(prim.hold(p, hx, hy))
+            hx, hy = prim.hold_point(p, apad.state.x_m, apad.state.y_m)
+            apad.set_primitive(prim.hold(p, hx, hy))
 
     def enter_guided(self) -> None:
         """GUIDED mode; with nothing to do it holds where it is until a target comes."""
-        v = self._v
-        self.set_mode(RoverMode.GUIDED)
-        if v.primitive.kind == Primitive.IDLE:
-            v.set_primitive(prim.hold(v.primitive, v.state.x_m, v.state.y_m))
+        apad = self._apad
+        apad.set_mode(RoverMode.GUIDED)
+        if apad.primitive.kind == Primitive.IDLE:
+            apad.set_primitive(prim.hold(apad.primitive, apad.state.x_m, apad.state.y_m))
 
     def _change_mode(self, base_mode: int, custom_mode: int, custom_field: str) -> Reply:
         if not base_mode & mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
@@ -111,26 +104,21 @@ class Modes:
 
     def _on_set_mode(self, msg: Any) -> None:
         """Legacy SET_MODE message; ArduPilot answers it with a COMMAND_ACK too."""
-        v = self._v
-        if msg.target_system not in (0, v.system_id):
+        host = self._host
+        if not host.for_us(msg.target_system, 0):  # SET_MODE names a system, no component
             return
         reply = self._change_mode(msg.base_mode, msg.custom_mode, "custom_mode")
         if reply.invalid is not None:
-            v.count_invalid("SET_MODE", reply.invalid)
-        v.send(msgs.command_ack(mavlink.MAVLINK_MSG_ID_SET_MODE, reply.result, 0,
-                                msg.get_srcSystem(), msg.get_srcComponent()))
+            host.count_invalid("SET_MODE", reply.invalid)
+        host.send(msgs.command_ack(mavlink.MAVLINK_MSG_ID_SET_MODE, reply.result, 0,
+                                   msg.get_srcSystem(), msg.get_srcComponent()))
 
     # ------------------------------------------------------------------ arming
 
     def _cmd_arm(self, cmd: Command) -> Reply:
         if cmd.params[0] not in (0.0, 1.0):
             return invalid(cmd.field(1))
-        v = self._v
-        armed = cmd.params[0] == 1.0
-        if armed != v.armed:
-            v.armed = armed
-            v.event("arm" if armed else "disarm")
-            v.streams.send_heartbeat()
+        self._apad.set_armed(cmd.params[0] == 1.0)
         return ACCEPT
 
     # ------------------------------------------------------------------ GCS failsafe
@@ -138,26 +126,26 @@ class Modes:
     def _on_heartbeat(self, msg: Any) -> None:
         if msg.type != mavlink.MAV_TYPE_GCS:
             return
-        v = self._v
-        self.last_gcs_heartbeat_us = v.now_us
-        if self._scheduler is not None and self._deadline is not None and not v.closed:
-            self._scheduler.reschedule(self._deadline, next_us=v.now_us + self._timeout_us())
+        host = self._host
+        self.last_gcs_heartbeat_us = host.now_us
+        if self._scheduler is not None and self._deadline is not None and not host.closed:
+            self._scheduler.reschedule(self._deadline, next_us=host.now_us + self._timeout_us())
 
     def _timeout_us(self) -> int:
-        return round(self._v.params.fs_gcs_timeout_s * US_PER_S)
+        return round(self._apad.params.fs_gcs_timeout_s * US_PER_S)
 
     def _on_deadline(self, now_us: int) -> None:
-        v = self._v
-        if v.closed:
+        host = self._host
+        if host.closed:
             return
-        v.now_us = max(v.now_us, now_us)
-        if v.params.fs_gcs_enable:
+        host.now_us = max(host.now_us, now_us)
+        if self._apad.params.fs_gcs_enable:
             self.check_failsafe()
 
     def gcs_link_lost(self) -> bool:
         """True if a GCS was heard and has been silent for FS_GCS_TIMEOUT (or longer)."""
         last = self.last_gcs_heartbeat_us
-        return last is not None and self._v.now_us - last >= self._timeout_us()
+        return last is not None and self._host.now_us - last >= self._timeout_us()
 
     def check_failsafe(self) -> None:
         """Called at the deadline and every physics step while FS_GCS_ENABLE is set."""
@@ -166,11 +154,11 @@ class Modes:
             return
         # Anything but holding: a Go To stops; a Dock or Undock gives way to Hold and its latch carries on,
         # so docked aMussels stay latched and charging. The GCS re-commands what it wants when it is back.
-        v = self._v
-        busy = v.primitive.kind != Primitive.HOLD and v.primitive.progress == Progress.IN_PROGRESS
+        host, p = self._host, self._apad.primitive
+        busy = p.kind != Primitive.HOLD and p.progress == Progress.IN_PROGRESS
         if busy and not self.failsafe_active:
             self.failsafe_active = True
-            v.statustext(mavlink.MAV_SEVERITY_WARNING, "GCS failsafe: heartbeat lost, holding")
-            silent_us = v.now_us - (self.last_gcs_heartbeat_us or 0)
-            v.event("failsafe", reason="gcs heartbeat lost", silent_s=round(silent_us / US_PER_S, 6))
+            host.statustext(mavlink.MAV_SEVERITY_WARNING, "GCS failsafe: heartbeat lost, holding")
+            silent_us = host.now_us - (self.last_gcs_heartbeat_us or 0)
+            host.event("failsafe", reason="gcs heartbeat lost", silent_s=round(silent_us / US_PER_S, 6))
             self.enter_hold()

@@ -9,15 +9,15 @@ further than MAX_GOTO_FROM_HOME_M from home, and one outside the geofence.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 from apad_sitl import primitives as prim
-from apad_sitl.commands import ACCEPT, DENY, Command, Reply, invalid
+from apad_sitl.dege7 import DegE7
+from apad_sitl.geofence import Geofence
+from apad_sitl.host import ACCEPT, DENY, Command, CommandRegistry, PartHost, Reply, invalid
+from apad_sitl.state import ApadState
 from apad_sitl.vocabulary import RoverMode
 from mavlink_dialect import mavlink
-
-if TYPE_CHECKING:
-    from apad_sitl.endpoint import SitlVehicle
+from mussel_sim.geo import LocalFrame
 
 # A Go To further than this from home is a typo in the coordinates, not a mission.
 MAX_GOTO_FROM_HOME_M = 20_000.0
@@ -32,15 +32,31 @@ SPEED_DEFAULT = -2.0
 
 
 class Navigation:
-    """The vehicle's Go To part. The speed override is the vehicle's (`vehicle.speed_override_mps`)."""
+    """The vehicle's Go To part. The speed override is the aPad's state (`ApadState.speed_override_mps`).
 
-    def __init__(self, vehicle: SitlVehicle) -> None:
-        self._v = vehicle
-        vehicle.commands.register(mavlink.MAV_CMD_DO_REPOSITION, self._cmd_reposition, stateful=True)
-        vehicle.commands.register(mavlink.MAV_CMD_DO_CHANGE_SPEED, self._cmd_change_speed, stateful=True)
+    `frame` turns targets into local metres; `geofence` (None: none) is the water a target must be in;
+    a Go To remembers its target as commanded in `target_e7`, which telemetry echoes.
+    """
+
+    def __init__(
+        self,
+        host: PartHost,
+        apad: ApadState,
+        commands: CommandRegistry,
+        frame: LocalFrame,
+        geofence: Geofence | None,
+        target_e7: DegE7,
+    ) -> None:
+        self._host = host
+        self._apad = apad
+        self._frame = frame
+        self._geofence = geofence
+        self._target_e7 = target_e7
+        commands.register(mavlink.MAV_CMD_DO_REPOSITION, self._cmd_reposition, stateful=True)
+        commands.register(mavlink.MAV_CMD_DO_CHANGE_SPEED, self._cmd_change_speed, stateful=True)
 
     def _cmd_reposition(self, cmd: Command) -> Reply:
-        v = self._v
+        host, apad = self._host, self._apad
         if cmd.frame is not None and cmd.frame not in GLOBAL_FRAMES:
             return invalid("frame")
         lat, lon = cmd.lat_lon_deg()
@@ -56,24 +72,24 @@ class Navigation:
             return invalid(cmd.field(3))
         if lat == 0.0 and lon == 0.0:
             return DENY  # an unset position
-        x, y = v.frame.to_local(lat, lon)
+        x, y = self._frame.to_local(lat, lon)
         x_m, y_m = float(x), float(y)
         if math.hypot(x_m, y_m) > MAX_GOTO_FROM_HOME_M:
-            v.statustext(mavlink.MAV_SEVERITY_WARNING, "Go To refused: target too far from home")
+            host.statustext(mavlink.MAV_SEVERITY_WARNING, "Go To refused: target too far from home")
             return DENY
-        if v.geofence is not None and not v.geofence.contains(x_m, y_m):
-            v.statustext(mavlink.MAV_SEVERITY_WARNING, "Go To refused: target outside the geofence")
-            v.event("geofence", what="goto", lat_deg=lat, lon_deg=lon)
+        if self._geofence is not None and not self._geofence.contains(x_m, y_m):
+            host.statustext(mavlink.MAV_SEVERITY_WARNING, "Go To refused: target outside the geofence")
+            host.event("geofence", what="goto", lat_deg=lat, lon_deg=lon)
             return DENY
-        speed = speed if speed > 0 else v.speed_override_mps  # NaN > 0 is False
+        speed = speed if speed > 0 else apad.speed_override_mps  # NaN > 0 is False
         radius = radius if radius > 0 else 0.0
-        v.streams.target_e7.remember(x_m, y_m, round(lat * 1e7), round(lon * 1e7))  # echo the target exactly
-        v.modes.set_mode(RoverMode.GUIDED)
-        v.set_primitive(prim.go_to(v.primitive, x_m, y_m, speed, radius))
+        self._target_e7.remember(x_m, y_m, round(lat * 1e7), round(lon * 1e7))  # echo the target exactly
+        apad.set_mode(RoverMode.GUIDED)
+        apad.set_primitive(prim.go_to(apad.primitive, x_m, y_m, speed, radius))
         return ACCEPT
 
     def _cmd_change_speed(self, cmd: Command) -> Reply:
-        v = self._v
+        apad = self._apad
         speed = cmd.params[1]
         if speed == SPEED_NO_CHANGE:
             return ACCEPT
@@ -81,6 +97,6 @@ class Navigation:
             speed = 0.0
         elif not (math.isfinite(speed) and speed > 0):
             return invalid(cmd.field(2))
-        v.speed_override_mps = speed
-        v.set_primitive(prim.set_speed(v.primitive, speed))
+        apad.speed_override_mps = speed
+        apad.set_primitive(prim.set_speed(apad.primitive, speed))
         return ACCEPT

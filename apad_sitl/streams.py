@@ -4,7 +4,8 @@ One scheduler task per stream, at its rate in mission time (`DEFAULT_RATES_HZ`, 
 vehicle and at run time by SET_MESSAGE_INTERVAL). REQUEST_MESSAGE (and the older
 REQUEST_AUTOPILOT_CAPABILITIES, GET_HOME_POSITION) sends one message after the ACK.
 PRIMITIVE_STATUS and DOCK_SLOT_STATUS also go out the moment they change (`announce`), so a
-script never waits a stream period to see its command take effect.
+script never waits a stream period to see its command take effect: the vehicle's core makes
+`primitive_changed` a listener of the primitive, and `send_heartbeat` one of mode and arming.
 
 A requested interval shorter than MIN_INTERVAL_US (20 ms, 50 Hz) is clamped to it and ACCEPTED, as
 ArduPilot does with rates above its limit: a stock GCS asking for "as fast as you can" gets a rate,
@@ -15,18 +16,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from apad_sitl import messages as msgs
-from apad_sitl.commands import ACCEPT, ACCEPTED, DENY, Command, Reply, invalid, whole
-from apad_sitl.primitives import SlotState
+from apad_sitl.dege7 import DegE7
+from apad_sitl.host import ACCEPT, ACCEPTED, DENY, Command, CommandRegistry, PartHost, Reply, invalid, whole
+from apad_sitl.primitives import PrimitiveState, SlotState
+from apad_sitl.state import ApadState
 from apad_sitl.vocabulary import N_SLOTS, Primitive
 from mavlink_dialect import mavlink
 from missiontime import US_PER_S, Scheduler, Task
 from mussel_sim.geo import LocalFrame
-
-if TYPE_CHECKING:
-    from apad_sitl.endpoint import SitlVehicle
 
 # Telemetry streams: message id -> default rate in Hz (0: only on request or SET_MESSAGE_INTERVAL).
 DEFAULT_RATES_HZ: dict[int, float] = {
@@ -47,32 +47,30 @@ MAX_INTERVAL_US = 2**31 - 1  # an int32 of microseconds (~36 min); longer is a t
 MIN_INTERVAL_US = 20_000  # 50 Hz per stream at most, whatever is asked
 
 
-class DegE7:
-    """Local metres -> degE7 through the frame, remembering the last point (most sends repeat it)."""
-
-    def __init__(self, frame: LocalFrame) -> None:
-        self.frame = frame
-        self._last: tuple[float, float, int, int] = (math.nan, math.nan, 0, 0)
-
-    def remember(self, x_m: float, y_m: float, lat_e7: int, lon_e7: int) -> None:
-        self._last = (x_m, y_m, lat_e7, lon_e7)
-
-    def of(self, x_m: float, y_m: float) -> tuple[int, int]:
-        cx, cy, lat_e7, lon_e7 = self._last
-        if x_m != cx or y_m != cy:
-            lat, lon = self.frame.to_geodetic(x_m, y_m)
-            lat_e7, lon_e7 = round(float(lat) * 1e7), round(float(lon) * 1e7)
-            self._last = (x_m, y_m, lat_e7, lon_e7)
-        return lat_e7, lon_e7
-
-
 class Streams:
-    """The vehicle's telemetry part. `attach` makes the tasks; `stop` ends them."""
+    """The vehicle's telemetry part. `attach` makes the tasks; `stop` ends them.
 
-    def __init__(self, vehicle: SitlVehicle, rates_hz: Mapping[int, float] | None = None) -> None:
-        self._v = vehicle
-        self.position_e7 = DegE7(vehicle.frame)  # where the aPad is
-        self.target_e7 = DegE7(vehicle.frame)  # where its primitive is going
+    It sends what `apad` holds; `frame` is the local frame around home (positions to degE7, and
+    HOME_POSITION). `target_e7` converts the primitive's target: the core shares it with navigation,
+    which remembers a Go To's target as commanded.
+    """
+
+    def __init__(
+        self,
+        host: PartHost,
+        apad: ApadState,
+        commands: CommandRegistry,
+        frame: LocalFrame,
+        system_id: int,
+        rates_hz: Mapping[int, float] | None = None,
+        target_e7: DegE7 | None = None,
+    ) -> None:
+        self._host = host
+        self._apad = apad
+        self._frame = frame
+        self._system_id = system_id
+        self.position_e7 = DegE7(frame)  # where the aPad is
+        self.target_e7 = target_e7 if target_e7 is not None else DegE7(frame)  # where its primitive is going
         self._rates_hz = dict(DEFAULT_RATES_HZ)
         for msg_id, hz in (rates_hz or {}).items():
             if msg_id not in DEFAULT_RATES_HZ:
@@ -84,21 +82,20 @@ class Streams:
         self._sent_primitive: tuple[Any, ...] | None = None
         self._sent_slots: list[SlotState | None] = [None] * N_SLOTS
 
-        v = vehicle
+        send = host.send
         self._senders: dict[int, Callable[[int], None]] = {
             mavlink.MAVLINK_MSG_ID_HEARTBEAT: lambda now: self.send_heartbeat(),
             mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: self._send_position,
-            mavlink.MAVLINK_MSG_ID_SYS_STATUS: lambda now: v.send(msgs.sys_status(v.state)),
-            mavlink.MAVLINK_MSG_ID_BATTERY_STATUS: lambda now: v.send(msgs.battery_status(v.state)),
+            mavlink.MAVLINK_MSG_ID_SYS_STATUS: lambda now: send(msgs.sys_status(apad.state)),
+            mavlink.MAVLINK_MSG_ID_BATTERY_STATUS: lambda now: send(msgs.battery_status(apad.state)),
             mavlink.MAVLINK_MSG_ID_PRIMITIVE_STATUS: self._send_primitive_status,
             mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS: self._send_all_slots,
-            mavlink.MAVLINK_MSG_ID_ATTITUDE: lambda now: v.send(msgs.attitude(now, v.state)),
-            mavlink.MAVLINK_MSG_ID_VFR_HUD: lambda now: v.send(msgs.vfr_hud(v.state, v.params)),
-            mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: lambda now: v.send(msgs.extended_sys_state()),
+            mavlink.MAVLINK_MSG_ID_ATTITUDE: lambda now: send(msgs.attitude(now, apad.state)),
+            mavlink.MAVLINK_MSG_ID_VFR_HUD: lambda now: send(msgs.vfr_hud(apad.state, apad.params)),
+            mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: lambda now: send(msgs.extended_sys_state()),
             mavlink.MAVLINK_MSG_ID_HOME_POSITION: self._send_home,
-            mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION: lambda now: v.send(msgs.autopilot_version(v.system_id)),
+            mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION: lambda now: send(msgs.autopilot_version(system_id)),
         }
-        commands = vehicle.commands
         commands.register(mavlink.MAV_CMD_REQUEST_MESSAGE, self._cmd_request_message)
         commands.register(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, self._cmd_set_message_interval)
         commands.register(mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES, self._cmd_request_autopilot_capabilities)
@@ -119,17 +116,17 @@ class Streams:
             task.active = False
 
     def _stream_callback(self, sender: Callable[[int], None]) -> Callable[[int], None]:
-        v = self._v
+        host = self._host
 
         def callback(now_us: int) -> None:
-            v.now_us = now_us
+            host.now_us = now_us
             sender(now_us)
 
         return callback
 
     def _apply_interval(self, msg_id: int, task: Task, now_us: int) -> None:
         interval_us = self._interval_us[msg_id]
-        if interval_us > 0 and not self._v.closed and self._scheduler is not None:
+        if interval_us > 0 and not self._host.closed and self._scheduler is not None:
             self._scheduler.reschedule(
                 task, period_us=interval_us, next_us=max(now_us, min(task.next_us, now_us + interval_us)), active=True
             )
@@ -150,13 +147,13 @@ class Streams:
                 return invalid(cmd.field(2))
             if slot:
                 return Reply(ACCEPTED, then=lambda: self.send_slot(slot))
-        return Reply(ACCEPTED, then=lambda: self._senders[msg_id](self._v.now_us))
+        return Reply(ACCEPTED, then=lambda: self._senders[msg_id](self._host.now_us))
 
     def _cmd_request_autopilot_capabilities(self, cmd: Command) -> Reply:
-        return Reply(ACCEPTED, then=lambda: self._senders[mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION](self._v.now_us))
+        return Reply(ACCEPTED, then=lambda: self._senders[mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION](self._host.now_us))
 
     def _cmd_get_home_position(self, cmd: Command) -> Reply:
-        return Reply(ACCEPTED, then=lambda: self._senders[mavlink.MAVLINK_MSG_ID_HOME_POSITION](self._v.now_us))
+        return Reply(ACCEPTED, then=lambda: self._senders[mavlink.MAVLINK_MSG_ID_HOME_POSITION](self._host.now_us))
 
     def _cmd_set_message_interval(self, cmd: Command) -> Reply:
         msg_id = whole(cmd.params[0], 0, MAX_MSG_ID)
@@ -176,54 +173,60 @@ class Streams:
         self._interval_us[msg_id] = interval_us
         task = self._tasks.get(msg_id)
         if task is not None:
-            self._apply_interval(msg_id, task, self._v.now_us)
+            self._apply_interval(msg_id, task, self._host.now_us)
         return ACCEPT
 
     # ------------------------------------------------------------------ sending
 
     def send_heartbeat(self) -> None:
-        v = self._v
-        if not v.closed:
-            v.send(msgs.heartbeat(v.mode, v.armed))
+        """A HEARTBEAT now (also the listener of mode and arming: consoles show a change at once)."""
+        apad = self._apad
+        if not self._host.closed:
+            self._host.send(msgs.heartbeat(apad.mode, apad.armed))
 
     def _send_position(self, now_us: int) -> None:
-        v = self._v
-        lat_e7, lon_e7 = self.position_e7.of(v.state.x_m, v.state.y_m)
-        v.send(msgs.global_position_int(now_us, lat_e7, lon_e7, v.state))
+        state = self._apad.state
+        lat_e7, lon_e7 = self.position_e7.of(state.x_m, state.y_m)
+        self._host.send(msgs.global_position_int(now_us, lat_e7, lon_e7, state))
 
     def _send_home(self, now_us: int) -> None:
-        v = self._v
-        v.send(msgs.home_position(now_us, round(v.home_lat_deg * 1e7), round(v.home_lon_deg * 1e7)))
+        frame = self._frame
+        self._host.send(msgs.home_position(now_us, round(frame.origin_lat_deg * 1e7),
+                                           round(frame.origin_lon_deg * 1e7)))
 
     def _primitive_key(self) -> tuple[Any, ...]:
-        p = self._v.primitive
+        p = self._apad.primitive
         return (p.kind, p.progress, p.target_x_m, p.target_y_m, p.slot, p.mussel_id)
 
     def _send_primitive_status(self, now_us: int) -> None:
-        v = self._v
-        p = v.primitive
+        apad = self._apad
+        p = apad.primitive
         lat_e7, lon_e7 = (0, 0) if p.kind == Primitive.IDLE else self.target_e7.of(p.target_x_m, p.target_y_m)
-        v.send(msgs.primitive_status(now_us, p, lat_e7, lon_e7, v.state))
+        self._host.send(msgs.primitive_status(now_us, p, lat_e7, lon_e7, apad.state))
         self._sent_primitive = self._primitive_key()
 
     def send_slot(self, slot: int) -> None:
-        v = self._v
-        s = v.primitive.slot_state(slot)
-        v.send(msgs.dock_slot_status(v.now_us, slot, s))
+        s = self._apad.primitive.slot_state(slot)
+        self._host.send(msgs.dock_slot_status(self._host.now_us, slot, s))
         self._sent_slots[slot - 1] = s
 
     def _send_all_slots(self, now_us: int) -> None:
         for slot in range(1, N_SLOTS + 1):
             self.send_slot(slot)
 
+    def primitive_changed(self, old: PrimitiveState, new: PrimitiveState) -> None:
+        """The listener of the primitive: announce the change, unless the vehicle has closed."""
+        if not self._host.closed:
+            self.announce()
+
     def announce(self) -> None:
         """On-change telemetry: every slot that differs from what was last sent, then the primitive."""
-        for i, s in enumerate(self._v.primitive.slots):
+        for i, s in enumerate(self._apad.primitive.slots):
             sent = self._sent_slots[i]
             if sent is None or (sent.mussel_id, sent.latch, sent.charging) != (s.mussel_id, s.latch, s.charging):
                 self.send_slot(i + 1)
         if self._primitive_key() != self._sent_primitive:
-            self._send_primitive_status(self._v.now_us)
+            self._send_primitive_status(self._host.now_us)
 
 
 def hz_to_us(hz: float) -> int:

@@ -6,8 +6,9 @@ wall seconds and, less sensitive to a busy machine, CPU seconds), then once more
 timed: MAVLink encode, MAVLink parse, fleet model step, planner, SITL physics, and everything else
 (scheduler, routing, handlers, the mission loop). Each part's time excludes the other parts it
 calls (a physics step that announces a change counts its encoding as encode). bay120 is a swarm
-(5 aPads, one loop each as a greenlet of `missiontime.processes`): the parts are timed by wrapping
-their functions, which works across the greenlets' switches (cProfile's call stack does not).
+(5 aPads, one loop each on a thread of `missiontime.processes`, one running at a time): the parts
+are timed by wrapping their functions, which works across the threads' hand-overs (cProfile
+profiles only the thread that started it). `bench/processes.py` times the hand-overs alone.
 
     .venv/bin/python bench/scenario_speed.py [--repeat N] [--scenarios pool12 bay24 stress240 bay120]
 """

@@ -22,11 +22,11 @@ import numpy as np
 
 from apad_sitl.vocabulary import N_SLOTS, Latch
 from gcs.console.app import ConsoleApp
-from gcs.console.model import ConsoleModel, area_outline
-from gcs.console.snapshot import Snapshot
 from gcs.link.fleet_table import MusselBatch
 from gcs.link.registry import VehicleRegistry
 from gcs.link.telemetry import DEG_E7, Heartbeat, Position, SlotView
+from gcs.view.model import MissionView, area_outline
+from gcs.view.snapshot import Snapshot
 from mussel_sim.fleet import step
 from mussel_sim.fleet_state import FleetInputs, FleetParams, initial_state
 from mussel_sim.placement import load_area
@@ -51,7 +51,7 @@ def snapshots(n: int, count: int) -> list[Snapshot]:
     params = FleetParams()
     state = initial_state(config, frame, params)
     registry = VehicleRegistry()
-    model = ConsoleModel(registry, APAD_ID, 0.8, 2400.0, "bench", config.ids.astype(np.int64),
+    model = MissionView(registry, APAD_ID, 0.8, 2400.0, "bench", config.ids.astype(np.int64),
                          area_outline(area.geometry))
     docked = state.ids[: min(N_SLOTS, n)].astype(np.int64)
     registry.apply(APAD_ID, Heartbeat(4, True), 0)

@@ -60,11 +60,12 @@ class Codec:
             cut = payload.rstrip(b"\0") or payload[:1]
             buf = frame(plain.msg_id, plain.crc_extra, cut, mav.seq, mav.srcSystem, mav.srcComponent)
             packed: Any = msg  # what pymavlink's _pack leaves on the message (the stub leaves them out)
-            packed._payload = cut
-            packed._header = mavlink.MAVLink_header(plain.msg_id, 0, 0, len(cut), mav.seq, mav.srcSystem,
-                                                    mav.srcComponent)
-            packed._msgbuf = bytearray(buf)
-            packed._crc = buf[-2] | buf[-1] << 8
+            # pymavlink's message keeps its packed form in private fields and has no public setter for them.
+            packed._payload = cut  # noqa: SLF001
+            packed._header = mavlink.MAVLink_header(plain.msg_id, 0, 0, len(cut), mav.seq,  # noqa: SLF001
+                                                    mav.srcSystem, mav.srcComponent)
+            packed._msgbuf = bytearray(buf)  # noqa: SLF001
+            packed._crc = buf[-2] | buf[-1] << 8  # noqa: SLF001
         mav.seq = (mav.seq + 1) % 256
         self.stats.sent += 1
         return buf
@@ -183,11 +184,12 @@ class _Plain:
             payload = payload.ljust(size, b"\0")[:size]
         t = self.unpacker.unpack(payload)
         msg: Any = self.cls(*[t[i] for i in self.orders])  # Any: the stub leaves pymavlink's private fields out
-        msg._signed = False
-        msg._msgbuf = buf = bytearray(data)
-        msg._payload = buf[6:-2]  # sic: pymavlink's decode takes [6:], a MAVLink 1 header's length
-        msg._crc = crc
-        msg._header = mavlink.MAVLink_header(self.msg_id, 0, 0, data[1], data[4], data[5], data[6])
+        # What pymavlink's decode leaves in the message's private fields (it has no public setter for them).
+        msg._signed = False  # noqa: SLF001
+        msg._msgbuf = buf = bytearray(data)  # noqa: SLF001
+        msg._payload = buf[6:-2]  # noqa: SLF001  # sic: pymavlink's decode takes [6:], a MAVLink 1 header's length
+        msg._crc = crc  # noqa: SLF001
+        msg._header = mavlink.MAVLink_header(self.msg_id, 0, 0, data[1], data[4], data[5], data[6])  # noqa: SLF001
         return msg
 
 

@@ -21,19 +21,30 @@ class TlogError(ValueError):
 
 
 class TlogWriter:
-    """Appends stamped frames; `epoch_us` turns mission time into the stamp (real dates in the field)."""
+    """Appends stamped frames; `epoch_us` turns mission time into the stamp (real dates in the field).
+    `muted`: frames are dropped, not written (a resumed lockstep mission replaying what the file holds)."""
 
     def __init__(self, path: Path, epoch_us: int = 0, append: bool = False) -> None:
         self.path = path
         self.epoch_us = epoch_us
+        self.muted = False
         self._file: BinaryIO = path.open("ab" if append else "wb")
 
     def write(self, time_us: int, frame: bytes) -> None:
-        self._file.write(_STAMP.pack(self.epoch_us + time_us) + frame)
+        if not self.muted:
+            self._file.write(_STAMP.pack(self.epoch_us + time_us) + frame)
 
     def write_many(self, time_us: int, frames: Iterable[bytes]) -> None:
-        stamp = _STAMP.pack(self.epoch_us + time_us)
-        self._file.write(b"".join(stamp + f for f in frames))
+        if not self.muted:
+            stamp = _STAMP.pack(self.epoch_us + time_us)
+            self._file.write(b"".join(stamp + f for f in frames))
+
+    def size(self) -> int:
+        """Bytes in the file, everything written flushed first (closed: as it was left)."""
+        if self._file.closed:
+            return self.path.stat().st_size
+        self._file.flush()
+        return self._file.tell()
 
     def flush(self) -> None:
         self._file.flush()

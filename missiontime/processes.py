@@ -3,31 +3,50 @@
 A mission script is ordinary blocking code that waits with `clock.sleep` (the paper's Listing 1,
 the energy-sharing loop). One aPad, one script: it drives the clock itself. Several aPads need
 several scripts on the one clock, and the clock's `sleep` runs the whole world, so two scripts
-must never sleep at once. `Processes` gives each script a greenlet (a coroutine with its own stack,
-so the script stays plain blocking code) and a `ProcessClock` of its own, and lets exactly one run
-at any moment (a discrete-event simulation in the manner of SimPy's processes): a script that
-sleeps parks until its wake time and, before it parks, moves the shared clock on to the earliest
-wake time of all and switches to that script. Scripts due at the same instant resume in the
-order they went to sleep (spawn order first). So a lockstep swarm is as deterministic as a single
-aPad, and the same code runs on the wall clock in the field.
+must never sleep at once. `Processes` gives each script an OS thread (so the script stays plain
+blocking code, deep waits inside the API included) and a `ProcessClock` of its own, and lets
+exactly one run at any moment (a discrete-event simulation in the manner of SimPy's processes):
+a script that sleeps parks until its wake time and, before it parks, moves the shared clock on to
+the earliest wake time of all and hands the baton to that script. Scripts due at the same instant
+resume in the order they went to sleep (spawn order first). So a lockstep swarm is as
+deterministic as a single aPad, and the same code runs on the wall clock in the field.
 
-Greenlets, not threads: the scripts never run at once anyway, and a switch between greenlets is
-about a microsecond in the one thread that called `run`, where a hand-over between OS threads
-(a futex wake, then the GIL) cost a fifth of a bay120 run.
+Threads, not greenlets (issue 19): a greenlet runs on a stack switched in and out of the one
+thread's C stack, and code that walks the C stack (numpy's temporary elision calls glibc's
+`backtrace()` for arrays over 256 KiB, numpy issue 13042; profilers; any C library) runs off that
+stack and crashes the process. A thread has a real C stack of its own, so nothing can. The
+baton: each process waits on a lock of its own, and the holder hands over by releasing the next
+one's lock and acquiring its own (no busy wait, no timeout, no notify_all: which thread runs next
+is decided before the hand-over, by the one queue, never by the OS). There is no hand-over when
+the sleeper is next again; a bay120 run of 40 minutes makes about 24,000. Each is a futex wake and
+a GIL hand-over, cheap on one CPU; the next thread is woken on the CPU of the one handing over
+(`_Steering`), without which a bay120 run took half as long again as on greenlets (with it, as
+long: bench/processes.py, bench/scenario_speed.py).
+
+The thread that calls `run` is the coordinator: it starts the scripts' threads, gives the baton
+to the first and waits for it to come back when every script has ended. A script that ends hands
+the baton on itself, so the coordinator does nothing meanwhile. Python runs signal handlers in the
+main thread only: `run` called there (as `vil run` does) gets the Ctrl-C; it stops every script
+at its next sleep, waits for them to unwind and raises the KeyboardInterrupt. A second Ctrl-C
+meanwhile (a script that never sleeps again) leaves at once, the scripts' threads (daemons)
+abandoned.
 
 Bounded: a script that raises ends `run` with that exception, and so does the world (a task or a
 handler that raises inside the clock's `sleep`); the scripts are stopped at their next sleep
-with `ProcessStopped`, so they unwind their `finally` blocks.
+with `ProcessStopped`, so they unwind their `finally` blocks. Every thread is joined before `run`
+returns or raises (but after a second Ctrl-C).
 """
 
 from __future__ import annotations
 
+import contextvars
 import heapq
+import os
+import signal
+import threading
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Generic, TypeVar
-
-from greenlet import greenlet
 
 from missiontime.clocks import Clock, Scheduler, seconds_to_us, us_to_s
 
@@ -58,12 +77,63 @@ class ProcessClock:
         self._coordinator.park(self._process, self.now_us + seconds_to_us(max(dt_s, 0.0)))
 
 
+def _held_lock() -> threading.Lock:
+    lock = threading.Lock()
+    lock.acquire()
+    return lock
+
+
+class _Steering:
+    """Wakes the next script on the CPU of the one handing over (Linux).
+
+    Left alone, the kernel wakes a thread on an idle CPU, as the waker is still running: every
+    hand-over then wakes another CPU (in a virtual machine, an exit to the host) and moves the
+    world's working set between caches, about a hundred microseconds a time: a bay120 run took
+    half as long again. So the thread handing over first allows the next one only its own CPU, and
+    the next one, running, allows itself every CPU again (the kernel may move it then, as any
+    thread): a few microseconds. Placement only: the order is the queue's.
+    """
+
+    def __init__(self) -> None:
+        import ctypes  # here, not at import: only swarms pay for it
+
+        self.cpus = os.sched_getaffinity(0)
+        getcpu = ctypes.PyDLL(None).sched_getcpu  # the GIL kept: a read of the vDSO
+        getcpu.restype, getcpu.argtypes = ctypes.c_int, []
+        self._getcpu: Callable[[], int] = getcpu
+        self.on = len(self.cpus) > 1
+
+    @classmethod
+    def make(cls) -> _Steering | None:
+        if not hasattr(os, "sched_setaffinity"):
+            return None
+        try:
+            return cls()
+        except (OSError, AttributeError):  # no sched_getcpu in this C library
+            return None
+
+    def towards_me(self, thread: threading.Thread) -> None:
+        if self.on and thread.native_id is not None:
+            try:
+                os.sched_setaffinity(thread.native_id, {self._getcpu()})
+            except (OSError, ValueError, OverflowError):  # a CPU gone, a cpuset changed: the kernel's placement
+                self.on = False
+
+    def free(self) -> None:
+        """The thread now running may run anywhere again."""
+        if self.on:
+            try:
+                os.sched_setaffinity(0, self.cpus)
+            except OSError:
+                self.on = False
+
+
 @dataclass(eq=False)
 class _Process:
     name: str
-    order: int
-    body: greenlet | None = None  # made at `run`, child of the greenlet that runs `run`
-    done: bool = False
+    body: Callable[[], None]  # the script with its result and failure handling
+    turn: threading.Lock = field(default_factory=_held_lock)  # released: this process holds the baton
+    thread: threading.Thread | None = None  # started by `run`
     stop: bool = False
 
 
@@ -78,26 +148,27 @@ class Handle(Generic[T]):
 class Processes:
     """Run scripts `spawn`ed on `clock` until all have returned (`run`).
 
-    The baton: the script that sleeps moves the clock on itself and switches straight to the next
-    script (none when the sleeper is next again). A script that ends returns to `run`, which does
-    the same for it. The order is a coordinator's: one queue, popped at the same moments.
-    `current` names the script running now (None between them).
+    The baton: the script that sleeps moves the clock on itself and hands over straight to the next
+    script (to none when the sleeper is next again); a script that ends does the same, and the last
+    one hands it back to `run`. The order is a coordinator's: one queue, popped at the same moments.
+    `current` names the script holding the baton (None before and after `run`); `hand_overs` counts
+    the hand-overs between threads.
     """
 
     def __init__(self, clock: Clock) -> None:
         self.clock = clock
         self._queue: list[tuple[int, int, _Process]] = []  # (wake_us, sequence, process)
         self._sequence = 0
-        self._error: BaseException | None = None  # the first failure: a script's, or the world's
+        self._error: BaseException | None = None  # the first failure: a script's, the world's, a Ctrl-C
         self._processes: list[_Process] = []
-        self._scripts: list[Callable[[], None]] = []
+        self._home = _held_lock()  # released: the baton is back with the thread in `run`
+        self._steering: _Steering | None = None  # made by `run` (Linux)
         self.current: str | None = None
+        self.hand_overs = 0
 
     def spawn(self, name: str, script: Callable[[Clock], T]) -> Handle[T]:
         """Add a script; it starts at `run`, at the clock's time then, with its own `ProcessClock`."""
-        process = _Process(name, len(self._processes))
         handle: Handle[T] = Handle(name)
-        own_clock = ProcessClock(self, process)
 
         def body() -> None:
             try:
@@ -107,10 +178,10 @@ class Processes:
                 pass
             except BaseException as exc:  # handed to `run`, which raises it in the caller
                 self._fail(exc)
-            process.done = True
 
+        process = _Process(name, body)
+        own_clock = ProcessClock(self, process)
         self._processes.append(process)
-        self._scripts.append(body)
         return handle
 
     def park(self, process: _Process, wake_us: int) -> None:
@@ -120,8 +191,9 @@ class Processes:
         self._push(process, wake_us)
         following = self._next()
         if following is not process:
-            following.body.switch()  # type: ignore[union-attr]  # back here when our turn comes
-        self.current = process.name
+            self._hand_to(following)
+            process.turn.acquire()  # back here when our turn comes
+            self._running()
         if process.stop:
             raise ProcessStopped(process.name)
 
@@ -133,30 +205,100 @@ class Processes:
         if self._error is None:
             self._error = exc  # from now on every script is stopped at its next turn
 
-    def _next(self) -> _Process:
+    def _next(self) -> _Process | None:
         """Run the world to the earliest wake time and return that script, marked stopped if
-        anything failed. The queue is never empty here: the caller has just queued itself, or
-        `run` checked."""
-        wake_us, _, process = heapq.heappop(self._queue)
-        if self._error is None:
-            try:  # a zero sleep too delivers what is due now, as the clock's own sleep(0) does
-                self.clock.sleep(us_to_s(max(wake_us - self.clock.now_us, 0)))
-            except BaseException as exc:  # the world failed: stop every script, then raise it in `run`
-                self._fail(exc)
-        process.stop = self._error is not None
-        return process
+        anything failed; None when no script is left (the baton goes back to `run`). A sleeper has
+        just queued itself, so it gets a script."""
+        while self._queue:
+            wake_us, _, process = heapq.heappop(self._queue)
+            if process.thread is None:  # never started (`run` failed while starting the threads)
+                continue
+            if self._error is None:
+                try:  # a zero sleep too delivers what is due now, as the clock's own sleep(0) does
+                    self.clock.sleep(us_to_s(max(wake_us - self.clock.now_us, 0)))
+                except BaseException as exc:  # the world failed: stop every script, then raise it in `run`
+                    self._fail(exc)
+            process.stop = self._error is not None
+            return process
+        return None
+
+    def _hand_to(self, following: _Process | None) -> None:
+        """Give the baton to `following` (to `run` for None); the caller then waits for its own."""
+        self.hand_overs += 1
+        if following is None:
+            self.current = None
+            self._home.release()
+        else:
+            self.current = following.name
+            if self._steering is not None and following.thread is not None:
+                self._steering.towards_me(following.thread)
+            following.turn.release()
+
+    def _running(self) -> None:
+        """First thing a script's thread does when the baton comes to it."""
+        if self._steering is not None:
+            self._steering.free()
+
+    def _thread_main(self, process: _Process) -> None:
+        process.turn.acquire()  # the first turn
+        self._running()
+        process.body()  # keeps its failure for `run`: nothing gets past it
+        self._hand_to(self._next())  # the next script, or `run` when this was the last
 
     def run(self) -> None:
         """Resume the earliest-waking script, one at a time, until every script has returned."""
-        for process, body in zip(self._processes, self._scripts, strict=True):
-            process.body = greenlet(body)
+        for process in self._processes:
             self._push(process, self.clock.now_us)
+        self._steering = _Steering.make()
+        restore = self._catch_ctrl_c()
         try:
-            while self._queue:
-                following = self._next()
-                self.current = following.name
-                following.body.switch()  # type: ignore[union-attr]  # returns when a script has ended
-        finally:
+            try:
+                for process in self._processes:
+                    self._start(process)
+            except BaseException as exc:  # no thread for a script: the started ones are run to their stop
+                self._fail(exc)
+            self._hand_to(self._next())
+            self._home.acquire()  # the last script to end hands the baton back
+        finally:  # left without the baton only by a second Ctrl-C: the threads are abandoned, not joined
+            restore()
             self.current = None
+        for process in self._processes:
+            if process.thread is not None:
+                process.thread.join()  # it has handed the baton on: only its thread's exit is left
         if self._error is not None:
             raise self._error
+
+    def _start(self, process: _Process) -> None:
+        context = contextvars.copy_context()  # the caller's (numpy's errstate, decimal's context ...)
+        thread = threading.Thread(target=context.run, args=(self._thread_main, process),
+                                  name=f"process-{process.name}", daemon=True)
+        process.thread = thread
+        try:
+            thread.start()  # it waits for its turn
+        except BaseException:
+            if thread.ident is None:  # not started (a Ctrl-C in `start` comes once the thread exists)
+                process.thread = None
+            raise
+
+    def _catch_ctrl_c(self) -> Callable[[], None]:
+        """In the main thread, Python's Ctrl-C handler raises KeyboardInterrupt wherever that thread
+        is, which could be in the middle of a hand-over. While `run` runs, the first Ctrl-C instead
+        stops every script at its next sleep and `run` raises the KeyboardInterrupt once they have
+        unwound; a second one raises at once. Returns the undo."""
+        if (threading.current_thread() is not threading.main_thread()
+                or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+            return lambda: None
+        pressed: list[KeyboardInterrupt] = []
+
+        def on_ctrl_c(signum: int, frame: object) -> None:
+            if pressed:
+                raise KeyboardInterrupt
+            pressed.append(KeyboardInterrupt())
+            self._fail(pressed[0])
+
+        previous = signal.signal(signal.SIGINT, on_ctrl_c)
+
+        def restore() -> None:
+            signal.signal(signal.SIGINT, previous)
+
+        return restore

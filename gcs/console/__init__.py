@@ -1,1 +1,1 @@
-"""The operator console: the world thread that runs it, the model it shows, and the Textual screens."""
+"""The operator console: the world thread that runs it and the Textual screens (the model it shows: `gcs.view`)."""

@@ -25,10 +25,10 @@ from gcs.console.confirm import ConfirmQuit, QuitChoice
 from gcs.console.help import HelpScreen
 from gcs.console.linkbar import LinkBar
 from gcs.console.runner import ConsoleRunner, DockMussel, GoToMussel, Hold, UndockMussel
-from gcs.console.snapshot import Snapshot
-from gcs.console.widgets import LEGEND, Chart, ConsoleFooter, EventLog, FleetTable, MapView, StatusPanel
+from gcs.console.widgets import LEGEND, Chart, ConsoleFooter, EventPanel, FleetTable, MapView, StatusPanel
 from gcs.mission.strategies import COLLECT
 from gcs.records.replay import Replay
+from gcs.view.snapshot import Snapshot
 from mussel_sim.vocabulary import MusselState
 
 REDRAW_PERIOD_S = 0.1
@@ -56,7 +56,7 @@ class ConsoleApp(App[None]):
             with Vertical(id="side"):
                 yield StatusPanel(id="status")
                 yield FleetTable(id="fleet")
-                yield EventLog(id="log")
+                yield EventPanel(id="log")
         with Horizontal(id="plots"):
             yield Chart("battery", id="batteries")
             yield Chart("active", id="active")
@@ -75,7 +75,7 @@ class ConsoleApp(App[None]):
         self.link_bar = self.query_one(LinkBar)
         self.status_panel = self.query_one(StatusPanel)
         self.fleet = self.query_one(FleetTable)
-        self.event_log = self.query_one(EventLog)
+        self.event_panel = self.query_one(EventPanel)
         self.charts = list(self.query(Chart))
         self.map_view.border_title = "Map"
         self.map_view.border_subtitle = LEGEND
@@ -106,7 +106,7 @@ class ConsoleApp(App[None]):
         self.map_view.show(snap)
         self.status_panel.show(snap, self.header())
         self.fleet.show(snap)
-        self.event_log.show(snap)
+        self.event_panel.show(snap)
         for chart in self.charts:
             chart.show(snap)
 
@@ -164,7 +164,10 @@ class LiveConsole(ConsoleApp):
         # However the app ends (q, an error, a test), the world thread must not outlive it for long.
         self.runner.request_quit(now=True)
         if self.world_thread.is_alive():
-            self.world_thread.join(max((self._quit_by or 0.0) - time.monotonic(), 0.0) or QUIT_BOUND_S)
+            # What is left of the bound (nothing once passed); QUIT_BOUND_S when the app ends another way.
+            left = QUIT_BOUND_S if self._quit_by is None else self._quit_by - time.monotonic()
+            if left > 0:
+                self.world_thread.join(left)
 
     def current(self) -> Snapshot | None:
         return self.runner.snapshot

@@ -17,7 +17,7 @@ from textual.geometry import Region
 from textual.strip import Strip
 from textual.widget import Widget
 
-from gcs.console.snapshot import Snapshot
+from gcs.view.snapshot import Snapshot
 
 # Bit of each dot (row 0..3, column 0..1) in the Unicode braille block U+2800.
 _DOT_BITS = np.array([[0x01, 0x08], [0x02, 0x10], [0x04, 0x20], [0x40, 0x80]], np.uint8)

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 from gcs.console.web import serve_console, web_address
 from gcs.mission import flags
 from gcs.mission.scenario import MISSIONS_DIR, Scenario, ScenarioError, load_scenario, resolve_scenario
-from gcs.records import rundirs
+from gcs.records.run_folder import RunFolder
 from mavlink_dialect.signing import SigningKeyError, load_key
 from missiontime import unix_time_us
 
@@ -83,9 +83,6 @@ def run_gcs(args: argparse.Namespace) -> int:
     if args.speed is not None and not args.sitl:
         print("vil gcs: --speed needs --sitl (a real aPad runs in real time)", file=sys.stderr)
         return 2
-    if len(scenario.apads) > 1 and args.resume:  # a swarm's loops are not checkpointed (as in vil run)
-        print(f"vil gcs: --resume serves one aPad; {path} has {len(scenario.apads)}", file=sys.stderr)
-        return 2
     if args.web is not None:  # checked as above; each browser session then runs the console itself
         host, port = args.web
         return serve_console(getattr(args, "argv", sys.argv[1:]), host, port, title=f"vil gcs: {scenario.name}")
@@ -99,10 +96,10 @@ def run_gcs(args: argparse.Namespace) -> int:
     else:
         epoch_us, resume = unix_time_us(), None
         try:
-            out = args.out or rundirs.new_run_dir(Path("runs"), stem)
+            out = args.out or RunFolder.new(Path("runs"), stem).path
             out.mkdir(parents=True, exist_ok=True)
-            (out / CONSOLE_JSON).write_text(json.dumps({"scenario": scenario.name, "scenario_path": str(path.resolve()),
-                                                        "epoch_us": epoch_us}))
+            record = {"scenario": scenario.name, "scenario_path": str(path.resolve()), "epoch_us": epoch_us}
+            RunFolder(out).console.write_text(json.dumps(record))
         except OSError as exc:
             print(f"vil gcs: cannot write the logs in {args.out or 'runs'}: {exc.strerror or exc}", file=sys.stderr)
             return 2
@@ -112,6 +109,11 @@ def run_gcs(args: argparse.Namespace) -> int:
     )
     try:  # open everything now: what cannot be used is refused before the console starts
         world = open_world(config)
+        try:
+            runner = ConsoleRunner(config, world)  # a resumed mission's state is put back here
+        except CheckpointError:
+            world.close()
+            raise
     except (OSError, ValueError, CheckpointError) as exc:  # AddressError is a ValueError
         if args.out is None and resume is None:
             shutil.rmtree(out, ignore_errors=True)  # the folder made for this run holds nothing
@@ -120,8 +122,7 @@ def run_gcs(args: argparse.Namespace) -> int:
         print(f"vil gcs: {exc}", file=sys.stderr)
         return 2
     if args.out is None:
-        rundirs.point_latest(out)
-    runner = ConsoleRunner(config, world)
+        RunFolder(out).point_latest()
     LiveConsole(runner).run()
     runner.request_quit(now=True)  # the app has already waited for the world, at most QUIT_BOUND_S
     if not runner.finished.wait(timeout=0.1):
@@ -133,31 +134,29 @@ def run_gcs(args: argparse.Namespace) -> int:
     print(f"vil gcs: logs in {out} (replay: vil replay {out})")
     return 0
 
-CONSOLE_JSON = "console.json"  # in a console's run folder: its scenario, and the Unix time of mission time 0
-
-
 def _resume_point(out: Path | None, stem: str, scenario: Scenario) -> tuple[Path, int, ResumePoint]:
     """The folder, log epoch and checkpoint of the console mission to resume; `CheckpointError` (one
     line) if there is none or it is unusable. The folder's logs are cut back to the checkpoint."""
     from gcs.console.runner import ResumePoint
-    from gcs.records.checkpoint import CHECKPOINT_NAME, CheckpointError, CheckpointFiles, cut_logs, scenario_key
+    from gcs.records.checkpoint import CheckpointError, CheckpointFiles, cut_logs, scenario_key
+    from gcs.records.run_folder import CHECKPOINT
 
-    if out is None:
-        out = rundirs.newest_run_dir(Path("runs"), stem, holding=CHECKPOINT_NAME)
-        if out is None:
-            raise CheckpointError(f"nothing to resume: no runs/{stem}-runK holds a {CHECKPOINT_NAME}")
-    files = CheckpointFiles(out / CHECKPOINT_NAME)
+    folder = RunFolder(out) if out is not None else RunFolder.newest_resumable(Path("runs"), stem)
+    if folder is None:
+        raise CheckpointError(f"nothing to resume: no runs/{stem}-runK holds a {CHECKPOINT}")
+    files = CheckpointFiles(folder.checkpoint)
     saved = files.read()
     try:
-        epoch_us = json.loads((out / CONSOLE_JSON).read_text(encoding="utf-8"))["epoch_us"]
+        epoch_us = json.loads(folder.console.read_text(encoding="utf-8"))["epoch_us"]
         if not isinstance(epoch_us, int) or isinstance(epoch_us, bool):
             raise TypeError
     except (OSError, ValueError, KeyError, TypeError):
-        raise CheckpointError(f"{out / CONSOLE_JSON} does not say when the mission began (epoch_us)") from None
-    if saved.run_key != scenario_key(scenario):
-        raise CheckpointError(f"the checkpoint in {out} is of run {saved.run_key}, not {scenario_key(scenario)}")
-    cut_logs(out, saved, epoch_us)  # the stretch after it runs again: each event logged once
-    return out, epoch_us, ResumePoint(files, saved)
+        raise CheckpointError(f"{folder.console} does not say when the mission began (epoch_us)") from None
+    key = scenario_key(scenario)
+    if saved.run_key != key:
+        raise CheckpointError(f"the checkpoint in {folder.path} is of run {saved.run_key}, not {key}")
+    cut_logs(folder, saved)  # the stretch after it runs again: each event logged once
+    return folder.path, epoch_us, ResumePoint(files, saved)
 
 
 def add_replay_arguments(parser: argparse.ArgumentParser) -> None:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from gcs.console.snapshot import MarkerColour, Snapshot
+from gcs.view.snapshot import MarkerColour, Snapshot
 
 GREEN, RED, GREY, PURPLE = "#22c55e", "#ef4444", "#9ca3af", "#c026d3"
 OUTLINE, APAD, TRACE, AXIS, BLUE = "#64748b", "#facc15", "#38bdf8", "#94a3b8", "#60a5fa"

@@ -7,7 +7,6 @@ from pathlib import Path
 
 from gcs.mission.scenario import Scenario
 from gcs.mission.world import LinkOptions, World, build_world
-from gcs.records import checkpoint
 from gcs.records.checkpoint import Checkpoint, CheckpointFiles
 from missiontime import Clock, PacedClock, WallClock, unix_time_us
 
@@ -39,8 +38,7 @@ class ConsoleConfig:
 
 def open_world(config: ConsoleConfig) -> World:
     """The mission's world on the console's clock, with remote aPads or the embedded SITL ones; a
-    resumed one starts at the checkpoint's time with its state put back (`CheckpointError` if it
-    is another run's)."""
+    resumed one starts at the checkpoint's time (its session puts the saved state back)."""
     if (config.connect is None) == (config.sitl is None):
         raise ValueError("give exactly one of connect or sitl")
     saved = config.resume.checkpoint if config.resume is not None else None
@@ -49,12 +47,5 @@ def open_world(config: ConsoleConfig) -> World:
     options = LinkOptions(connect=config.connect, sitl_medium=config.sitl or "memory", signing_key=config.signing_key,
                           bridge=config.bridge, fail_apads=config.fail_apads)
     epoch_us = unix_time_us() if config.epoch_us is None else config.epoch_us
-    world = build_world(config.scenario, clock, config.out_dir, options, epoch_us=epoch_us,
-                        mission_start_us=0 if saved is not None else None, append_logs=saved is not None)
-    if saved is not None:
-        try:
-            checkpoint.restore(world, saved)
-        except checkpoint.CheckpointError:
-            world.close()
-            raise
-    return world
+    return build_world(config.scenario, clock, config.out_dir, options, epoch_us=epoch_us,
+                       mission_start_us=0 if saved is not None else None, append_logs=saved is not None)

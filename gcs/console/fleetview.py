@@ -23,7 +23,7 @@ from textual.scroll_view import ScrollView
 from textual.strip import Strip
 
 from gcs.console.colours import MARKER_COLOURS
-from gcs.console.snapshot import Snapshot
+from gcs.view.snapshot import Snapshot
 from mussel_sim.vocabulary import MusselState
 
 STATE_NAMES = {int(s): s.name.lower() for s in MusselState}

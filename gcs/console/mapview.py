@@ -32,7 +32,7 @@ from gcs.console.colours import (
     apad_colour,
 )
 from gcs.console.fleetview import MusselMessage
-from gcs.console.snapshot import ApadSnapshot, Snapshot
+from gcs.view.snapshot import ApadSnapshot, Snapshot
 from mussel_sim.geo import LocalFrame
 
 Floats = NDArray[np.float64]

@@ -4,22 +4,30 @@ The commands are plain values the UI puts on the runner's `CommandQueue` (any th
 serves them on the world thread (or on an aPad loop's process, with that loop's API on its clock),
 each run by `execute`, and logs them with the operator's other actions. `leave_holding` is what
 quitting does, in a bounded time: hold every aPad and send the floating aMussels back down;
-`log_whereabouts` then says where every aMussel was left.
+`log_whereabouts` then says where every aMussel was left. Once the operator has quit, no command
+waits for an aPad whose link is lost (`LOST_S` without a heartbeat, LINK LOST on screen): it is
+sent once and its retries are not waited out (a `quit_apad_silent` event says so, once per aPad),
+so a silent aPad cannot hold the quit past its bound; a live aPad is waited for as ever.
 """
 
 from __future__ import annotations
 
+import functools
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 
 from apad_sitl.vocabulary import Latch, Primitive, Progress
 from gcs.api import ApadApi, CommandError
+from gcs.console.link_health import LOST_S
+from gcs.link.commands import command_words
 from gcs.mission.accounting import account
 from gcs.mission.world import World
+from missiontime import seconds_to_us, us_to_s
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
-QUIT_ACK_S = 0.3  # quitting waits this long (mission time) for each aPad's ACK of its hold
+QUIT = "quit"  # the operator action that ends the console (`ConsoleRunner.request_quit` logs it)
+QUIT_ACK_S = 0.3  # quitting waits this long (mission time) for each aPad's ACK of its hold (a silent one: none)
 QUIT_FLUSH_S = 0.1  # and this long for the last commands to go out
 
 
@@ -107,6 +115,7 @@ class CommandQueue:
         self._commands: list[tuple[int, OperatorCommand]] = []  # (target aPad, command)
         self._operator_events: list[tuple[str, dict[str, object]]] = []  # from the UI, logged on the world thread
         self._to_sink: dict[int, int] = {}  # aMussel -> the aPad to relay its sink command
+        self._silent_at_quit: set[int] = set()  # aPads whose answers the quit stopped waiting for
         self._lock = threading.Lock()
 
     def put(self, apad: int, command: OperatorCommand) -> None:
@@ -152,11 +161,31 @@ class CommandQueue:
                 del self._to_sink[mussel_id]
 
     def flush(self, world: World) -> None:
-        """Log the operator's actions the UI queued."""
+        """Log the operator's actions the UI queued. The quit among them also stops every command's
+        wait for an aPad that has fallen silent (`quit_give_up`), from this moment on."""
         with self._lock:
             taken, self._operator_events = self._operator_events, []
         for action, fields in taken:
             world.events.emit(world.clock.time(), "operator", action=action, **fields)
+            if action == QUIT:
+                world.link.commands.give_up = functools.partial(self.quit_give_up, world)
+
+    def quit_give_up(self, world: World, apad: int, command: int) -> str | None:
+        """Quitting: why a command to aPad `apad` is not waited for (its link lost: it answers nothing,
+        and it holds by its own GCS failsafe), or None (heard lately: waited for as ever). The first
+        time for an aPad, a `quit_apad_silent` event. On the world thread (the command client's wait)."""
+        view = world.link.vehicles.get(apad)
+        if view is None:
+            return None  # never heard: nothing is sent to it
+        silent_us = world.clock.now_us - view.last_heartbeat_us
+        if silent_us <= seconds_to_us(LOST_S):
+            return None
+        silent_s = round(us_to_s(silent_us), 1)
+        if apad not in self._silent_at_quit:
+            self._silent_at_quit.add(apad)
+            world.events.emit(world.clock.time(), "quit_apad_silent", apad=apad, silent_s=silent_s,
+                              command=command_words(command))
+        return f"silent {silent_s:g} s (LINK LOST), its answer not waited for"
 
 
 def docking(world: World, apad: int) -> bool:
@@ -168,17 +197,17 @@ def docking(world: World, apad: int) -> bool:
 
 
 def leave_holding(world: World, notice: Callable[[str], None]) -> list[int]:
-    """Quit, bounded: hold every aPad heard (one send and a short wait for its ACK: a lost link must
-    not keep the console), and send every aMussel floating outside a slot back down. A dock in
-    progress is left to its latch (the aPad holds in place: in reach it latches; if not, the aMussel
-    floats and the whereabouts say so), and so is an aMussel still surfacing (it takes no sink
-    command before it floats). Returns those left at the surface."""
+    """Quit, bounded: hold every aPad heard (one send and a short wait for its ACK, none for one whose
+    link is lost: a lost link must not keep the console), and send every aMussel floating outside a
+    slot back down. A dock in progress is left to its latch (the aPad holds in place: in reach it
+    latches; if not, the aMussel floats and the whereabouts say so), and so is an aMussel still
+    surfacing (it takes no sink command before it floats). Returns those left at the surface."""
     heard = [a.system_id for a in world.scenario.apads if a.system_id in world.link.vehicles]
     for apad in heard:
         try:
             world.api.hold(apad, timeout_s=QUIT_ACK_S, retries=0)
         except CommandError as exc:
-            notice(f"quitting: {exc.words} to the hold of aPad {apad}")
+            notice(f"quitting: the hold of aPad {apad}: {exc.words}")
     if not heard:
         return []
     api = world.api

@@ -10,15 +10,17 @@ talks to it only through thread-safe doors:
 - `snapshot`: a frozen `Snapshot` (copies) replaced at 10 Hz when something changed;
 - `select_apad`: which aPad the operator's commands act on.
 
-With several aPads the loops run as processes of one clock (`gcs.mission.swarm_run.run_loops`),
-one at a time; each loop has its own `LoopControl`, which follows the runner's (pause, stop) at
-each of its waits, and serves the commands for its own aPad there, on its own clock, so a command
-never runs inside another command's ACK wait for the same aPad, and never two threads at once.
+The mission itself is a `MissionSession` (`gcs.mission.session`), as in `vil run`: the loops (several
+aPads' as processes of one clock, one at a time), checkpoints, resume, time accounting, results.
+This runner adds the screen's snapshots and the operator's doors. With several aPads each loop has
+its own `LoopControl`, which follows the runner's (pause, stop) at each of its waits, and serves the
+commands for its own aPad there, on its own clock, so a command never runs inside another command's
+ACK wait for the same aPad, and never two threads at once.
 
 With an output folder the mission checkpoints itself there every `CHECKPOINT_PERIOD_S` of mission
-time (deleted when the loop ends), so `vil gcs --resume` continues it after a crash: the world is
-built on a clock starting at the checkpoint's time, the saved state put back, and the loop first
-settles what the crash interrupted (`EnergySharingLoop.run(resume=True)`).
+time (deleted when the mission ends, when result.json is written), so `vil gcs --resume` continues
+it after a crash: the world is built on a clock starting at the checkpoint's time, the saved state
+put back, and each loop first settles what the crash interrupted (`EnergySharingLoop.run(resume=True)`).
 
 Nothing here imports Textual: tests drive a runner directly.
 """
@@ -35,8 +37,8 @@ import numpy as np
 from gcs.api import ApadApi
 from gcs.console.config import ConsoleConfig, ResumePoint, open_world
 from gcs.console.link_health import Level, LinkHealth, LossWindow, link_health
-from gcs.console.model import END_WORDS, ConsoleModel, area_outline
 from gcs.console.operator import (
+    QUIT,
     CommandQueue,
     DockMussel,
     GoToMussel,
@@ -46,14 +48,16 @@ from gcs.console.operator import (
     leave_holding,
     log_whereabouts,
 )
-from gcs.console.snapshot import Snapshot
 from gcs.mission.loop import EnergySharingLoop, LoopControl
-from gcs.mission.swarm_run import SwarmOutcome, run_loops, share_fleet
+from gcs.mission.outcome import write_outputs
+from gcs.mission.session import MissionSession
 from gcs.mission.world import World
-from gcs.records import checkpoint
-from gcs.records.checkpoint import CHECKPOINT_NAME, CHECKPOINT_PERIOD_S, Checkpoint, CheckpointFiles
-from gcs.records.events import EVENTS_NAME, Event
-from missiontime import PacedClock, Task, mm_ss, seconds_to_us, us_to_s
+from gcs.records.checkpoint import Checkpoint, CheckpointError, CheckpointFiles
+from gcs.records.events import Event
+from gcs.records.run_folder import RunFolder
+from gcs.view.model import END_WORDS, MissionView, area_outline
+from gcs.view.snapshot import Snapshot
+from missiontime import PacedClock, mm_ss, us_to_s
 from mussel_sim.placement import load_area
 
 PUBLISH_PERIOD_S = 0.1  # the UI redraws at 10 Hz at most
@@ -70,19 +74,19 @@ class ConsoleRunner:
         self.world: World | None = world
         self.apad_ids = tuple(a.system_id for a in config.scenario.apads)
         self.selected = self.apad_ids[0]  # the aPad the operator's commands act on
-        self.loop: EnergySharingLoop | None = None  # with one aPad, its loop
-        self.loops: dict[int, EnergySharingLoop] = {}  # every aPad's loop, as it starts
         self.error: str | None = None
         self.finished = threading.Event()
-        self._controls: dict[int, LoopControl] = {}  # a swarm's loops' own, following `control`
+        # A swarm's loops' own controls, following `control`; one aPad's loop takes `control` itself.
+        self._controls = {sysid: LoopControl(paused=self.control.paused) for sysid in self.apad_ids} \
+            if len(self.apad_ids) > 1 else {}
+        self.session: MissionSession | None = self._open_session(world) if world is not None else None
         self._commands = CommandQueue(swarm=len(self.apad_ids) > 1)
         self._quit = threading.Event()
         self._quit_now = threading.Event()
         self._notice = "connecting" if config.connect else "starting the SITL aPad"
-        self._model: ConsoleModel | None = None
+        self._model: MissionView | None = None
         self._last_event: Event | None = None
         self._published: tuple[object, ...] = ()
-        self._checkpoints: CheckpointFiles | None = config.resume.files if config.resume else None
         # The links as last computed on the world thread, and when (monotonic wall seconds): a UI that
         # sees no new one for a while knows the world thread is stuck, not that the links are fine.
         self.link_status: tuple[LinkHealth, ...] = ()
@@ -96,6 +100,24 @@ class ConsoleRunner:
     @property
     def swarm(self) -> bool:
         return len(self.apad_ids) > 1
+
+    @property
+    def loops(self) -> dict[int, EnergySharingLoop]:
+        """Every aPad's loop, as it starts."""
+        return self.session.loops if self.session is not None else {}
+
+    def _open_session(self, world: World) -> MissionSession:
+        """The mission over `world` (a resumed one's saved state put back: `CheckpointError` if it
+        is not this world's), each loop with its control and its hook before each wait."""
+        config = self.config
+        controls = self._controls or {self.apad_ids[0]: self.control}
+        for sysid, control in controls.items():
+            # Operator commands run between the loop's waits; a quit-now ends it at one (never mid-dock).
+            control.before_wait = functools.partial(self._loop_wait, world, sysid)
+        resume = config.resume
+        files = resume.files if resume is not None else (
+            CheckpointFiles(RunFolder(config.out_dir).checkpoint) if config.out_dir is not None else None)
+        return MissionSession(world, files, resume.checkpoint if resume is not None else None, controls=controls)
 
     # --- the UI's doors (any thread) -------------------------------------------------------------
 
@@ -141,7 +163,7 @@ class ConsoleRunner:
         (`leave_holding`): the aPads hold, the floating aMussels are sent down, the world closes.
         """
         if not self._quit_now.is_set() and (now or not self._quit.is_set()):
-            self.log_operator("quit", now=now)
+            self.log_operator(QUIT, now=now)
         self._quit.set()
         self.control.stop = True
         if now:
@@ -155,27 +177,27 @@ class ConsoleRunner:
     def run(self) -> None:
         try:
             self.world = world = self.world or open_world(self.config)
-        except (OSError, ValueError) as exc:
+            self.session = session = self.session or self._open_session(world)
+        except (OSError, ValueError, CheckpointError) as exc:
             self.error = f"cannot start: {exc}"
             self.finished.set()
             return
         try:
-            self._run(world)
+            self._run(world, session)
         except Exception as exc:  # shown on the console, not lost in a worker thread
             self.error = f"{type(exc).__name__}: {exc}"
             self._publish(world.clock.now_us)
             raise
         finally:
-            if self._checkpoints is not None:
-                self._checkpoints.close()  # kept: the mission did not end, so it can be resumed
+            session.close()  # a checkpoint left is kept: the mission did not end, so it can be resumed
             world.close()
             self.finished.set()
 
-    def _run(self, world: World) -> None:
+    def _run(self, world: World, session: MissionSession) -> None:
         s = world.scenario
         clock = world.clock
         source = self.config.connect or f"embedded SITL ({self.config.sitl})"
-        model = ConsoleModel(
+        model = MissionView(
             world.link.registry, s.apad.system_id, s.mission.pool_threshold, s.mission.duration_s, source,
             world.start.ids.astype(np.int64), area_outline(load_area(s.fleet.area).geometry), apad_ids=self.apad_ids,
             sinking_counts_active=s.mission.sinking_counts_active,
@@ -188,10 +210,11 @@ class ConsoleRunner:
         clock.scheduler.every(PUBLISH_PERIOD_S, self._publish, "console.publish", clock.now_us)
         sampling = clock.scheduler.every(SAMPLE_PERIOD_S, lambda now_us: model.sample(us_to_s(now_us)),
                                          "console.sample", clock.now_us)
-        if not self._wait_for_apads(world):
+        if not session.start(functools.partial(self._wait_for_apad, world)):
             return
-        for sysid in self.apad_ids:
-            world.request_telemetry(apad_id=sysid)
+        if session.shares is not None and session.watch is not None:
+            model.set_owner(session.shares.owner)
+            session.watch.on_reshare.append(lambda now: model.set_owner(now.owner))
         self._notice = "loop paused: press p to start" if self.control.paused else ""
         while self.control.paused and not self._quit.is_set():
             self._serve(world, world.api, None)
@@ -199,7 +222,11 @@ class ConsoleRunner:
         if not self._quit.is_set():
             self._notice = ""
             self._mission_started = True
-            end = self._run_swarm(world, model) if self.swarm else self._run_one(world)
+            started_s = time.perf_counter()
+            end = session.run()
+            if self.config.out_dir is not None:  # the mission's figures, as `vil run` writes them
+                write_outputs(world, session.result(time.perf_counter() - started_s), RunFolder(self.config.out_dir),
+                              session.apad_times)
             sampling.active = False  # the plots and the clock stop at the mission's end
             why = END_WORDS.get(end, end)
             self._notice = f"mission ended at {mm_ss(clock.time())}: {why}; the aPad holds (q quits)"
@@ -208,33 +235,6 @@ class ConsoleRunner:
             clock.sleep(PUBLISH_PERIOD_S)
         self._commands.flush(world)
         log_whereabouts(world, leave_holding(world, self._set_notice))
-
-    def _run_one(self, world: World) -> str:
-        """One aPad: its loop on the world's clock, checkpointed; the reason it ended."""
-        sysid = self.apad_ids[0]
-        # Operator commands run between the loop's waits; a quit-now ends it at one (never mid-dock).
-        self.control.before_wait = functools.partial(self._loop_wait, world, sysid)
-        self.loop = self.loops[sysid] = loop = world.mission_loop(self.control)
-        if self.config.resume is not None:
-            loop.status = self.config.resume.checkpoint.loop_status
-        task = self._start_checkpoints(world, loop)
-        end = loop.run(resume=self.config.resume is not None)
-        if task is not None:
-            task.active = False
-        if self._checkpoints is not None:
-            self._checkpoints.remove()  # the mission ended: nothing to resume
-            self._checkpoints = None
-        return str(end)
-
-    def _run_swarm(self, world: World, model: ConsoleModel) -> str:
-        """Several aPads: share the fleet, run every aPad's loop (no checkpoints, as `vil run`)."""
-        shares, watch = share_fleet(world)
-        model.set_owner(shares.owner)
-        watch.on_reshare.append(lambda now: model.set_owner(now.owner))
-        for sysid in self.apad_ids:
-            control = self._controls[sysid] = LoopControl(paused=self.control.paused, stop=self.control.stop)
-            control.before_wait = functools.partial(self._loop_wait, world, sysid)
-        return str(SwarmOutcome(run_loops(world, shares, watch, self._controls, self.loops), shares, watch).end_reason)
 
     def _loop_wait(self, world: World, sysid: int) -> bool:
         """A loop's hook before each of its waits: follow the operator's pause, stop and strategy,
@@ -249,24 +249,12 @@ class ConsoleRunner:
         self._serve(world, loop.api, sysid)
         return self._quit_now.is_set()
 
-    def _start_checkpoints(self, world: World, loop: EnergySharingLoop) -> Task | None:
-        """Save the mission every `CHECKPOINT_PERIOD_S` of mission time (with an output folder)."""
-        out = self.config.out_dir
-        if out is None:
-            return None
-        if self._checkpoints is None:
-            self._checkpoints = CheckpointFiles(out / CHECKPOINT_NAME)
-        files = self._checkpoints
-        return world.clock.scheduler.every(
-            CHECKPOINT_PERIOD_S, lambda now_us: checkpoint.save(files, checkpoint.capture(world, loop)),
-            "console.checkpoint", world.clock.now_us + seconds_to_us(CHECKPOINT_PERIOD_S))
-
-    def _replay_history(self, model: ConsoleModel, saved: Checkpoint) -> None:
+    def _replay_history(self, model: MissionView, saved: Checkpoint) -> None:
         """A resumed console shows the mission so far: the events logged up to the checkpoint."""
         out = self.config.out_dir
         if out is None:
             return
-        with (out / EVENTS_NAME).open("rb") as f:
+        with RunFolder(out).events.open("rb") as f:
             head = f.read(saved.events_bytes)
         for line in head.decode("utf-8", "replace").splitlines():
             try:
@@ -275,18 +263,20 @@ class ConsoleRunner:
             except (ValueError, KeyError, TypeError, AttributeError):
                 continue  # the console's history is for show; the mission does not depend on it
 
-    def _wait_for_apads(self, world: World) -> bool:
-        for sysid in self.apad_ids:
-            while True:
-                if self._quit.is_set():
-                    return False
-                try:
-                    world.api.wait_apad(timeout_s=self.config.connect_timeout_s, apad_id=sysid)
-                    break
-                except TimeoutError:
+    def _wait_for_apad(self, world: World, sysid: int) -> bool:
+        """Listen for the aPad until it is heard (True) or the operator quits (False, seen within a
+        tenth of a second); a notice says so while nothing is heard."""
+        since = world.clock.time()
+        while True:
+            if self._quit.is_set():
+                return False
+            try:
+                world.api.wait_apad(timeout_s=PUBLISH_PERIOD_S, apad_id=sysid)
+                return True
+            except TimeoutError:
+                if world.clock.time() - since >= self.config.connect_timeout_s:
                     who = f"aPad {sysid}" if self.swarm else "aPad"
                     self._notice = f"no {who} heard on {self.config.connect or 'the SITL link'}; still listening"
-        return True
 
     def _set_notice(self, text: str) -> None:
         self._notice = text

@@ -35,12 +35,12 @@ from gcs.console.colours import (
 )
 from gcs.console.fleetview import FleetTable
 from gcs.console.mapview import MapView
-from gcs.console.snapshot import ApadSnapshot, Snapshot
+from gcs.view.snapshot import ApadSnapshot, Snapshot
 from missiontime import mm_ss
 from mussel_sim.vocabulary import MusselState
 
 __all__ = ["APAD", "APAD_COLOURS", "GREEN", "LEGEND", "MARKER_COLOURS", "PURPLE", "RED", "SWARM_LEGEND",
-           "Chart", "ConsoleFooter", "EventLog", "FleetTable", "MapView", "StatusPanel"]
+           "Chart", "ConsoleFooter", "EventPanel", "FleetTable", "MapView", "StatusPanel"]
 
 class Chart(CachedLines):
     """Time on x (mission minutes, over the whole mission), one quantity on y, labelled gutter."""
@@ -174,7 +174,7 @@ def _apad_line(snap: Snapshot, a: ApadSnapshot) -> Text:
     return line.append(f"{a.ended or a.phase}, {a.mode}, {volts}, slots {used}/{len(a.slots)}, share {len(a.share)}")
 
 
-class EventLog(Static):
+class EventPanel(Static):
     """The latest events, newest last; as many as fit."""
 
     _shown: tuple[str, ...] = ()

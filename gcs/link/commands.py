@@ -4,7 +4,9 @@ Waits run on the clock (`clock.sleep`), so the same client serves lockstep runs 
 Every wait is bounded: `retries + 1` attempts, the first waiting `timeout_s` and each next one
 `BACKOFF` times the one before (1 + 1.5 + 2.25 + 3.375 s by default); at the bound a
 `CommandError` with `result=None`. A vehicle that answers IN_PROGRESS gets at most
-`IN_PROGRESS_MAX_S` in all before the command fails with that result.
+`IN_PROGRESS_MAX_S` in all before the command fails with that result. A `give_up` hook, asked at
+each look of a wait, may end it at once (the console quitting while the aPad is silent: it answers
+nothing, so its retries are not waited out).
 
 `refusal_words` is the one place a MAV_RESULT, and our dialect's refusal reason for Dock and Undock
 (COMMAND_ACK.result_param2, `apad_sitl.primitives.Refusal`), become the words an operator reads
@@ -23,6 +25,9 @@ from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
 from missiontime import Clock, seconds_to_us
 
 Send = Callable[[Any], None]  # encode a message as the GCS and send it to the vehicles
+# Asked at each look of an ACK wait with the aPad's system id and the command: words (why) end the
+# wait at once, no more sends, with a `CommandError` (result None) carrying them; None waits on.
+GiveUp = Callable[[int, int], str | None]
 
 BACKOFF = 1.5  # each retransmission waits this much longer than the attempt before
 POLL_S = 0.02  # how often a wait looks again (mission time)
@@ -112,6 +117,7 @@ class CommandClient:
         self._send = send
         self._clock = clock
         self._pending: list[_Pending] = []
+        self.give_up: GiveUp | None = None  # set by whoever must not wait on (`gcs.console.operator`)
 
     def on_ack(self, system_id: int, ack: CommandAck) -> None:
         """The router hands every validated COMMAND_ACK here."""
@@ -176,6 +182,9 @@ class CommandClient:
                         return ack
                     if clock.now_us >= deadline:
                         break
+                    why = self.give_up(system_id, command) if self.give_up is not None else None
+                    if why is not None:
+                        raise CommandError(system_id, command, None, "given up", params=params, words=why)
                     clock.sleep(min(POLL_S, wait_s))
                 wait_s *= BACKOFF
             raise CommandError(system_id, command, None, f"{retries + 1} attempts, {timeout_s:g} s and up",

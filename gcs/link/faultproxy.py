@@ -17,6 +17,7 @@ bind loopback unless given an address; the GCS side forgets a GCS silent for 30 
 from __future__ import annotations
 
 import heapq
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -80,13 +81,13 @@ class _Held:
 class _Side:
     """One UDP transport of the proxy, polled by the scheduler: what it receives goes the other way."""
 
-    def __init__(self, proxy: FaultProxy, transport: UdpTransport, to_vehicle: bool) -> None:
-        self.proxy, self.transport, self.to_vehicle = proxy, transport, to_vehicle
+    def __init__(self, admit: Callable[[bytes, bool], None], transport: UdpTransport, to_vehicle: bool) -> None:
+        self.admit, self.transport, self.to_vehicle = admit, transport, to_vehicle
 
     def poll(self) -> bool:
         chunks = self.transport.receive()
         for data in chunks:
-            self.proxy._admit(data, self.to_vehicle)
+            self.admit(data, self.to_vehicle)
         return bool(chunks)
 
     def fileno(self) -> int | None:
@@ -109,8 +110,8 @@ class FaultProxy:
         self._last_seq = {True: -1, False: -1}
         # The GCS side listens and answers whoever spoke; the vehicle side sends to the vehicle.
         gcs_udp = UdpTransport(listen_host, listen_port, listen=True, now_s=clock.time)  # mission time: repeatable
-        self.gcs_side = _Side(self, gcs_udp, to_vehicle=True)
-        self.vehicle_side = _Side(self, UdpTransport(*vehicle_addr, listen=False), to_vehicle=False)
+        self.gcs_side = _Side(self._admit, gcs_udp, to_vehicle=True)
+        self.vehicle_side = _Side(self._admit, UdpTransport(*vehicle_addr, listen=False), to_vehicle=False)
         sched = clock.scheduler
         self._task: Task = sched.every(us_to_s(_IDLE_PERIOD_US), self._deliver_due, "faultproxy.deliver",
                                        clock.now_us + _IDLE_PERIOD_US)

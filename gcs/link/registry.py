@@ -85,7 +85,7 @@ class VehicleView:
     restarts: int = 0
     restarted_us: int = 0
     held_before_restart: tuple[int, ...] = ()
-    _held: tuple[int, ...] = ()  # what its slots held at its last PRIMITIVE_STATUS
+    held_at_last_status: tuple[int, ...] = ()  # what its slots held at its last PRIMITIVE_STATUS
 
     def held(self) -> tuple[int, ...]:
         """The aMussels its slots hold (latched, closing or releasing)."""
@@ -192,9 +192,9 @@ class VehicleRegistry:
         if 0 <= boot_us + RESTART_SLACK_US < view.boot_us:
             view.restarts += 1
             view.restarted_us = now_us
-            view.held_before_restart = view._held
+            view.held_before_restart = view.held_at_last_status
         view.boot_us = boot_us
-        view._held = view.held()
+        view.held_at_last_status = view.held()
 
     def restore(self, saved: VehicleRegistry) -> None:
         """Take what a saved registry knew (a mission resumed from its checkpoint), in place: whoever

@@ -19,6 +19,7 @@ from __future__ import annotations
 import logging
 from collections import Counter, deque
 from collections.abc import Callable, Collection, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +30,7 @@ from gcs.link.registry import VehicleRegistry, VehicleView
 from gcs.link.telemetry import GCS_COMPONENT_ID, GCS_SYSTEM_ID, CommandAck, MusselView, Rejected, read
 from mavlink_dialect import Codec, Transport, hot, mavlink
 from mavlink_dialect.tlog import TlogWriter
-from mavlink_dialect.transport import Bell, ring_on
+from mavlink_dialect.transport import Bell, UdpTransport, ring_on
 from missiontime import Clock, seconds_to_us
 
 # 2 Hz: the aPad holds after FS_GCS_TIMEOUT (3 s) of silence, so 1 Hz would tolerate only two lost
@@ -45,6 +46,19 @@ log = logging.getLogger(__name__)
 __all__ = ["GCS_SYSTEM_ID", "CommandError", "Link", "Port", "VehicleView"]
 
 
+@dataclass(frozen=True)
+class _Wiring:
+    """What a port and a transport poller use of their link: its own steps, handed to them by the link."""
+
+    out: Callable[[bytes], None]  # to every transport
+    loopback: Codec  # parses bare bytes of local parties, once
+    deliver: Callable[[Port | None, Any], bool]  # to every local party but the sender
+    deliver_batch: Callable[[int, Sequence[bytes], Mapping[str, Any]], None]
+    receive: Callable[[Any], bool]  # a message from a transport; True if taken
+    relay: Callable[[_TransportPoller, bytes], None]  # to the other transports
+    registry: VehicleRegistry
+
+
 class Port:
     """A local party's way onto the link; `handler` gets every message the others sent.
 
@@ -53,7 +67,7 @@ class Port:
     here, for the others).
     """
 
-    def __init__(self, link: Link, handler: Handler | None, forward: frozenset[int] | None = None,
+    def __init__(self, link: _Wiring, handler: Handler | None, forward: frozenset[int] | None = None,
                  system_id: int | None = None) -> None:
         """`forward`: the message ids of this party that go out to the vehicles (None: all of them);
         a router sends a listener what it uses, as mavlink-router's filters do. `system_id`: the
@@ -65,26 +79,26 @@ class Port:
 
     def _out(self, data: bytes) -> None:
         if self.forward is None or frame_msg_id(data) in self.forward:
-            self.link._out(data)
+            self.link.out(data)
 
     def send(self, data: bytes) -> None:
         self._out(data)
-        for msg in self.link._loopback.decode(data):
-            self.link._deliver(self, msg)
+        for msg in self.link.loopback.decode(data):
+            self.link.deliver(self, msg)
 
     def send_bytes(self, data: bytes) -> None:
         self._out(data)
 
     def send_local(self, msg: Any) -> None:
-        self.link._deliver(self, msg)
+        self.link.deliver(self, msg)
 
     def send_batch(self, msg_id: int, frames: Sequence[bytes], columns: Mapping[str, Any]) -> None:
         """Many messages of one id at once (`mavlink_dialect.hot`): out to the vehicles in datagrams,
         and into the link as a batch (local parties get none)."""
         if self.forward is None or msg_id in self.forward:
             for data in hot.pack_datagrams(frames):
-                self.link._out(data)
-        self.link._deliver_batch(msg_id, frames, columns)
+                self.link.out(data)
+        self.link.deliver_batch(msg_id, frames, columns)
 
 
 def frame_msg_id(frame: bytes) -> int:
@@ -98,7 +112,7 @@ class _TransportPoller:
     """Reads one transport for the scheduler; one parser per transport keeps stream framing apart."""
 
     def __init__(
-        self, link: Link, transport: Transport, forward: frozenset[int] = frozenset(),
+        self, link: _Wiring, transport: Transport, forward: frozenset[int] = frozenset(),
         outbound: frozenset[int] | None = None,
     ) -> None:
         self.link = link
@@ -112,7 +126,7 @@ class _TransportPoller:
         chunks = self.transport.receive()
         for chunk in chunks:
             for msg in self.codec.decode(chunk):
-                taken = self.link._receive(msg)
+                taken = self.link.receive(msg)
                 if taken:
                     self.link.registry.count_frame(msg.get_srcSystem(), msg.get_srcComponent(), msg.get_seq())
                 if taken and msg.get_msgId() in self.forward:
@@ -120,7 +134,7 @@ class _TransportPoller:
                     ident = (msg.get_srcSystem(), msg.get_seq(), msg.get_msgId())
                     if ident not in self._relayed:
                         self._relayed.append(ident)
-                        self.link._relay(self, bytes(msg.get_msgbuf()))
+                        self.link.relay(self, bytes(msg.get_msgbuf()))
         return bool(chunks)
 
     def fileno(self) -> int | None:
@@ -159,6 +173,8 @@ class Link:
         self._loopback = Codec(system_id, component_id)  # parses bare bytes of local parties, once
         self._tlog = TlogWriter(tlog_path, tlog_epoch_us, append) if tlog_path else None
         self._signing: tuple[bytes, int, Callable[[], int]] | None = None
+        self._wiring = _Wiring(self._out, self._loopback, self._deliver, self._deliver_batch, self._receive,
+                               self._relay, self.registry)
         self.port = self.attach(None)  # the GCS's own party
         self._heartbeat = mavlink.MAVLink_heartbeat_message(
             mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, mavlink.MAV_STATE_ACTIVE, 3
@@ -179,7 +195,7 @@ class Link:
         relayed to the other transports (a bridge of real aMussels: the aPads dock by their status).
         `outbound`: the only message ids sent to it (None: everything the GCS sends): a bridge radio
         gets the commands for its aMussels, not the simulated fleet's traffic."""
-        poller = _TransportPoller(self, transport, forward, outbound)
+        poller = _TransportPoller(self._wiring, transport, forward, outbound)
         if self._signing is not None:
             poller.codec.enable_signing(*self._signing)
         self._pollers.append(poller)
@@ -202,11 +218,20 @@ class Link:
 
     def attach(self, handler: Handler | None, forward: frozenset[int] | None = None,
                system_id: int | None = None) -> Port:
-        port = Port(self, handler, forward, system_id)
+        port = Port(self._wiring, handler, forward, system_id)
         self._ports.append(port)
         if system_id is not None:
             self._local_systems.add(system_id)
         return port
+
+    @property
+    def tlog(self) -> TlogWriter | None:
+        """The GCS's .tlog writer (None without a log): a checkpoint reads its size, a replay mutes it."""
+        return self._tlog
+
+    def udp_ports(self) -> list[int]:
+        """The local ports of the link's UDP transports (for endpoints.json)."""
+        return [p.transport.local_port for p in self._pollers if isinstance(p.transport, UdpTransport)]
 
     def close(self) -> None:
         for poller in self._pollers:

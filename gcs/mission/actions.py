@@ -1,9 +1,10 @@
-"""The aPad actions the energy-sharing loop is written in: each command with its wait.
+"""The aPad's actions the energy-sharing loop is written in: each command with its wait.
 
 Go To, Dock, Undock and Sink each command the aPad through the API and wait, on the clock, until
 the aPad or the fleet reports the result; every wait is bounded or interruptible, and the mission
-ends only between actions (never mid-dock). The loop's phases (`gcs.mission.loop`) build on these;
-what they read of the fleet (the pool, slots, states, shares) is `gcs.mission.fleet_knowledge`.
+ends only between actions (never mid-dock). `ApadActions` reads the fleet through
+`FleetKnowledge` (`gcs.mission.fleet_knowledge`), keeps the loop's `LoopStatus` (phase, cost) and
+follows the operator's `LoopControl`; the loop's phases (`gcs.mission.phases`) are built on it.
 """
 
 from __future__ import annotations
@@ -12,13 +13,11 @@ from collections.abc import Callable
 from functools import partial
 
 from apad_sitl.vocabulary import Latch, Progress
-from gcs.api import ApadApi, CommandError, GeofenceError, Location
-from gcs.mission.control import EndReason, LoopControl, LoopSettings, LoopStatus, MissionEnded, Phase
+from gcs.api import CommandError, GeofenceError, Location
+from gcs.mission.control import EndReason, LoopControl, LoopLog, LoopStatus, MissionEnded, Phase
 from gcs.mission.fleet_knowledge import FleetKnowledge
-from gcs.mission.real_fleet import RealFleet
-from gcs.mission.swarm import FleetShares, route_conflicts
-from gcs.records.events import EventLog
-from missiontime import Clock, seconds_to_us, us_to_s
+from gcs.mission.swarm import route_conflicts
+from missiontime import seconds_to_us, us_to_s
 from mussel_sim.geo import distance_m
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
@@ -30,40 +29,25 @@ LINK_LOST_S = 3.0
 GOTO_HEARD_S = 5.0  # the aPad reports its primitive every second; five lost in a row is rare even at 40 % loss
 
 
-class LoopActions(FleetKnowledge):
-    """The aPad and aMussel commands with their waits, over what the loop knows of the fleet."""
+class ApadActions:
+    """One aPad's commands with their waits, over what its loop knows of the fleet. `leaving` holds
+    the aMussels let go in the current redeployment and not yet seen off their slots (`finish`)."""
 
-    def __init__(
-        self,
-        api: ApadApi,
-        clock: Clock,
-        settings: LoopSettings,
-        homes: dict[int, Location],
-        apad_id: int,
-        events: EventLog | None = None,
-        control: LoopControl | None = None,
-        shares: FleetShares | None = None,
-        real: RealFleet | None = None,
-    ) -> None:
-        """`shares`: with several aPads, the one record of who serves which aMussel (`gcs.mission.swarm`);
-        this loop then plans, calls up and fetches only within its aPad's share."""
-        self.api = api
-        self.clock = clock
-        self.settings = settings
-        self.homes = homes  # original positions the aMussels go back to
-        self.apad_id = apad_id
-        self.events = events or EventLog()
-        self.control = control or LoopControl()
-        self.status = LoopStatus(strategy=settings.mission.collect_strategy)
-        self.unreachable: set[int] = set()  # aMussels found outside the geofence (logged once)
-        self.shares = shares
-        self.real = real  # estimates of real aMussels between their sparse reports
-        self._leaving: set[int] = set()  # let go in this redeployment, not yet seen off the slot (`_finish`)
-        self._phase_since_s = clock.time()
+    def __init__(self, knows: FleetKnowledge, control: LoopControl, status: LoopStatus, log: LoopLog) -> None:
+        self.knows = knows
+        self.api = knows.api
+        self.clock = knows.clock
+        self.settings = knows.settings
+        self.apad_id = knows.apad_id
+        self.control = control
+        self.status = status
+        self.leaving: set[int] = set()
+        self._log = log
+        self._phase_since_s = self.clock.time()
 
     # --- primitives with waiting ------------------------------------------------------------
 
-    def _go_to(self, target: Location, interruptible: bool = True) -> bool:
+    def go_to(self, target: Location, interruptible: bool = True) -> bool:
         """Go To and wait; False if it cannot be done (outside the geofence, or the bounds below hit).
 
         A Go To preempted on the aPad (its link-loss failsafe switched to Hold) is commanded again
@@ -73,7 +57,7 @@ class LoopActions(FleetKnowledge):
         distance = float(distance_m(here.lat, here.lon, target.lat, target.lon))
         self.status.cost_m += distance
         trip_limit_s = GOTO_SLACK_S + GOTO_SLOWNESS * distance / self.settings.apad_speed_mps
-        if self.shares is not None and self.api.inside_geofence(target):
+        if self.knows.shares is not None and self.api.inside_geofence(target):
             self._keep_apart(target, interruptible)
         for _ in range(self.settings.goto_attempts):
             try:
@@ -83,16 +67,16 @@ class LoopActions(FleetKnowledge):
                 return False
             except CommandError as exc:
                 self._log("command_failed", what=str(exc))
-                self._sleep(self.settings.poll_s * 4, interruptible)
+                self.sleep(self.settings.poll_s * 4, interruptible)
                 continue
             mine = self.api.apad(self.apad_id).expected
             # Accepted, but not one report on it (all lost, or the failsafe took over unheard):
             # send it again; a re-send of a Go To in force is answered, not restarted.
-            if not self._wait_until(partial(self._goto_heard, mine), timeout_s=GOTO_HEARD_S,
+            if not self.wait_until(partial(self._goto_heard, mine), timeout_s=GOTO_HEARD_S,
                                     interruptible=interruptible):
                 self._log("goto_unconfirmed", lat=target.lat, lon=target.lon, after_s=GOTO_HEARD_S)
                 continue
-            if not self._wait_until(partial(self._goto_over, mine), timeout_s=trip_limit_s,
+            if not self.wait_until(partial(self._goto_over, mine), timeout_s=trip_limit_s,
                                     interruptible=interruptible):
                 self._log("goto_timeout", lat=target.lat, lon=target.lon, after_s=round(trip_limit_s, 1))
                 continue
@@ -125,10 +109,10 @@ class LoopActions(FleetKnowledge):
         if not blocked():
             return
         self._log("separation_wait", lat=target.lat, lon=target.lon, apads=blocked())
-        if not self._wait_until(lambda: not blocked(), self.settings.separation_wait_s, interruptible):
+        if not self.wait_until(lambda: not blocked(), self.settings.separation_wait_s, interruptible):
             self._log("separation_wait_expired", lat=target.lat, lon=target.lon, apads=blocked())
 
-    def _dock(self, slot: int, mussel_id: int) -> bool:
+    def dock(self, slot: int, mussel_id: int) -> bool:
         """Dock and wait for the latch. The slot's own report decides, not the ACK or the primitive:
         an ACK or a slot report lost on the way back, or a failsafe Hold over the dock, leave the
         latch closing; so the end is confirmed by asking the aPad for the slot."""
@@ -140,7 +124,7 @@ class LoopActions(FleetKnowledge):
                 return False  # refused: nothing happened on the aPad
 
         def ours(latch: Latch) -> bool:
-            s = self._slot(slot)
+            s = self.knows.slot(slot)
             return s.mussel_id == mussel_id and s.latch == latch
 
         mine = self.api.apad(self.apad_id).expected
@@ -150,7 +134,7 @@ class LoopActions(FleetKnowledge):
             return ours(Latch.LATCHED) or (failed and not ours(Latch.CLOSING))
 
         # Never abandon a dock half-way: the waits ignore the end of the mission.
-        self._wait_until(settled, self.settings.surfacing_timeout_s, interruptible=False)
+        self.wait_until(settled, self.settings.surfacing_timeout_s, interruptible=False)
         for _ in range(self.settings.command_attempts * 4):  # a latch closes in seconds: this is minutes
             try:
                 s = self.api.fresh_slot(slot, self.apad_id)
@@ -159,45 +143,46 @@ class LoopActions(FleetKnowledge):
                 continue
             if not (s.mussel_id == mussel_id and s.latch == Latch.CLOSING):
                 return s.mussel_id == mussel_id and s.latch == Latch.LATCHED
-            self._wait_until(lambda: not ours(Latch.CLOSING), self.settings.poll_s * 8, interruptible=False)
+            self.wait_until(lambda: not ours(Latch.CLOSING), self.settings.poll_s * 8, interruptible=False)
         self._log("gave_up", what="dock confirmation", mussel=mussel_id, slot=slot)
         return ours(Latch.LATCHED)
 
-    def _undock(self, slot: int, mussel_id: int) -> bool:
+    def undock(self, slot: int, mussel_id: int) -> bool:
         """Undock until the slot is released. A retransmitted undock is harmless: the aPad re-ACKs it,
         and it names the aMussel, so it can never release another one put in that slot since."""
 
         def released() -> bool:
-            s = self._slot(slot)
+            s = self.knows.slot(slot)
             return s.mussel_id != mussel_id or s.latch == Latch.OPEN
 
         for _ in range(20):  # ~3 min; a refusal that long (e.g. not over water) leaves it on board, logged
             if released():
                 return True
-            if self._slot(slot).latch != Latch.RELEASING:
+            if self.knows.slot(slot).latch != Latch.RELEASING:
                 try:
                     self.api.docking(False, slot, mussel_id, self.apad_id)
                 except CommandError as exc:
                     self._log("command_failed", what=str(exc))
-            self._wait_until(lambda: released() or self._slot(slot).latch != Latch.RELEASING,
+            self.wait_until(lambda: released() or self.knows.slot(slot).latch != Latch.RELEASING,
                              timeout_s=self.settings.poll_s * 8, interruptible=False)
         if released():
             return True
         self._log("undock_failed", mussel=mussel_id, slot=slot, why="the aPad keeps refusing; it stays on board")
         return False
 
-    def _sink(self, mussel_id: int) -> None:
+    def sink(self, mussel_id: int) -> None:
         """Tell a called-up aMussel to go back down, and see that it does (the relay is not acknowledged)."""
         for _ in range(10):
-            self._command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
-            if self._wait_until(lambda: self._state(mussel_id) not in (MusselState.FLOATING, MusselState.SURFACING),
+            self.command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
+            if self.wait_until(lambda: self.knows.state(mussel_id) not in (MusselState.FLOATING, MusselState.SURFACING),
                                 timeout_s=self.settings.poll_s * 8, interruptible=False):
-                self._release(mussel_id)
+                self.knows.release(mussel_id)
                 return
-        self._log("lost", mussel=mussel_id, why="does not answer the sink command", state=self._state(mussel_id).name)
-        self._release(mussel_id)  # floating, unclaimed: an orphan its owner will come back for
+        self._log("lost", mussel=mussel_id, why="does not answer the sink command",
+                  state=self.knows.state(mussel_id).name)
+        self.knows.release(mussel_id)  # floating, unclaimed: an orphan its owner will come back for
 
-    def _command(self, fn: Callable[..., None], *args: object, **kwargs: object) -> bool:
+    def command(self, fn: Callable[..., None], *args: object, **kwargs: object) -> bool:
         """Run an API command; a refused or unanswered one is logged and tried again, at most
         `command_attempts` times (each is itself several sends: `gcs.link.commands`). False at the
         bound, with a `gave_up` event: the caller leaves that step for now and goes on."""
@@ -207,23 +192,23 @@ class LoopActions(FleetKnowledge):
                 return True
             except CommandError as exc:
                 self._log("command_failed", what=str(exc))
-                self._sleep(self.settings.poll_s * 4)
+                self.sleep(self.settings.poll_s * 4)
         self._log("gave_up", what=getattr(fn, "__name__", str(fn)), attempts=self.settings.command_attempts)
         return False
 
     # --- the link -----------------------------------------------------------------------------
 
-    def _link_up(self) -> bool:
+    def link_up(self) -> bool:
         silent_us = self.clock.now_us - self.api.apad(self.apad_id).last_heartbeat_us
         return silent_us <= seconds_to_us(LINK_LOST_S)
 
-    def _wait_for_link(self, timeout_s: float | None = None, interruptible: bool = True) -> bool:
+    def wait_for_link(self, timeout_s: float | None = None, interruptible: bool = True) -> bool:
         """Wait until the aPad is heard again (events `link_lost`, `link_back`); False at the bound."""
-        if self._link_up():
+        if self.link_up():
             return True
         silent_us = self.clock.now_us - self.api.apad(self.apad_id).last_heartbeat_us
         self._log("link_lost", silent_s=round(us_to_s(silent_us), 1))
-        if self._wait_until(self._link_up, timeout_s, interruptible):
+        if self.wait_until(self.link_up, timeout_s, interruptible):
             self._log("link_back")
             return True
         self._log("gave_up", what="waiting for the aPad's link", after_s=timeout_s)
@@ -231,17 +216,17 @@ class LoopActions(FleetKnowledge):
 
     # --- waiting, ending, pausing -----------------------------------------------------------
 
-    def _wait_until(self, done: Callable[[], bool], timeout_s: float | None = None, interruptible: bool = True) -> bool:
+    def wait_until(self, done: Callable[[], bool], timeout_s: float | None = None, interruptible: bool = True) -> bool:
         deadline = None if timeout_s is None else self.clock.time() + timeout_s
         while not done():
             if deadline is not None and self.clock.time() >= deadline:
                 return False
-            self._sleep(self.settings.poll_s, interruptible)
+            self.sleep(self.settings.poll_s, interruptible)
         return True
 
-    def _sleep(self, dt_s: float, interruptible: bool = True) -> None:
+    def sleep(self, dt_s: float, interruptible: bool = True) -> None:
         if interruptible:
-            self._check_end()
+            self.check_end()
         self._wait(dt_s)
         while self.control.paused and not self.control.stop:
             self._wait(dt_s)
@@ -252,7 +237,7 @@ class LoopActions(FleetKnowledge):
             raise MissionEnded(EndReason.OPERATOR)
         self.clock.sleep(dt_s)
 
-    def _check_end(self) -> None:
+    def check_end(self) -> None:
         if self.control.stop:
             raise MissionEnded(EndReason.OPERATOR)
         if self.clock.time() >= self.settings.mission.duration_s:
@@ -261,7 +246,7 @@ class LoopActions(FleetKnowledge):
         if battery_v is not None and battery_v <= self.settings.battery_end_v:
             raise MissionEnded(EndReason.APAD_BATTERY)
 
-    def _finish(self) -> None:
+    def finish(self) -> None:
         """Leave the aPad holding (a dock in progress was already waited out), and see every aMussel
         this redeployment let go reported off its slot: the simulated fleet applies a release at its
         next step, so one whose latch report it heard only in the last instant (e.g. the RELEASING
@@ -273,30 +258,30 @@ class LoopActions(FleetKnowledge):
             self._log("command_failed", what=str(exc))
 
         def still_docked() -> list[int]:
-            return sorted(m for m in self._leaving if self._state(m) == MusselState.DOCKED)
+            return sorted(m for m in self.leaving if self.knows.state(m) == MusselState.DOCKED)
 
-        if not self._wait_until(lambda: not still_docked(), self.settings.surfacing_timeout_s, interruptible=False):
+        if not self.wait_until(lambda: not still_docked(), self.settings.surfacing_timeout_s, interruptible=False):
             self._log("gave_up", what="seeing released aMussels leave their slots", mussels=still_docked())
 
     # --- calling up, the phase record -------------------------------------------------------
 
-    def _call_up_if_in_range(self, mussel_id: int) -> bool:
+    def call_up_if_in_range(self, mussel_id: int) -> bool:
         """Safety: an aMussel is only called to the surface with an aPad within acoustic range.
         With several aPads it must be this one's to call, and is claimed first (never two aPads)."""
-        if self.shares is not None and not self.shares.claim(self.apad_id, mussel_id, self.clock.now_us):
+        if not self.knows.claim(mussel_id):
             return False
-        self._note_home(mussel_id)
-        if self._state(mussel_id) == MusselState.FLOATING:
+        self.knows.note_home(mussel_id)
+        if self.knows.state(mussel_id) == MusselState.FLOATING:
             return True  # already up (an orphan): nothing to call
-        distance = self._distance_to(mussel_id)
+        distance = self.knows.distance_to(mussel_id)
         if distance > self.settings.acoustic_range_m:
-            self._release(mussel_id)
+            self.knows.release(mussel_id)
             return False
-        self._command(self.api.command_mussel, mussel_id, MusselCommand.SURFACE, self.apad_id)
+        self.command(self.api.command_mussel, mussel_id, MusselCommand.SURFACE, self.apad_id)
         self._log("call_up", mussel=mussel_id, distance_m=round(distance, 2))
         return True
 
-    def _set_phase(self, phase: Phase) -> None:
+    def set_phase(self, phase: Phase) -> None:
         if phase != self.status.phase or phase == Phase.IDLE_WAIT:
             now = self.clock.time()
             spent = self.status.phase_s

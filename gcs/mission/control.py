@@ -1,5 +1,5 @@
 """The energy-sharing loop's vocabulary and settings: its phases, why it ends, the operator's
-controls and the status it shows."""
+controls, the status it shows, and its voice in the mission's event log."""
 
 from __future__ import annotations
 
@@ -9,6 +9,8 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 
 from gcs.mission.scenario import MissionConfig
+from gcs.records.events import EventLog
+from missiontime import Clock
 from mussel_sim.battery import DEFAULT_CHARGE, DEFAULT_DISCHARGE
 
 
@@ -86,3 +88,18 @@ class LoopSettings:
     # Several aPads: a leg passing closer than this to another aPad (or its target) waits to set off.
     separation_m: float = 3.0
     separation_wait_s: float = 60.0
+
+
+@dataclass(frozen=True)
+class LoopLog:
+    """One aPad loop's events, stamped with its clock's mission time; with several aPads each event
+    names its aPad (`apad_id` set)."""
+
+    events: EventLog
+    clock: Clock
+    apad_id: int | None = None
+
+    def __call__(self, kind: str, **fields: object) -> None:
+        if self.apad_id is not None:
+            fields = {"apad": self.apad_id, **fields}
+        self.events.emit(self.clock.time(), kind, **fields)

@@ -1,8 +1,10 @@
-"""What the energy-sharing loop knows of the fleet, from what the GCS has heard.
+"""What one aPad's energy-sharing loop knows of the fleet, from what the GCS has heard.
 
-The charging pool and why an aMussel cannot be collected now, the aPad's slots, each aMussel's
-state, battery and distance, and this aPad's share of the fleet with several aPads
-(`gcs.mission.swarm`). `LoopActions` (`gcs.mission.actions`) builds its commands on these.
+`FleetKnowledge` answers with public reads: the charging pool and why an aMussel cannot be
+collected now, the aPad's slots, each aMussel's state, battery and distance, this aPad's share of
+the fleet with several aPads (`gcs.mission.swarm`), and the outlook a strategy plans with. It
+commands nothing: the aPad's actions (`gcs.mission.actions`) and the loop's phases
+(`gcs.mission.phases`) are built on it.
 """
 
 from __future__ import annotations
@@ -10,12 +12,12 @@ from __future__ import annotations
 from apad_sitl.vocabulary import Latch
 from gcs.api import ApadApi, Location
 from gcs.link.telemetry import SlotView
-from gcs.mission.control import LoopSettings
+from gcs.mission.control import LoopLog, LoopSettings
 from gcs.mission.real_fleet import RealFleet
+from gcs.mission.strategies import Outlook, traits
 from gcs.mission.swarm import FleetShares, orphans
-from gcs.records.events import EventLog
 from missiontime import Clock
-from mussel_sim.battery import sim_minutes
+from mussel_sim.battery import charge_profile, discharge_profile, sim_minutes
 from mussel_sim.geo import distance_m
 from mussel_sim.vocabulary import MusselState
 
@@ -24,22 +26,48 @@ from mussel_sim.vocabulary import MusselState
 # called up on arrival, the trip and its rise, and this margin for the close-in and the latch.
 TRIP_SLOWNESS = 1.2
 DOCK_MARGIN_S = 10.0
+DOCK_S = 20.0  # besides surfacing, at each collection stop: closing in and latching
+RELEASE_MARGIN_S = 60.0  # released early, an aMussel still has this much charge left at the end
+
+
+def outlook(settings: LoopSettings, now_s: float) -> Outlook:
+    """What a planning step at mission time `now_s` is told of the time left and the battery models."""
+    mission = settings.mission
+    return Outlook(
+        time_left_s=max(mission.duration_s - now_s, 0.0),
+        drain_per_s=discharge_profile(settings.mussel_discharge).rate_per_min * sim_minutes(mission.theta, 1.0),
+        charge=charge_profile(settings.mussel_charge),
+        theta=mission.theta,
+        speed_mps=settings.apad_speed_mps,
+        stop_s=settings.mussel_surfacing_s + DOCK_S,
+        charged_frac=mission.charged_threshold,
+    )
 
 
 class FleetKnowledge:
-    """The loop's view of the fleet; the state it reads is set up by `LoopActions.__init__`."""
+    """One aPad's view of the fleet. `unreachable` collects the aMussels found outside the geofence
+    (each logged once)."""
 
-    api: ApadApi
-    clock: Clock
-    settings: LoopSettings
-    homes: dict[int, Location]
-    apad_id: int
-    events: EventLog
-    unreachable: set[int]
-    shares: FleetShares | None
-    real: RealFleet | None
+    def __init__(
+        self, api: ApadApi, clock: Clock, settings: LoopSettings, homes: dict[int, Location], apad_id: int,
+        log: LoopLog, shares: FleetShares | None = None, real: RealFleet | None = None,
+    ) -> None:
+        """`homes`: where each aMussel goes back to (filled in for real ones as they are first heard);
+        `shares`: with several aPads, the one record of who serves which aMussel; `real`: estimates of
+        real aMussels between their sparse reports."""
+        self.api = api
+        self.clock = clock
+        self.settings = settings
+        self.homes = homes
+        self.apad_id = apad_id
+        self.shares = shares
+        self.real = real
+        self.unreachable: set[int] = set()
+        self._log = log
 
-    def _candidates(self) -> list[int]:
+    # --- the charging pool ----------------------------------------------------------------------
+
+    def candidates(self) -> list[int]:
         """The charging pool: ids of active aMussels below the pool threshold, lowest first, that
         the aPad may go to (one outside the geofence, e.g. carried off by a current while it
         floated, is left out with one `unreachable` event instead of being tried again and again)."""
@@ -51,8 +79,8 @@ class FleetKnowledge:
         out = []
         for m in ids:
             if not self.api.mussels[m].simulated:
-                self._note_home(m)
-            if m not in self.homes or not self._serves(m) or self._cannot_collect(m) is not None:
+                self.note_home(m)
+            if m not in self.homes or not self.serves(m) or self.cannot_collect(m) is not None:
                 continue
             if self.api.inside_geofence(self.api.get_location(m)):
                 out.append(m)
@@ -62,70 +90,98 @@ class FleetKnowledge:
                 self._log("unreachable", mussel=m, lat=where.lat, lon=where.lon, why="outside the geofence")
         return out
 
-    def _cannot_collect(self, mussel_id: int) -> str | None:
+    def cannot_collect(self, mussel_id: int) -> str | None:
         """Why the aPad should not set off for this aMussel now, or None: it has depleted (below
         3600 mV it cannot surface), it is no longer waiting on the seabed or at the surface (e.g.
         docked elsewhere), or its battery will give out before the aPad could dock it (eq. 1 over
         the trip, its rise and the latch: it drains the same on the seabed and at the surface, and
         would be left in the water or at the surface, depleted)."""
-        state = self._state(mussel_id)
+        state = self.state(mussel_id)
         if state == MusselState.DEPLETED:
             return "depleted"
         if state not in (MusselState.ACTIVE, MusselState.FLOATING):
             return f"it is {state.name.lower()}"
         if self.real is not None:
-            distance = self._distance_to(mussel_id)
+            distance = self.distance_to(mussel_id)
             trip_s = TRIP_SLOWNESS * distance / self.settings.apad_speed_mps
             rise_s = 0.0 if state == MusselState.FLOATING else self.settings.mussel_surfacing_s
             call_up_s = 0.0 if distance <= self.settings.acoustic_range_m else trip_s
             need_s = max(trip_s, call_up_s + rise_s) + DOCK_MARGIN_S
             per_s = self.real.discharge.rate_per_min * sim_minutes(self.real.theta, 1.0)
-            battery = self._battery(mussel_id)
+            battery = self.battery(mussel_id)
             if battery <= per_s * need_s:
                 return f"its battery ({battery:.3f}) would give out before it could be docked ({need_s:.0f} s)"
         return None
 
-    def _free_slots(self) -> list[int]:
+    def too_late_to_call_up(self) -> bool:
+        return self.settings.mission.duration_s - self.clock.time() < self.settings.call_up_margin_s
+
+    def outlook(self) -> Outlook:
+        return outlook(self.settings, self.clock.time())
+
+    def charged(self, mussel_id: int, strategy: str) -> bool:
+        """Whether a docked aMussel may go back now: at the scenario's charged threshold, or, for a
+        strategy that releases early, once it holds enough to stay active to the mission end."""
+        battery = self.battery(mussel_id)
+        if battery >= self.settings.mission.charged_threshold:
+            return True
+        if not traits(strategy).release_early:
+            return False
+        view = self.outlook()
+        return battery >= view.drain_per_s * (view.time_left_s + RELEASE_MARGIN_S)
+
+    # --- slots and aMussels ---------------------------------------------------------------------
+
+    def free_slots(self) -> list[int]:
         return self.api.apad(self.apad_id).free_slots()
 
-    def _slot(self, slot: int) -> SlotView:
+    def slot(self, slot: int) -> SlotView:
         return self.api.slots(self.apad_id)[slot - 1]
 
-    def _docked(self) -> dict[int, int]:
+    def docked(self) -> dict[int, int]:
+        """slot -> aMussel id of every latched slot."""
         return {s.slot: s.mussel_id for s in self.api.slots(self.apad_id) if s.latch == Latch.LATCHED}
 
-    def _floating(self, mussel_id: int) -> bool:
-        return self._state(mussel_id) == MusselState.FLOATING
+    def floating(self, mussel_id: int) -> bool:
+        return self.state(mussel_id) == MusselState.FLOATING
 
-    def _state(self, mussel_id: int) -> MusselState:
+    def state(self, mussel_id: int) -> MusselState:
         return self.api.mussels[mussel_id].state
 
-    def _battery(self, mussel_id: int) -> float:
+    def battery(self, mussel_id: int) -> float:
         """As last reported; for a real aMussel out of the water, estimated since (`RealFleet`)."""
         view = self.api.mussels[mussel_id]
         if self.real is not None and not view.simulated and mussel_id in self.real.heard_us:
-            on_slot = mussel_id in self._docked().values()
+            on_slot = mussel_id in self.docked().values()
             return self.real.estimate(mussel_id, self.clock.now_us, on_slot).battery_frac
         return view.battery_frac
 
-    def _distance_to(self, mussel_id: int) -> float:
+    def distance_to(self, mussel_id: int) -> float:
         here, there = self.api.position(self.apad_id), self.api.get_location(mussel_id)
         return float(distance_m(here.lat, here.lon, there.lat, there.lon))
 
-    def _too_late_to_call_up(self) -> bool:
-        return self.settings.mission.duration_s - self.clock.time() < self.settings.call_up_margin_s
+    def note_home(self, mussel_id: int) -> None:
+        """A real aMussel goes back where it was first found (a simulated one: its start)."""
+        if mussel_id not in self.homes and mussel_id in self.api.mussels:
+            self.homes[mussel_id] = self.api.get_location(mussel_id)
 
-    def _orphans(self) -> list[int]:
+    # --- this aPad's share ----------------------------------------------------------------------
+
+    def orphans(self) -> list[int]:
         """aMussels of this aPad's share floating with no live claim (`swarm.orphans`): fetch them first."""
         if self.shares is None:
             return []
         return orphans(self.shares, self.api.link.registry, self.apad_id, self.clock.now_us)
 
-    def _serves(self, mussel_id: int) -> bool:
+    def serves(self, mussel_id: int) -> bool:
         """Whether this aPad may call the aMussel up (always, with no other aPad)."""
         return self.shares is None or self.shares.serves(self.apad_id, mussel_id, self.clock.now_us)
 
-    def _taken_over(self, mussel_id: int) -> bool:
+    def claim(self, mussel_id: int) -> bool:
+        """Claim the aMussel for this aPad before calling it up (never two aPads; always, alone)."""
+        return self.shares is None or self.shares.claim(self.apad_id, mussel_id, self.clock.now_us)
+
+    def taken_over(self, mussel_id: int) -> bool:
         """This aPad was lost long enough for another to take over its claim: leave the aMussel to
         that one (no sink: it is being fetched). Logged."""
         if self.shares is None or self.shares.holds(self.apad_id, mussel_id):
@@ -133,16 +189,6 @@ class FleetKnowledge:
         self._log("skip", mussel=mussel_id, why="taken over by another aPad while this one was unheard")
         return True
 
-    def _note_home(self, mussel_id: int) -> None:
-        """A real aMussel goes back where it was first found (a simulated one: its start)."""
-        if mussel_id not in self.homes and mussel_id in self.api.mussels:
-            self.homes[mussel_id] = self.api.get_location(mussel_id)
-
-    def _release(self, mussel_id: int) -> None:
+    def release(self, mussel_id: int) -> None:
         if self.shares is not None:
             self.shares.release(self.apad_id, mussel_id)
-
-    def _log(self, kind: str, **fields: object) -> None:
-        if self.shares is not None:
-            fields = {"apad": self.apad_id, **fields}
-        self.events.emit(self.clock.time(), kind, **fields)

@@ -47,7 +47,7 @@ class RunResult:
     out_dir: str = ""
     messages: dict[str, int] = field(default_factory=dict)  # MAVLink counters of the run
     whereabouts: list[dict[str, Any]] = field(default_factory=list)  # every aMussel at the end (gcs.mission.accounting)
-    # One row per aPad (gcs.mission.swarm_run.apad_rows), with its travelling, docking and holding shares
+    # One row per aPad (gcs.mission.outcome.apad_rows), with its travelling, docking and holding shares
     # of the mission time (gcs.mission.time_accounting).
     apads: list[dict[str, Any]] = field(default_factory=list)
 

@@ -47,8 +47,9 @@ from gcs.mission.scenario import SEED_MAX, THETA_RANGE, Scenario, ScenarioError,
 from gcs.mission.scenario_models import check_inputs
 from gcs.mission.strategies import COLLECT
 from gcs.mission.world import LinkOptions
-from gcs.records import checkpoint, rundirs
-from gcs.records.checkpoint import CHECKPOINT_NAME, CheckpointError
+from gcs.records import checkpoint
+from gcs.records.checkpoint import CheckpointError
+from gcs.records.run_folder import CHECKPOINT, RunFolder
 from mavlink_dialect.signing import SigningKeyError, load_key
 
 # The paper's Table II runs: (scenario, collection strategy).
@@ -196,16 +197,16 @@ def _place(jobs: list[Job]) -> list[Job]:
     for job in jobs:
         stem = run_stem(job.scenario)
         if not job.resume:
-            placed.append(replace(job, out_dir=rundirs.new_run_dir(job.out_dir, stem)))
+            placed.append(replace(job, out_dir=RunFolder.new(job.out_dir, stem).path))
             continue
-        folder = rundirs.newest_run_dir(job.out_dir, stem, holding=CHECKPOINT_NAME)
+        folder = RunFolder.newest_resumable(job.out_dir, stem)
         if folder is None:
-            raise CheckpointError(f"nothing to resume: no {CHECKPOINT_NAME} in any {job.out_dir / stem}-runK/")
-        saved = checkpoint.load(folder / CHECKPOINT_NAME)  # a corrupt one is refused here, not mid-run
-        key = (job.scenario.name, job.scenario.mission.collect_strategy, job.scenario.seed)
+            raise CheckpointError(f"nothing to resume: no {CHECKPOINT} in any {job.out_dir / stem}-runK/")
+        saved = checkpoint.load(folder.checkpoint)  # a corrupt one is refused here, not mid-run
+        key = checkpoint.scenario_key(job.scenario)
         if saved.run_key != key:
-            raise CheckpointError(f"{folder / CHECKPOINT_NAME} is of run {saved.run_key}, not {key}")
-        placed.append(replace(job, out_dir=folder))
+            raise CheckpointError(f"{folder.checkpoint} is of run {saved.run_key}, not {key}")
+        placed.append(replace(job, out_dir=folder.path))
     return placed
 
 
@@ -223,7 +224,7 @@ def run(args: argparse.Namespace) -> int:
     except OSError as exc:  # the output folder went away or filled up since the flag was checked
         print(f"vil run: --out {args.out}: {exc.strerror or exc}", file=sys.stderr)
         return 2
-    rundirs.point_latest(jobs[-1].out_dir)
+    RunFolder(jobs[-1].out_dir).point_latest()
     try:
         results = _run_all(jobs, args.jobs, console)
     except TimeoutError as exc:  # e.g. an --outage over the start: the aPad was never heard

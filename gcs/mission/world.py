@@ -18,12 +18,14 @@ from apad_sitl.endpoint import SitlVehicle
 from gcs.api import ApadApi, Location
 from gcs.link.faultproxy import FaultProxy, LinkFaults
 from gcs.link.router import Link
-from gcs.mission.loop import EnergySharingLoop, LoopControl, LoopSettings
+from gcs.mission.control import LoopControl, LoopSettings, LoopStatus
+from gcs.mission.loop import EnergySharingLoop
 from gcs.mission.real_fleet import RealFleet
 from gcs.mission.scenario import ApadConfig, Scenario
 from gcs.mission.scenario_models import apad_params, fleet_params, geofence_ring, sensor_field, start_config
 from gcs.mission.swarm import FleetShares
 from gcs.records.events import EventLog
+from gcs.records.run_folder import RunFolder
 from mavlink_dialect import Codec, Transport, mavlink, memory_pair, open_transport, signing
 from mavlink_dialect.transport import UdpTransport
 from missiontime import Clock, VirtualClock, seconds_to_us
@@ -94,6 +96,7 @@ class World:
     proxies: list[FaultProxy] = field(default_factory=list)  # fault-injection proxies, one per embedded aPad
     real: RealFleet | None = None  # estimates of the real aMussels heard on the bridge
     geofence_deg: list[tuple[float, float]] = field(default_factory=list)  # (lat, lon) ring; empty: none
+    folder: RunFolder | None = None  # where the logs go; None: no logs
 
     @property
     def vehicle(self) -> SitlVehicle | None:
@@ -115,10 +118,10 @@ class World:
 
     def mission_loop(
         self, control: LoopControl | None = None, apad_id: int | None = None, shares: FleetShares | None = None,
-        clock: Clock | None = None,
+        clock: Clock | None = None, status: LoopStatus | None = None,
     ) -> EnergySharingLoop:
         """The energy-sharing loop of one aPad (default the first); with several, each on its own
-        process `clock` and within its share of `shares`."""
+        process `clock` and within its share of `shares`; `status`: a resumed mission's."""
         s = self.scenario
         a = next(a for a in s.apads if apad_id is None or a.system_id == apad_id)
         settings = LoopSettings(
@@ -134,7 +137,30 @@ class World:
         clock = clock or self.clock
         api = self.api if clock is self.clock else self.api.on_clock(clock)
         return EnergySharingLoop(api, clock, settings, self.homes, a.system_id, self.events, control, shares,
-                                 self.real)
+                                 self.real, status)
+
+    def mute_logs(self, muted: bool) -> None:
+        """Stop (or restart) writing the logs: a resumed lockstep mission replays up to its checkpoint
+        with them muted, since they already hold that stretch."""
+        if self.link.tlog is not None:
+            self.link.tlog.muted = muted
+        self.events.muted = muted
+        for vehicle in self.vehicles.values():
+            if vehicle.log is not None:
+                vehicle.log.mute(muted)
+
+    def log_sizes(self) -> dict[str, int]:
+        """Each log's length now, by file name in the run folder (flushed first): a checkpoint keeps
+        them, and a resume cuts the logs back to them."""
+        sizes: dict[str, int] = {}
+        if self.link.tlog is not None:
+            sizes[self.link.tlog.path.name] = self.link.tlog.size()
+        if self.folder is not None:
+            sizes[self.folder.events.name] = self.events.bytes
+        for vehicle in self.vehicles.values():
+            if vehicle.log is not None:
+                sizes |= {path.name: size for path, size in vehicle.log.sizes().items()}
+        return sizes
 
     def close(self) -> None:
         for vehicle in self.vehicles.values():
@@ -153,6 +179,7 @@ def build_world(
     epoch_us: int = LOCKSTEP_EPOCH_US,
     mission_start_us: int | None = None,
     append_logs: bool = False,
+    muted_logs: bool = False,
 ) -> World:
     """The one builder of a mission's world on `clock`: the simulated fleet, the GCS link and API,
     and the aPad, embedded (SITL) or reached at `options.connect`. Used by `vil run`, `vil gcs`
@@ -160,7 +187,8 @@ def build_world(
 
     `epoch_us` is the Unix time of mission time 0 in the logs (lockstep: a fixed date, so logs
     repeat). `mission_start_us` is when the mission began (default: now; a resumed mission began
-    earlier); `append_logs` continues the folder's logs instead of starting them afresh.
+    earlier); `append_logs` continues the folder's logs instead of starting them afresh; `muted_logs`
+    writes nothing to them from the start (a lockstep resume replays what they hold: `World.mute_logs`).
     """
     options = options or LinkOptions()
     rng = np.random.default_rng(scenario.seed)
@@ -168,12 +196,13 @@ def build_world(
     area = load_area(scenario.fleet.area)
     config, frame = start_config(scenario, area, rng)
     params = fleet_params(scenario)
-    if out_dir is not None:
-        out_dir.mkdir(parents=True, exist_ok=True)
+    folder = RunFolder(out_dir) if out_dir is not None else None
+    if folder is not None:
+        folder.path.mkdir(parents=True, exist_ok=True)
     apad_ids = frozenset(a.system_id for a in scenario.apads)  # only their telemetry is believed
-    link = Link(clock, tlog_path=out_dir / "gcs.tlog" if out_dir else None, tlog_epoch_us=epoch_us,
+    link = Link(clock, tlog_path=folder.gcs_tlog if folder else None, tlog_epoch_us=epoch_us,
                 append=append_logs, apad_ids=apad_ids)
-    events = EventLog(out_dir / "events.jsonl" if out_dir else None, append=append_logs)
+    events = EventLog(folder.events if folder else None, append=append_logs)
     port = link.attach(None, forward=APAD_HEARS_FROM_FLEET, system_id=FLEET_SYSTEM_ID)
     state = initial_state(config, frame, params, clock.now_us)
     fleet = FleetRunner(
@@ -194,7 +223,8 @@ def build_world(
         int(i): Location(float(lat), float(lon))
         for i, lat, lon in zip(config.ids, config.lat_deg, config.lon_deg, strict=True)
     }
-    world = World(scenario, clock, link, api, fleet, frame, config, homes, events, geofence_deg=fence)
+    world = World(scenario, clock, link, api, fleet, frame, config, homes, events, geofence_deg=fence, folder=folder)
+    world.mute_logs(muted_logs)
     world.real = RealFleet(link.registry.mussels, link.registry.mussel_heard_us,
                            discharge_profile(scenario.fleet.discharge), charge_profile(scenario.fleet.charge),
                            scenario.mission.theta)
@@ -205,7 +235,7 @@ def build_world(
         for address in options.connect.split(","):
             link.add_transport(open_transport(address.strip()))
     else:
-        _embed_sitl(world, options, out_dir, epoch_us, append_logs)
+        _embed_sitl(world, options, epoch_us, append_logs, muted_logs)
     if options.signing_key is not None:
         link.enable_signing(options.signing_key, GCS_SIGNING_LINK_ID,
                             lambda: signing.timestamp_ticks(epoch_us, clock.now_us))
@@ -215,12 +245,12 @@ def build_world(
     return world
 
 
-def _embed_sitl(world: World, options: LinkOptions, out_dir: Path | None, epoch_us: int, append_logs: bool) -> None:
+def _embed_sitl(world: World, options: LinkOptions, epoch_us: int, append_logs: bool, muted_logs: bool) -> None:
     """The scenario's SITL aPads on the world's clock, each over an in-memory pair of real MAVLink
     bytes, localhost UDP, or real UDP through a `FaultProxy` whose delays run on the same clock;
     the GCS link routes by system id over all of them."""
     for a in world.scenario.apads:
-        _embed_one(world, a, options, out_dir, epoch_us, append_logs)
+        _embed_one(world, a, options, epoch_us, append_logs, muted_logs)
     for sysid, t_s in options.fail_apads:
         vehicle = world.vehicles.get(sysid)
         if vehicle is None:
@@ -239,7 +269,7 @@ def _once(clock: Clock, at_us: int, action: Callable[[], None], name: str) -> No
 
 
 def _embed_one(
-    world: World, a: ApadConfig, options: LinkOptions, out_dir: Path | None, epoch_us: int, append_logs: bool,
+    world: World, a: ApadConfig, options: LinkOptions, epoch_us: int, append_logs: bool, muted_logs: bool,
 ) -> None:
     s, clock = world.scenario, world.clock
     gcs_end: Transport
@@ -259,9 +289,11 @@ def _embed_one(
     vehicle = SitlVehicle(
         apad_end, apad_params(s, a), a.home_lat_deg, a.home_lon_deg, system_id=a.system_id,
         current_mps=(s.environment.current_east_mps, s.environment.current_north_mps),
-        log_dir=out_dir, log_epoch_us=epoch_us, signing_key=options.signing_key,
+        log_dir=world.folder.path if world.folder else None, log_epoch_us=epoch_us, signing_key=options.signing_key,
         geofence_deg=world.geofence_deg or None, log_append=append_logs,
     )
+    if vehicle.log is not None:
+        vehicle.log.mute(muted_logs)  # before its first event, at attach
     vehicle.attach(clock.scheduler, clock.now_us)
     world.link.add_transport(gcs_end)
     world.vehicles[a.system_id] = vehicle
@@ -269,9 +301,8 @@ def _embed_one(
 
 def lockstep_world(
     scenario: Scenario, out_dir: Path | None = None, options: LinkOptions | None = None,
-    start_us: int = 0, append_logs: bool = False,
+    append_logs: bool = False, muted_logs: bool = False,
 ) -> World:
-    """Everything on one virtual clock, run at CPU speed. `start_us` > 0 starts the clock later
-    (a resumed mission; the mission itself began at 0)."""
-    return build_world(scenario, VirtualClock(start_us=start_us), out_dir, options, mission_start_us=0,
-                       append_logs=append_logs)
+    """Everything on one virtual clock from mission time 0, run at CPU speed."""
+    return build_world(scenario, VirtualClock(), out_dir, options, mission_start_us=0, append_logs=append_logs,
+                       muted_logs=muted_logs)

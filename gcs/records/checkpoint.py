@@ -1,10 +1,20 @@
 """Crash-safe checkpoints of a running mission, so a killed GCS continues the same mission.
 
 A checkpoint holds what cannot be heard again from the vehicles: mission time, the simulated
-fleet (state arrays, its rng, the uptime recorder), the scenario loop's status (phase, strategy,
-cost, cycles), and what the GCS knew (aMussel and aPad views). In lockstep the SITL aPad runs
-in this process, so its state (hull, primitive, latches, mode) is saved too; in the field the aPad
-is its own vehicle and keeps its own state across a GCS crash, so `vehicle` is None.
+fleet (state arrays, its rng, the uptime recorder), every aPad loop's status (phase, strategy,
+cost, cycles), with several aPads who serves whom (`FleetShares`, the retired aPads), and what the
+GCS knew (aMussel and aPad views). In lockstep the SITL aPads run in this process, so their state
+(hull, primitive, latches, mode) is saved too; in the field an aPad is its own vehicle and keeps its
+own state across a GCS crash, so `vehicles` is empty. It also keeps how long each log was
+(`log_sizes`) and a `fingerprint` of the mission's state at that instant.
+
+Two ways back (`gcs.mission.session`): a lockstep mission is deterministic, so it resumes by
+replaying from the start with its logs muted to the checkpoint's instant, checking the
+fingerprint there, and going on: its results are those of a run never interrupted. A console
+mission (wall clock, an operator) cannot be replayed: the saved state is put into a new world whose
+clock starts at the checkpoint's time (`restore`), and each loop first settles what the crash
+interrupted (`EnergySharingLoop.run(resume=True)`). Either way `cut_logs` first cuts every log back
+to its length at the checkpoint, so each event and message is in the logs once.
 
 A save costs the same at any mission time. What grows with the mission (the recorder's rows: active
 count and time per step, battery trace rows) is appended to two side files, `checkpoint.steps` and
@@ -18,53 +28,40 @@ filtered out on load by the saved stride (`Recorder.restore`), so the file stays
 bounded by the recorder's budget times (1 + decimations / 2). No fsync: the kernel keeps the data of
 a killed process; an fsync per checkpoint cost more than the mission (power loss is not covered).
 Pickle is fine here: the files are our own, written and read by the same version (checked), in the
-run's folder; a missing, short or garbled side file is a `CheckpointError`.
-
-The run's logs go on past the last checkpoint until the crash; the resumed run simulates that
-stretch again, so `cut_logs` first cuts them back to the checkpoint (events.jsonl to its length
-then, each .tlog and aPad event log before its mission time): every event and message is in the logs once.
-
-A resume (`vil run --resume` in lockstep, `vil gcs --resume` on the console's clock): `files.read()`,
-`cut_logs`, a world built with `mission_start_us=0`, its clock starting at `ckpt.time_us` and
-`append_logs=True` (the console keeps its log epoch in `console.json`), `restore(world, ckpt)`,
-`loop.status = ckpt.loop_status`, `loop.run(resume=True)`, saving with the same `files` (they know
-where the side files' valid rows end), `files.remove()` once the mission ended. A wall clock runs on
-while the world is built, hence `RESTORE_SLACK_US`.
+run's folder; a missing, short or garbled side file, or one of an older version, is a `CheckpointError`.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 import pickle
 import struct
 import zlib
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
 import numpy as np
 
-from apad_sitl import logs as apad_logs
 from apad_sitl.primitives import PrimitiveState
 from apad_sitl.vehicle import VehicleState
 from gcs.link.registry import VehicleRegistry
 from gcs.mission.control import LoopStatus
-from gcs.records.events import EVENTS_NAME
-from mavlink_dialect import mavlink, tlog
+from gcs.mission.swarm import FleetShares
+from gcs.records.run_folder import EVENTS, RunFolder
 from mussel_sim.fleet_state import FleetState
 from mussel_sim.recorder import Recorder, RecorderHead, RecorderRows
 
 if TYPE_CHECKING:
-    from gcs.mission.loop import EnergySharingLoop
     from gcs.mission.scenario import Scenario
     from gcs.mission.world import World
 
-CHECKPOINT_NAME = "checkpoint.pkl"
 CHECKPOINT_PERIOD_S = 10.0  # mission time between checkpoints
-FORMAT_VERSION = 3
+FORMAT_VERSION = 4
 RESTORE_SLACK_US = 30_000_000  # a wall clock started at the checkpoint's time runs on while the world is built
-STEPS_SUFFIX = ".steps"  # side files beside CHECKPOINT_NAME
+STEPS_SUFFIX = ".steps"  # side files beside the checkpoint
 TRACES_SUFFIX = ".traces"
 
 
@@ -74,7 +71,7 @@ class CheckpointError(Exception):
 
 @dataclass(frozen=True)
 class VehicleSnapshot:
-    """The embedded SITL aPad (lockstep only)."""
+    """An embedded SITL aPad."""
 
     state: VehicleState
     primitive: PrimitiveState
@@ -91,10 +88,18 @@ class Checkpoint:
     fleet_state: FleetState
     fleet_rng_state: dict[str, Any]
     recorder: Recorder  # the live one at capture (not copied: save at once); rebuilt by load
-    loop_status: LoopStatus
+    loop_statuses: dict[int, LoopStatus]  # by aPad system id
     registry: VehicleRegistry  # what the GCS had heard: the aPads' views and the aMussel table
-    vehicle: VehicleSnapshot | None
-    events_bytes: int = 0  # how long events.jsonl was
+    vehicles: dict[int, VehicleSnapshot]  # the embedded SITL aPads, by system id
+    shares: FleetShares | None  # several aPads: who serves whom
+    retired: frozenset[int]  # several aPads: those whose loop has ended for good
+    log_sizes: dict[str, int]  # each log's length, by its file name in the run folder
+    fingerprint: str  # the mission's state at `time_us`: a replay must arrive at the same
+
+    @property
+    def events_bytes(self) -> int:
+        """How long the mission's event log was."""
+        return self.log_sizes.get(EVENTS, 0)
 
 
 def scenario_key(s: Scenario) -> tuple[str, str, int]:
@@ -106,16 +111,33 @@ def run_key(world: World) -> tuple[str, str, int]:
     return scenario_key(world.scenario)
 
 
-def capture(world: World, loop: EnergySharingLoop) -> Checkpoint:
-    v = world.vehicle
-    snapshot = None
-    if v is not None:
-        snapshot = VehicleSnapshot(v.state, v.primitive, v.mode, v.armed, v._speed_override_mps)
+def fingerprint(world: World, statuses: Mapping[int, LoopStatus]) -> str:
+    """A digest of the mission's state now: the fleet's arrays, the recorder's step count, each
+    loop's cost, cycles, phase and dockings. Equal digests at one instant: a replay has arrived where
+    the checkpointed run was. (Not the event log's length: a resumed run logged `mission_resume`.)"""
+    digest = hashlib.sha256()
+    state = world.fleet.state
+    for f in fields(state):
+        value = getattr(state, f.name)
+        digest.update(value.tobytes() if isinstance(value, np.ndarray) else repr(value).encode())
+    digest.update(repr((world.clock.now_us, world.fleet.recorder.head().n_steps)).encode())
+    for sysid, st in sorted(statuses.items()):
+        digest.update(repr((sysid, round(st.cost_m, 6), st.cycles, str(st.phase), st.dockings)).encode())
+    return digest.hexdigest()
+
+
+def capture(
+    world: World, statuses: Mapping[int, LoopStatus], shares: FleetShares | None = None,
+    retired: frozenset[int] = frozenset(),
+) -> Checkpoint:
+    vehicles = {sysid: VehicleSnapshot(v.state, v.primitive, v.mode, v.armed, v.speed_override_mps)
+                for sysid, v in world.vehicles.items()}
     fleet = world.fleet
-    # The registry and the loop status go in live, not copied: `save` pickles a capture at once.
+    # The registry, the statuses and the shares go in live, not copied: `save` pickles a capture at once.
     return Checkpoint(
         FORMAT_VERSION, run_key(world), world.clock.now_us, fleet.state, dict(fleet.rng.bit_generator.state),
-        fleet.recorder, loop.status, world.link.registry, snapshot, world.events.bytes,
+        fleet.recorder, dict(statuses), world.link.registry, vehicles, shares, retired, world.log_sizes(),
+        fingerprint(world, statuses),
     )
 
 
@@ -302,48 +324,26 @@ def _one_line(exc: BaseException) -> str:
     return " ".join(str(exc).split()) or type(exc).__name__
 
 
-def cut_logs(out_dir: Path, ckpt: Checkpoint, epoch_us: int) -> None:
-    """Cut the run's logs back to the checkpoint: events.jsonl to its length then, each .tlog (the GCS's
-    and the aPad's, stamped `epoch_us` + mission time) and each aPad's event log (stamped with mission
-    time) before the checkpoint's mission time."""
+def cut_logs(folder: RunFolder, ckpt: Checkpoint) -> None:
+    """Cut every log of the run back to its length at the checkpoint (what the crashed run logged
+    after it is logged again by the resumed one). A log shorter than that is not this run's."""
     try:
-        events = out_dir / EVENTS_NAME
-        if events.exists() and events.stat().st_size > ckpt.events_bytes:
-            os.truncate(events, ckpt.events_bytes)
-        for path in sorted(out_dir.glob("*.tlog")):
-            _cut(path, ((stamp, 8 + len(frame), _whole(frame)) for stamp, frame in tlog.frames(path)),
-                 epoch_us + ckpt.time_us)
-        for path in sorted(out_dir.glob(f"*{apad_logs.EVENTS_SUFFIX}")):
-            _cut(path, apad_logs.event_records(path), ckpt.time_us)
-    except (OSError, tlog.TlogError) as exc:
-        raise CheckpointError(f"cannot cut the logs in {out_dir} back to the checkpoint: {_one_line(exc)}") from None
-
-
-def _cut(path: Path, records: Iterable[tuple[int, int, bool]], stamp_us: int) -> None:
-    """Truncate a log of (stamp, length in bytes, whole) records before the first stamped at or after
-    `stamp_us` (logged again after the resume) or cut short by the crash."""
-    size, offset = path.stat().st_size, 0
-    for stamp, length, whole in records:
-        if stamp >= stamp_us or not whole:
-            break
-        offset += length
-    if offset < size:
-        os.truncate(path, offset)
-
-
-def _whole(frame: bytes) -> bool:
-    """Whether a .tlog frame is all there (a crash can cut the last one short)."""
-    if len(frame) < 3:
-        return False
-    if frame[0] == mavlink.PROTOCOL_MARKER_V2:
-        signature = mavlink.MAVLINK_SIGNATURE_BLOCK_LEN if frame[2] & mavlink.MAVLINK_IFLAG_SIGNED else 0
-        return len(frame) == 12 + frame[1] + signature
-    return len(frame) == 8 + frame[1]
+        for name, size in sorted(ckpt.log_sizes.items()):
+            path = folder.path / name
+            if path.stat().st_size < size:
+                raise CheckpointError(f"{path} is shorter than at the checkpoint: not the log of this run")
+            os.truncate(path, size)
+    except FileNotFoundError as exc:
+        raise CheckpointError(f"a log of the checkpointed run is missing: {exc.filename}") from None
+    except OSError as exc:
+        raise CheckpointError(f"cannot cut the logs in {folder.path} back to the checkpoint: "
+                              f"{_one_line(exc)}") from None
 
 
 def restore(world: World, ckpt: Checkpoint) -> None:
-    """Put the saved state into a freshly built world whose clock started at `ckpt.time_us` (a wall
-    clock has run on a little since: the fleet's next step still falls a step after the saved time)."""
+    """Put the saved fleet, registry and embedded aPads into a freshly built world whose clock started at
+    `ckpt.time_us` (a wall clock has run on a little since: the fleet's next step still falls a step
+    after the saved time). The loops' statuses and the shares are the session's to hand on."""
     if ckpt.run_key != run_key(world):
         raise CheckpointError(f"the checkpoint is of run {ckpt.run_key}, not {run_key(world)}")
     if not 0 <= world.clock.now_us - ckpt.time_us <= RESTORE_SLACK_US:
@@ -354,8 +354,10 @@ def restore(world: World, ckpt: Checkpoint) -> None:
         raise CheckpointError("the checkpoint's recorder is of other aMussels than the scenario's")
     fleet.resume(ckpt.fleet_state, ckpt.fleet_rng_state, ckpt.recorder)
     world.link.registry.restore(ckpt.registry)
-    v, snap = world.vehicle, ckpt.vehicle
-    if v is not None and snap is not None:
+    for sysid, snap in ckpt.vehicles.items():
+        v = world.vehicles.get(sysid)
+        if v is None:
+            continue  # a real aPad now where the checkpoint had a SITL one: it keeps its own state
         v.state, v.mode, v.armed = snap.state, snap.mode, snap.armed
-        v._speed_override_mps = snap.speed_override_mps
-        v._set_primitive(snap.primitive)
+        v.speed_override_mps = snap.speed_override_mps
+        v.set_primitive(snap.primitive)

@@ -7,8 +7,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TextIO
 
-EVENTS_NAME = "events.jsonl"  # in a run folder
-
 
 @dataclass
 class Event:
@@ -21,7 +19,9 @@ class Event:
 
 
 class EventLog:
-    """Append-only; every event is flushed so a killed process loses nothing already logged."""
+    """Append-only; every event is flushed so a killed process loses nothing already logged.
+    `muted`: events are kept in memory but not written (a resumed lockstep mission replaying what
+    the file holds)."""
 
     def __init__(self, path: Path | None = None, keep: int = 10_000, append: bool = False) -> None:
         """`append` continues an existing log (a resumed mission); otherwise a new run starts it afresh."""
@@ -30,13 +30,14 @@ class EventLog:
         self._file: TextIO | None = path.open("a" if append else "w", encoding="utf-8") if path else None
         # The file's length: a checkpoint keeps it, so a resumed run cuts what the crashed one logged later.
         self.bytes = path.stat().st_size if path is not None and append else 0
+        self.muted = False
 
     def emit(self, t_s: float, kind: str, **fields: Any) -> Event:
         event = Event(t_s, kind, fields)
         self.events.append(event)
         if len(self.events) > self.keep:
             del self.events[: len(self.events) - self.keep]
-        if self._file is not None:
+        if self._file is not None and not self.muted:
             line = event.line() + "\n"
             self._file.write(line)
             self._file.flush()

@@ -4,7 +4,7 @@ A run folder (from `vil run`/`run_mission` or the live console's `--out`) holds 
 which every message the GCS saw is stamped (aMussel statuses, aPad telemetry, the GCS's own
 commands), and `events.jsonl` with the loop's phases. Replaying reads the .tlog, in time order,
 through the live link's own readers (`gcs.link.telemetry`) into a `VehicleRegistry`, feeds the
-events to the same `ConsoleModel` the live console uses (it reads that registry), and keeps one
+events to the same `MissionView` the live console uses (it reads that registry), and keeps one
 `Snapshot` per second of mission time, so seeking is an index lookup.
 """
 
@@ -20,14 +20,14 @@ from typing import Any
 
 import numpy as np
 
-from gcs.console.model import ConsoleModel, area_outline
-from gcs.console.snapshot import Snapshot
 from gcs.link import telemetry
 from gcs.link.registry import VehicleRegistry
 from gcs.link.router import GCS_SYSTEM_ID
 from gcs.mission.scenario import MISSIONS_DIR, Scenario, ScenarioError, load_scenario
-from gcs.records import rundirs
-from gcs.records.events import EVENTS_NAME, Event
+from gcs.records.events import Event
+from gcs.records.run_folder import RunFolder
+from gcs.view.model import MissionView, area_outline
+from gcs.view.snapshot import Snapshot
 from mavlink_dialect import Codec, mavlink, tlog
 from missiontime import us_to_s
 from mussel_sim.placement import load_area
@@ -89,17 +89,18 @@ class RunFiles:
 
 
 def run_files(path: str | Path) -> RunFiles:
-    p = rundirs.resolve(Path(path))
-    if p.is_dir():
-        tlog = p / "gcs.tlog"
+    """The files of the run at `path`: a run folder (`runs/latest` too) or a .tlog in one."""
+    folder = RunFolder.at(path)
+    if folder.path.is_dir():
+        tlog = folder.gcs_tlog
         if not tlog.exists():
-            raise ReplayError(f"{p}: no gcs.tlog in this folder")
-    elif p.is_file():
-        tlog, p = p, p.parent
+            raise ReplayError(f"{folder.path}: no {tlog.name} in this folder")
+    elif folder.path.is_file():
+        tlog, folder = folder.path, RunFolder(folder.path.parent)
     else:
-        raise ReplayError(f"{p}: no such run folder or .tlog")
-    result = {**_read_json(p / "console.json"), **_read_json(p / "result.json")}
-    return RunFiles(p, tlog, p / EVENTS_NAME, result)
+        raise ReplayError(f"{folder.path}: no such run folder or .tlog")
+    result = {**_read_json(folder.console), **_read_json(folder.result)}
+    return RunFiles(folder.path, tlog, folder.events, result)
 
 
 def find_scenario(files: RunFiles, explicit: str | Path | None = None) -> Scenario | None:
@@ -151,12 +152,12 @@ def load_replay(path: str | Path, scenario: str | Path | None = None) -> Replay:
             outline = area_outline(load_area(found.fleet.area).geometry)
         except (OSError, ValueError, KeyError, TypeError) as exc:
             raise ReplayError(f"{found.fleet.area}: bad area: {exc}") from None
-        model = ConsoleModel(registry, found.apad.system_id, found.mission.pool_threshold,
+        model = MissionView(registry, found.apad.system_id, found.mission.pool_threshold,
                              found.mission.duration_s, str(files.folder), ids, outline,
                              apad_ids=[a.system_id for a in found.apads],
                              sinking_counts_active=found.mission.sinking_counts_active)
     else:
-        model = ConsoleModel(registry, apad_id, 0.8, us_to_s(stream[-1][0] - t0_us), str(files.folder), ids)
+        model = MissionView(registry, apad_id, 0.8, us_to_s(stream[-1][0] - t0_us), str(files.folder), ids)
     events = read_events(files.events)
     frames: list[Snapshot] = []
     next_sample_s = 0.0

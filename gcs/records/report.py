@@ -36,6 +36,7 @@ from gcs.records.report_data import RunData, load_run
 from gcs.records.report_geojson import write_geojson
 from gcs.records.report_html import Figure, write_page
 from gcs.records.report_style import use_files_only
+from gcs.records.run_folder import RunFolder
 
 Draw = Callable[[RunData, Path], "Path | None"]
 
@@ -123,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         if len(runs) == 1:
             data = load_run(runs[0], args.scenario)
-            written = write_run_report(data, Path(args.out) if args.out is not None else data.folder / "report")
+            written = write_run_report(data, Path(args.out) if args.out is not None else RunFolder(data.folder).report)
         else:
             written = write_reports(runs, Path(args.out), args.scenario)
     except (ReplayError, ScenarioError, OSError) as exc:

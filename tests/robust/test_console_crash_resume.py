@@ -31,7 +31,8 @@ from testkit import read_jsonl
 
 from gcs.mission.control import Phase
 from gcs.records import checkpoint
-from gcs.records.checkpoint import CHECKPOINT_NAME, load
+from gcs.records.checkpoint import load
+from gcs.records.run_folder import CHECKPOINT
 from mavlink_dialect import tlog
 from mussel_sim.vocabulary import MusselState
 
@@ -94,13 +95,13 @@ def _wait(what: str, condition: Any, console: Console) -> None:
 
 def test_sigkill_of_the_console_with_amussels_docked_then_resume(tmp_path: Path) -> None:
     run = tmp_path / RUN
-    ckpt = run / CHECKPOINT_NAME
+    ckpt = run / CHECKPOINT
 
     def charging_late_enough() -> bool:
         if not ckpt.exists():
             return False
         saved = load(ckpt)
-        return saved.time_us > KILL_AFTER_S * 1e6 and saved.loop_status.phase == Phase.CHARGING_WAIT
+        return saved.time_us > KILL_AFTER_S * 1e6 and saved.loop_statuses[1].phase == Phase.CHARGING_WAIT
 
     first = Console(tmp_path)
     try:
@@ -158,8 +159,8 @@ def test_sigkill_of_the_console_with_amussels_docked_then_resume(tmp_path: Path)
 
     # The aPad's own log and both .tlogs: cut back to the checkpoint, each record once, in time order.
     apad = read_jsonl(run / "apad1.events.jsonl")
-    kept = [e for e in apad_before if e["t_s"] < at_s]
-    assert apad[: len(kept)] == kept
+    kept = apad_before[: len(_lines_within(run / "apad1.events.jsonl", saved.log_sizes["apad1.events.jsonl"]))]
+    assert apad[: len(kept)] == kept and all(e["t_s"] <= at_s for e in kept)
     assert apad[len(kept)]["event"] == "start" and apad[len(kept)]["t_s"] == pytest.approx(at_s)
     assert [e["t_s"] for e in apad] == sorted(e["t_s"] for e in apad)
     for name in ("gcs.tlog", "apad1.tlog"):
@@ -192,7 +193,7 @@ def _left_checkpoint(folder: Path, strategy: str, monkeypatch: pytest.MonkeyPatc
     monkeypatch.setattr(checkpoint.CheckpointFiles, "remove", checkpoint.CheckpointFiles.close)
     run_mission(load_scenario("pool12").with_overrides(strategy=strategy, duration_s=60.0), folder)
     monkeypatch.undo()
-    assert (folder / CHECKPOINT_NAME).exists()
+    assert (folder / CHECKPOINT).exists()
 
 
 def test_resume_with_nothing_to_resume_is_refused(tmp_path: Path) -> None:
@@ -206,8 +207,8 @@ def test_a_corrupt_checkpoint_is_refused(tmp_path: Path) -> None:
     folder = tmp_path / "runs" / "console-pool12-run1"
     folder.mkdir(parents=True)
     (folder / "console.json").write_text('{"scenario": "pool12", "epoch_us": 1591920000000000}')
-    (folder / CHECKPOINT_NAME).write_bytes(b"\x80\x05garbage")
-    _refused(_gcs(tmp_path, "--resume"), str(Path("runs") / "console-pool12-run1" / CHECKPOINT_NAME))
+    (folder / CHECKPOINT).write_bytes(b"\x80\x05garbage")
+    _refused(_gcs(tmp_path, "--resume"), str(Path("runs") / "console-pool12-run1" / CHECKPOINT))
 
 
 def test_a_checkpoint_of_another_run_or_without_its_epoch_is_refused_and_the_logs_are_left_alone(
@@ -223,8 +224,56 @@ def test_a_checkpoint_of_another_run_or_without_its_epoch_is_refused_and_the_log
     assert (folder / "events.jsonl").read_bytes() == events  # nothing cut for a resume that did not happen
 
 
-def test_resuming_a_scenario_of_several_apads_is_refused(tmp_path: Path) -> None:
-    """A swarm's loops are not checkpointed (as in `vil run`): nothing to resume them from."""
-    _refused(_gcs(tmp_path, "--resume", "--scenario", str(ROOT / "missions" / "pool12x2.toml")), "--resume",
-             "one aPad")
-    assert not (tmp_path / "runs").exists()
+def test_sigkill_of_a_two_apad_console_then_resume(tmp_path: Path) -> None:
+    """A swarm's console checkpoints like a single aPad's: killed with aMussels docked, resumed from
+    its checkpoint, both loops settle the crash and the mission runs to its end, each event once."""
+    run = tmp_path / "runs" / "console-pool12x2-run1"
+    ckpt = run / CHECKPOINT
+    scenario = ["--scenario", str(ROOT / "missions" / "pool12x2.toml")]
+
+    def docked_late_enough() -> bool:
+        if not ckpt.exists():
+            return False
+        saved = load(ckpt)
+        return saved.time_us > KILL_AFTER_S * 1e6 and len(saved.loop_statuses) == 2 and bool(
+            (saved.fleet_state.state == MusselState.DOCKED).any())
+
+    first = Console(tmp_path, *scenario)
+    try:
+        _wait("checkpoint with aMussels docked", docked_late_enough, first)
+        os.kill(first.proc.pid, signal.SIGKILL)
+        first.proc.wait(10)
+    finally:
+        first.close()
+    saved = load(ckpt)
+    at_s = saved.time_us / 1e6
+    before = (run / "events.jsonl").read_bytes()
+
+    second = Console(tmp_path, *scenario, "--resume")
+    try:
+        _wait("mission end", lambda: (run / "events.jsonl").read_bytes().count(b'"mission_end"') == 2, second)
+        second.press(b"q")
+        second.proc.wait(WALL_TIMEOUT_S)
+    finally:
+        second.close()
+    assert second.proc.returncode == 0, bytes(second.tail)[-800:]
+    assert not ckpt.exists()
+    after = (run / "events.jsonl").read_bytes()
+    assert after[: saved.events_bytes] == before[: saved.events_bytes]
+    lines = after.decode().splitlines()
+    events = [json.loads(line) for line in lines]
+    resumed = [e for e in events if e["event"] == "mission_resume"]
+    assert sorted(e["apad"] for e in resumed) == [1, 2] and all(at_s <= e["t_s"] < at_s + 10 for e in resumed)
+    assert all(e["t_s"] <= at_s for e in events[: len(before[: saved.events_bytes].decode().splitlines())])
+    times = [e["t_s"] for e in events]
+    assert times == sorted(times) and len(set(lines)) == len(lines)
+    assert [e["reason"] for e in events if e["event"] == "mission_end"] == ["mission time"] * 2
+    (where,) = [e for e in events if e["event"] == "whereabouts"]
+    assert where["lost"] == {} and sorted(where["seabed"] + where["slot"]) == list(range(1, 13))
+    result = json.loads((run / "result.json").read_text())
+    assert [a["sysid"] for a in result["apads"]] == [1, 2] and result["end_reason"] == "mission time"
+
+
+def _lines_within(path: Path, size: int) -> list[bytes]:
+    """The whole lines in the first `size` bytes of a log."""
+    return path.read_bytes()[:size].splitlines()

@@ -8,9 +8,9 @@ what the crashed run logged after its last checkpoint; a corrupt checkpoint is o
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
-import pickle
 import shutil
 import signal
 import subprocess
@@ -25,7 +25,8 @@ import pytest
 from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
 from gcs.records import checkpoint
-from gcs.records.checkpoint import CHECKPOINT_NAME, load
+from gcs.records.checkpoint import load
+from gcs.records.run_folder import CHECKPOINT, RunFolder
 from mavlink_dialect import tlog
 
 pytestmark = [pytest.mark.sitl, pytest.mark.slow]
@@ -37,7 +38,7 @@ ARGS = ["run", "pool12", "--strategy", "greedy", "--duration", "1h", "--jobs", "
 def test_sigkill_mid_mission_then_resume_completes_with_every_mussel_accounted_for(tmp_path: Path) -> None:
     out = tmp_path / "runs"
     run_dir = out / "pool12-greedy-seed1-run1"
-    ckpt = run_dir / CHECKPOINT_NAME
+    ckpt = run_dir / CHECKPOINT
     env = {**os.environ, "COLUMNS": "100"}
     err = tmp_path / "stderr.txt"
     with err.open("w") as err_file:
@@ -97,14 +98,14 @@ def test_a_corrupt_checkpoint_is_one_line_and_exit_2_before_anything_runs(tmp_pa
     folder = tmp_path / "pool12-greedy-seed1-run1"
     strategy = "cautious" if damage == "other run" else "greedy"
     scenario = load_scenario("pool12").with_overrides(strategy=strategy, duration_s=60.0)
-    files = checkpoint.CheckpointFiles(folder / CHECKPOINT_NAME)
+    files = checkpoint.CheckpointFiles(folder / CHECKPOINT)
     real_remove = checkpoint.CheckpointFiles.remove
     checkpoint.CheckpointFiles.remove = checkpoint.CheckpointFiles.close  # type: ignore[method-assign]
     try:
         run_mission(scenario, folder)  # leaves its last checkpoint behind, as a crash would
     finally:
         checkpoint.CheckpointFiles.remove = real_remove  # type: ignore[method-assign]
-    ckpt = folder / CHECKPOINT_NAME
+    ckpt = folder / CHECKPOINT
     assert load(files).time_us > 0
     (folder / "result.json").unlink()
     if damage == "garbage":
@@ -121,9 +122,12 @@ def test_a_corrupt_checkpoint_is_one_line_and_exit_2_before_anything_runs(tmp_pa
     assert not (folder / "result.json").exists()  # nothing ran
 
 
-def test_a_resume_cuts_what_the_crashed_run_logged_after_its_last_checkpoint(
+def test_a_resume_cuts_what_the_crashed_run_logged_after_its_last_checkpoint_and_logs_it_once(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
+    """The crashed run logged a minute past its last checkpoint; the resumed one replays to the
+    checkpoint with its logs muted and goes on: every log is the uninterrupted run's, byte for byte,
+    but for the one `mission_resume` event, and so are result.json and traces.npz."""
     scenario = load_scenario("pool12").with_overrides(strategy="greedy", duration_s=900.0)
     whole, crashed = tmp_path / "whole", tmp_path / "crashed"
     real_save, at = checkpoint.save, {}
@@ -144,73 +148,55 @@ def test_a_resume_cuts_what_the_crashed_run_logged_after_its_last_checkpoint(
     monkeypatch.setattr(checkpoint, "save", real_save)
     before = (crashed / "events.jsonl").read_bytes()
     assert "logs" in at and len(before) > at["events_bytes"]  # events after the checkpoint were logged
-    apad_before = (crashed / "apad1.events.jsonl").read_text().splitlines()
-    apad_kept = [line for line in apad_before if json.loads(line)["t_s"] < at["t_s"]]
-    assert len(apad_kept) < len(apad_before)  # and the aPad logged commands after it too
     run_mission(scenario, crashed, resume=True)
-    after = (crashed / "events.jsonl").read_bytes()
-    assert after[: at["events_bytes"]] == before[: at["events_bytes"]]
-    events = [json.loads(x) for x in after[at["events_bytes"]:].decode().splitlines()]
-    assert events[0]["event"] == "mission_resume" and events[0]["t_s"] == pytest.approx(at["t_s"])
-    times = [e["t_s"] for e in events]
-    assert times == sorted(times) and events[-1]["event"] == "mission_end"
-    for name in ("gcs.tlog", "apad1.tlog"):
-        stamps = [stamp for stamp, _ in tlog.frames(crashed / name)]
-        assert stamps == sorted(stamps), name
-    # The aPad's own event log: cut by mission time, then continued.
-    apad_after = (crashed / "apad1.events.jsonl").read_text().splitlines()
-    assert apad_after[: len(apad_kept)] == apad_kept
-    resumed = [json.loads(line) for line in apad_after[len(apad_kept):]]
-    assert resumed[0]["event"] == "start" and resumed[0]["t_s"] == pytest.approx(at["t_s"])
-    assert [e["t_s"] for e in resumed] == sorted(e["t_s"] for e in resumed)
-
-
-def test_the_apads_event_log_is_cut_before_the_checkpoint_and_before_a_line_the_kill_cut_short(
-    tmp_path: Path,
-) -> None:
-    log = tmp_path / "apad1.events.jsonl"
-    kept = '{"t_s":1.0,"event":"start"}\n{"t_s":9.5,"event":"command"}\n'
-    log.write_text(kept + '{"t_s":9.9,"event":"comm')  # the kill fell mid-line, before the checkpoint
-    saved = SimpleNamespace(time_us=10_000_000, events_bytes=0)
-    checkpoint.cut_logs(tmp_path, saved, 0)  # type: ignore[arg-type]  # only its time and events length count
-    assert log.read_text() == kept
-    log.write_text(kept + '{"t_s":10.0,"event":"command"}\n{"t_s":12.0,"event":"command"}\n')
-    checkpoint.cut_logs(tmp_path, saved, 0)  # type: ignore[arg-type]
-    assert log.read_text() == kept  # logged again by the resumed aPad
-
-
-def test_resuming_from_the_checkpoint_files_is_resuming_from_the_whole_state_they_were_saved_of(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    scenario = load_scenario("pool12").with_overrides(strategy="greedy", duration_s=1800.0)
-    whole, files_run, state_run = tmp_path / "whole", tmp_path / "files", tmp_path / "state"
-    real_save, taken = checkpoint.save, {}
-
-    def save_and_take(files: checkpoint.CheckpointFiles, ckpt: checkpoint.Checkpoint) -> None:
-        real_save(files, ckpt)
-        if ckpt.time_us >= 900_000_000 and not taken:  # mid-mission, after several charging moves
-            taken["state"] = pickle.dumps(ckpt)  # all of it, the recorder's whole history included
-            shutil.copytree(whole, files_run)
-            shutil.copytree(whole, state_run)
-
-    monkeypatch.setattr(checkpoint, "save", save_and_take)
-    run_mission(scenario, whole)  # uninterrupted
-    monkeypatch.setattr(checkpoint, "save", real_save)
-    assert taken
-    run_mission(scenario, files_run, resume=True)
-    monkeypatch.setattr(checkpoint, "load", lambda files: pickle.loads(taken["state"]))
-    run_mission(scenario, state_run, resume=True)
-
-    a = json.loads((files_run / "result.json").read_text())
-    b = json.loads((state_run / "result.json").read_text())
+    for name in ("gcs.tlog", "apad1.tlog", "apad1.events.jsonl"):
+        assert (crashed / name).read_bytes() == (whole / name).read_bytes(), name
+    after, uninterrupted = (crashed / "events.jsonl").read_bytes(), (whole / "events.jsonl").read_bytes()
+    cut = at["events_bytes"]
+    resume_line, rest = after[cut:].split(b"\n", 1)
+    assert json.loads(resume_line)["event"] == "mission_resume"
+    assert json.loads(resume_line)["t_s"] == pytest.approx(at["t_s"])
+    assert after[:cut] + rest == uninterrupted
+    a, b = (json.loads((d / "result.json").read_text()) for d in (crashed, whole))
     for r in (a, b):
         del r["wall_s"], r["out_dir"]
     assert a == b and a["end_reason"] == "mission time"
-    t_whole, t_files, t_state = (np.load(d / "traces.npz") for d in (whole, files_run, state_run))
-    for key in t_files.files:
-        np.testing.assert_array_equal(t_files[key], t_state[key])
-    # The resumed record starts with what the uninterrupted run recorded up to the checkpoint.
-    k = 900
-    for key in ("step_time_us", "active_count", "battery_steps"):
-        np.testing.assert_array_equal(t_files[key][:k], t_whole[key][:k])
-    np.testing.assert_array_equal(t_files["battery"][:k], t_whole["battery"][:k])
+    t_resumed, t_whole = (np.load(d / "traces.npz") for d in (crashed, whole))
+    for key in t_whole.files:
+        np.testing.assert_array_equal(t_resumed[key], t_whole[key])
+    assert not (crashed / CHECKPOINT).exists()
+
+
+def test_cut_logs_cuts_every_log_to_its_length_at_the_checkpoint_and_refuses_a_shorter_one(tmp_path: Path) -> None:
+    folder = RunFolder(tmp_path)
+    kept = b'{"t_s":1.0,"event":"start"}\n{"t_s":9.5,"event":"command"}\n'
+    folder.apad_events(1).write_bytes(kept + b'{"t_s":9.9,"event":"comm')  # the kill fell mid-line
+    folder.gcs_tlog.write_bytes(b"x" * 100)
+    saved = SimpleNamespace(log_sizes={folder.apad_events(1).name: len(kept), folder.gcs_tlog.name: 64})
+    checkpoint.cut_logs(folder, saved)  # type: ignore[arg-type]  # only the log sizes count
+    assert folder.apad_events(1).read_bytes() == kept and folder.gcs_tlog.read_bytes() == b"x" * 64
+    longer = SimpleNamespace(log_sizes={folder.gcs_tlog.name: 65})
+    with pytest.raises(checkpoint.CheckpointError, match="shorter than at the checkpoint"):
+        checkpoint.cut_logs(folder, longer)  # type: ignore[arg-type]
+    missing = SimpleNamespace(log_sizes={folder.apad_tlog(2).name: 1})
+    with pytest.raises(checkpoint.CheckpointError, match="missing"):
+        checkpoint.cut_logs(folder, missing)  # type: ignore[arg-type]
+
+
+def test_a_replay_that_does_not_arrive_at_the_checkpoint_is_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A checkpoint whose fingerprint the replay cannot reproduce (another version or scenario) is a
+    `CheckpointError`, and the logs past the cut are not written."""
+    scenario = load_scenario("pool12").with_overrides(strategy="greedy", duration_s=120.0)
+    monkeypatch.setattr(checkpoint.CheckpointFiles, "remove", checkpoint.CheckpointFiles.close)
+    run_mission(scenario, tmp_path)  # leaves its last checkpoint behind, as a crash would
+    monkeypatch.undo()
+    files = checkpoint.CheckpointFiles(RunFolder(tmp_path).checkpoint)
+    saved = files.read()
+    files.close()
+    tampered = dataclasses.replace(saved, fingerprint="0" * 64)
+    monkeypatch.setattr(checkpoint.CheckpointFiles, "read", lambda self: tampered)
+    with pytest.raises(checkpoint.CheckpointError, match="not where it was"):
+        run_mission(scenario, tmp_path, resume=True)
+    assert (tmp_path / "events.jsonl").stat().st_size == saved.events_bytes

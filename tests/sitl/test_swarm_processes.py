@@ -1,5 +1,6 @@
 """One GCS, two `vil sitl` processes (one aPad each), real UDP, the wall clock: routing by system id,
-and two aPads' scripts taking turns on one link (`missiontime.processes`)."""
+and two aPads' scripts taking turns on one link (`missiontime.processes`); and a lockstep swarm
+whose planning walks the C stack (issue 19)."""
 
 from __future__ import annotations
 
@@ -7,13 +8,17 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from testkit import free_udp_port
 
 from apad_sitl.vocabulary import Progress
 from gcs.api import Location
+from gcs.mission.control import EndReason
+from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
-from gcs.mission.swarm_run import run_swarm
+from gcs.mission.session import MissionSession
+from gcs.mission.strategies import STRATEGIES, CostWeights, Plan, PlanInput
 from gcs.mission.world import LinkOptions, build_world
 from missiontime import Clock, Scheduler, WallClock
 from missiontime.processes import Processes
@@ -21,7 +26,6 @@ from mussel_sim.geo import LocalFrame, distance_m
 
 pytestmark = pytest.mark.sitl
 ROOT = Path(__file__).resolve().parents[2]
-
 
 
 def test_one_gcs_drives_two_sitl_processes_over_udp(tmp_path: Path) -> None:
@@ -67,9 +71,12 @@ def test_one_gcs_drives_two_sitl_processes_over_udp(tmp_path: Path) -> None:
             lat, lon = frame.to_geodetic(x, y)
             assert float(distance_m(here.lat, here.lon, float(lat), float(lon))) < 1.5
         # And the swarm's start: both aPads share the fleet, each loop on its own aPad.
-        outcome = run_swarm(world)
+        session = MissionSession(world)
+        assert session.start()
+        session.run()
+        outcome = session.outcome()
         assert sorted(outcome.loops) == [1, 2]
-        assert outcome.shares.partition is not None
+        assert outcome.shares is not None and outcome.shares.partition is not None
         assert sorted(m for ids in outcome.shares.partition.shares.values() for m in ids) == list(range(1, 13))
     finally:
         world.close()
@@ -79,3 +86,28 @@ def test_one_gcs_drives_two_sitl_processes_over_udp(tmp_path: Path) -> None:
     for p in procs:
         assert p.returncode == 0, p.stderr
     assert (tmp_path / "apad1.tlog").stat().st_size > 0 and (tmp_path / "apad2.tlog").stat().st_size > 0
+
+
+def test_a_swarm_whose_strategy_builds_large_numpy_temporaries_completes(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 19: numpy elides a temporary of over 256 KiB (`(a + b) * c` reuses the buffer of
+    `a + b`) only after walking the C stack with glibc's `backtrace()` to see who called it. On a
+    greenlet's switched stack that walk ran off the stack: this very run (five aPads, rolling)
+    died of a segmentation fault at its second plan. On a thread of its own each script has a real
+    C stack: the swarm plans with such temporaries to the mission's end."""
+    scenario = load_scenario("bay120").with_overrides(duration_s=1200.0, strategy="rolling")
+    name = scenario.mission.collect_strategy
+    plain = STRATEGIES[name]
+    big = np.linspace(0.0, 1.0, 1 << 19)  # 4 MiB, sixteen times numpy's elision threshold
+    planned: list[float] = []
+
+    def heavy(inp: PlanInput, weights: CostWeights) -> Plan:
+        total = (big + big) * 0.5 + big  # two temporaries elided: `big + big`, then `... * 0.5`
+        planned.append(float(total[-1]))
+        return plain(inp, weights)
+
+    monkeypatch.setitem(STRATEGIES, name, heavy)
+    r = run_mission(scenario)
+    assert len(planned) > 100 and set(planned) == {2.0}  # planned all along, with the temporaries ...
+    assert sorted(a["sysid"] for a in r.apads) == [1, 2, 3, 4, 5] and r.cycles > 0
+    assert {a["end_reason"] for a in r.apads} == {EndReason.MISSION_TIME}  # ... by every aPad's loop, to the end
+    assert r.misplaced == []

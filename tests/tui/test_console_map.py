@@ -20,11 +20,11 @@ from tui_helpers import screen_text, wait_for
 
 from apad_sitl.vocabulary import Latch
 from gcs.console.app import ConsoleApp
-from gcs.console.model import ConsoleModel, area_outline
-from gcs.console.snapshot import Snapshot
 from gcs.link.registry import VehicleRegistry
 from gcs.link.telemetry import DEG_E7, Heartbeat, MusselView, Position, SlotView
 from gcs.mission.scenario import load_scenario
+from gcs.view.model import MissionView, area_outline
+from gcs.view.snapshot import Snapshot
 from mussel_sim.geo import LocalFrame
 from mussel_sim.placement import load_area
 from mussel_sim.startconfig import generate_start_config
@@ -41,7 +41,7 @@ def pool12_frame() -> Snapshot:
     area = load_area(scenario.fleet.area)
     config = generate_start_config(area, 12, area.frame(), np.random.default_rng(1))
     registry = VehicleRegistry()
-    model = ConsoleModel(registry, 1, 0.8, 2400.0, "test", config.ids.astype(np.int64), area_outline(area.geometry))
+    model = MissionView(registry, 1, 0.8, 2400.0, "test", config.ids.astype(np.int64), area_outline(area.geometry))
     lon_lo, lat_lo, lon_hi, lat_hi = area.geometry.bounds
     apad_lat, apad_lon = lat_lo + 0.2 * (lat_hi - lat_lo), lon_lo + 0.2 * (lon_hi - lon_lo)  # clear of the fleet
     registry.apply(1, Heartbeat(4, True), 0)

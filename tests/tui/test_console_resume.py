@@ -18,7 +18,8 @@ from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
 from gcs.mission.world import LOCKSTEP_EPOCH_US
 from gcs.records import checkpoint
-from gcs.records.checkpoint import CHECKPOINT_NAME, CheckpointFiles
+from gcs.records.checkpoint import CheckpointFiles
+from gcs.records.run_folder import CHECKPOINT, RunFolder
 from missiontime import mm_ss
 from mussel_sim.vocabulary import MusselState
 
@@ -43,9 +44,9 @@ def test_a_resumed_console_shows_the_history_and_releases_the_docked_before_call
     scenario = load_scenario(POOL12)
     run_mission(scenario, tmp_path)
     monkeypatch.undo()
-    files = CheckpointFiles(tmp_path / CHECKPOINT_NAME)
+    files = CheckpointFiles(tmp_path / CHECKPOINT)
     saved = files.read()
-    checkpoint.cut_logs(tmp_path, saved, LOCKSTEP_EPOCH_US)
+    checkpoint.cut_logs(RunFolder(tmp_path), saved)
     docked = {int(i) for i, s in zip(saved.fleet_state.ids, saved.fleet_state.state, strict=True)
               if s == MusselState.DOCKED}
     assert docked and saved.time_us > (CRASH_AT_S - 10) * 1e6
@@ -65,8 +66,8 @@ def test_a_resumed_console_shows_the_history_and_releases_the_docked_before_call
             assert snap is not None and snap.t_s >= saved.time_us / 1e6  # on from the checkpoint, not from 0
             # The mission before the crash, as the crashed console showed it.
             assert snap.log and all(line[:5] <= mm_ss(saved.time_us / 1e6) for line in snap.log)
-            assert f"docked aMussel {saved.loop_status.dockings[-1][1]}" in "\n".join(snap.log)
-            assert snap.strategy == saved.loop_status.strategy
+            assert f"docked aMussel {saved.loop_statuses[1].dockings[-1][1]}" in "\n".join(snap.log)
+            assert snap.strategy == saved.loop_statuses[1].strategy
             await wait_for(pilot, lambda: "docked aMussel" in screen_text(app))
             await pilot.press("p")
             await wait_for(pilot, lambda: runner.world is not None and any(k == "call_up" for k, _ in kinds()),
@@ -82,4 +83,4 @@ def test_a_resumed_console_shows_the_history_and_releases_the_docked_before_call
     for mussel in docked:  # released before anything is called up for it
         mine = [k for k, m in seen if m == mussel and k in ("call_up", "released")]
         assert mine[:1] == ["released"], (mussel, mine)
-    assert not (tmp_path / CHECKPOINT_NAME).exists()  # the operator ended the mission: nothing to resume
+    assert not (tmp_path / CHECKPOINT).exists()  # the operator ended the mission: nothing to resume

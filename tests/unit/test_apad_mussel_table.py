@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from apad_sitl.docking import MusselTable
+from apad_sitl.docking import MusselFixTable
 from mussel_sim.geo import LocalFrame
 from mussel_sim.vocabulary import MusselState
 
@@ -39,7 +39,7 @@ def arrays(rows: list[tuple[int, int, int, int]], dtype: Any = np.int64) -> tupl
 
 def test_update_converts_to_metres_only_when_asked_and_once_per_new_fix() -> None:
     frame = CountingFrame()
-    table = MusselTable(frame)
+    table = MusselFixTable(frame)
     for _ in range(3):
         assert table.update(24, *e7(3.0, 4.0), FLOATING)
     assert frame.to_local_calls == 0 and len(table) == 1 and list(table) == [24]
@@ -67,10 +67,10 @@ def test_update_converts_to_metres_only_when_asked_and_once_per_new_fix() -> Non
 ])
 def test_a_bad_status_is_dropped_and_counted_by_its_first_bad_field(row: tuple[int, int, int, int], field: str) -> None:
     dropped: Counter[str] = Counter()
-    one = MusselTable(LocalFrame(*HOME), dropped)
+    one = MusselFixTable(LocalFrame(*HOME), dropped)
     assert not one.update(*row)
     assert len(one) == 0 and dropped == Counter({f"invalid:AMUSSEL_STATUS:{field}": 1})
-    batch = MusselTable(LocalFrame(*HOME), dropped)
+    batch = MusselFixTable(LocalFrame(*HOME), dropped)
     assert batch.update_many(*arrays([row])) == 0
     assert len(batch) == 0 and dropped == Counter({f"invalid:AMUSSEL_STATUS:{field}": 2})
 
@@ -78,7 +78,7 @@ def test_a_bad_status_is_dropped_and_counted_by_its_first_bad_field(row: tuple[i
 def test_update_many_takes_the_good_rows_in_order_and_counts_the_rest() -> None:
     dropped: Counter[str] = Counter()
     frame = CountingFrame()
-    table = MusselTable(frame, dropped)
+    table = MusselFixTable(frame, dropped)
     rows = [
         (3, *e7(1.0, 0.0), FLOATING),
         (0, *e7(1.0, 0.0), FLOATING),  # no id
@@ -104,7 +104,7 @@ def test_update_many_and_update_agree() -> None:
     state = rng.integers(-1, 8, n)
     d1: Counter[str] = Counter()
     d2: Counter[str] = Counter()
-    one, batch = MusselTable(LocalFrame(*HOME), d1), MusselTable(LocalFrame(*HOME), d2)
+    one, batch = MusselFixTable(LocalFrame(*HOME), d1), MusselFixTable(LocalFrame(*HOME), d2)
     taken = sum(one.update(*(int(c[i]) for c in (ids, lat, lon, state))) for i in range(n))
     assert batch.update_many(ids, lat, lon, state) == taken > 0
     assert d1 == d2 and sum(d1.values()) == n - taken
@@ -119,13 +119,13 @@ def test_update_many_and_update_agree() -> None:
     (np.array([1]), np.array([np.nan]), np.array([0]), np.array([2])),
 ])
 def test_update_many_refuses_columns_that_are_not_integer_arrays_of_one_shape(columns: tuple[np.ndarray, ...]) -> None:
-    table = MusselTable(LocalFrame(*HOME))
+    table = MusselFixTable(LocalFrame(*HOME))
     with pytest.raises(ValueError, match=r"integer arrays of one shape \(n,\)"):
         table.update_many(*columns)
     assert len(table) == 0
 
 
 def test_update_many_of_nothing_is_nothing() -> None:
-    table = MusselTable(LocalFrame(*HOME))
+    table = MusselFixTable(LocalFrame(*HOME))
     empty = np.array([], dtype=np.int64)
     assert table.update_many(empty, empty, empty, empty) == 0 and not table.dropped

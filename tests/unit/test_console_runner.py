@@ -12,13 +12,13 @@ import pytest
 
 from apad_sitl.vocabulary import Primitive
 from gcs.console.canvas import BrailleCanvas
-from gcs.console.model import ConsoleModel
 from gcs.console.runner import ConsoleConfig, ConsoleRunner, Hold, PacedClock, UndockMussel
-from gcs.console.snapshot import MarkerColour
 from gcs.link import telemetry
 from gcs.link.registry import VehicleRegistry
 from gcs.mission.scenario import load_scenario
 from gcs.records.events import Event
+from gcs.view.model import MissionView
+from gcs.view.snapshot import MarkerColour
 from mavlink_dialect import Codec, mavlink
 from mussel_sim.vocabulary import MusselState
 
@@ -37,7 +37,7 @@ def _status(registry: VehicleRegistry, mussel_id: int, battery: float, state: Mu
 
 def test_model_classes_uptime_and_copies() -> None:
     registry = VehicleRegistry()
-    model = ConsoleModel(registry, 1, 0.8, 60.0, "test", np.array([1, 2, 3, 4]))
+    model = MissionView(registry, 1, 0.8, 60.0, "test", np.array([1, 2, 3, 4]))
     for mussel_id, battery, state in ((1, 0.9, MusselState.ACTIVE), (2, 0.5, MusselState.ACTIVE),
                                       (3, 0.0, MusselState.DEPLETED), (4, 0.7, MusselState.DOCKED)):
         _status(registry, mussel_id, battery, state)
@@ -59,7 +59,7 @@ def test_model_counts_sinking_as_the_results_do() -> None:
     """The console's uptime reads as result.json's: sinking after release counts unless the scenario says not."""
     for counts, expected in ((True, [100.0, 100.0]), (False, [100.0, 0.0])):
         registry = VehicleRegistry()
-        model = ConsoleModel(registry, 1, 0.8, 60.0, "test", np.array([1, 2]), sinking_counts_active=counts)
+        model = MissionView(registry, 1, 0.8, 60.0, "test", np.array([1, 2]), sinking_counts_active=counts)
         _status(registry, 1, 0.9, MusselState.ACTIVE)
         _status(registry, 2, 0.9, MusselState.SINKING)
         model.sample(0.0)
@@ -67,7 +67,7 @@ def test_model_counts_sinking_as_the_results_do() -> None:
 
 
 def test_model_counts_cycles_and_strategy_from_events() -> None:
-    model = ConsoleModel(VehicleRegistry(), 1, 0.8, 60.0, "test")
+    model = MissionView(VehicleRegistry(), 1, 0.8, 60.0, "test")
     for kind, fields in (("mission_start", {"strategy": "cautious"}), ("phase", {"phase": "idle wait"}),
                          ("strategy_switch", {"old": "cautious", "new": "greedy"}),
                          ("plan_redeployment", {"route": [1]}), ("phase", {"phase": "idle wait"}),
@@ -214,7 +214,7 @@ POOL12X2 = POOL12.with_name("pool12x2.toml")
 
 def test_the_model_follows_every_apad_and_shows_the_selected_one() -> None:
     registry = VehicleRegistry()
-    model = ConsoleModel(registry, 1, 0.8, 60.0, "test", np.array([1, 2, 3, 4]), apad_ids=(1, 2))
+    model = MissionView(registry, 1, 0.8, 60.0, "test", np.array([1, 2, 3, 4]), apad_ids=(1, 2))
     model.set_owner({1: 1, 2: 2, 3: 2, 4: 1})
     for apad, phase in ((1, "collect"), (2, "idle wait"), (2, "charging wait")):
         model.event(Event(1.0, "phase", {"apad": apad, "phase": phase}))

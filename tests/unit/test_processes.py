@@ -1,14 +1,28 @@
-"""Several blocking scripts on one clock, one at a time, in a deterministic order."""
+"""Several blocking scripts on one clock, one at a time, in a deterministic order, each on a thread
+of its own (a real C stack: nothing that walks the stack can run off it, issue 19)."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+import textwrap
 import threading
+from collections.abc import Callable, Iterator
 
+import numpy as np
 import pytest
-from greenlet import greenlet
 
 from missiontime import Clock, VirtualClock
 from missiontime.processes import Processes
+
+
+@pytest.fixture(autouse=True)
+def every_thread_joined() -> Iterator[None]:
+    """Whatever a test's `run` did (returned or raised), none of its threads outlives it."""
+    before = threading.active_count()
+    yield
+    assert threading.active_count() == before
 
 
 def _script(name: str, period_s: float, n: int, log: list[tuple[str, float]], running: list[str]) -> object:
@@ -111,7 +125,6 @@ def test_the_worlds_error_stops_every_script_and_reaches_the_caller() -> None:
 def test_a_sleeper_that_is_next_again_runs_on_without_a_hand_over() -> None:
     clock = VirtualClock()
     running: list[str | None] = []
-    switches: list[str] = []
 
     def quick(c: Clock) -> None:
         for _ in range(3):
@@ -124,15 +137,12 @@ def test_a_sleeper_that_is_next_again_runs_on_without_a_hand_over() -> None:
     procs = Processes(clock)
     procs.spawn("quick", quick)
     procs.spawn("slow", slow)
-    previous = greenlet.settrace(lambda event, args: switches.append(event))
-    try:
-        procs.run()
-    finally:
-        greenlet.settrace(previous)
+    procs.run()
     assert running == ["quick"] * 3 and clock.time() == 10.0
     # run -> quick (starts, sleeps 0.1: slow is due first) -> slow (sleeps 10) -> quick, which sleeps
-    # twice more without a switch (it is next again) and ends -> run -> slow, which ends -> run.
-    assert len(switches) == 6
+    # twice more without a hand-over (it is next again) and ends -> slow, which ends -> run.
+    assert procs.hand_overs == 5
+    assert procs.current is None
 
 
 def test_a_script_catching_exception_around_its_sleep_is_still_stopped() -> None:
@@ -188,3 +198,231 @@ def test_a_zero_sleep_delivers_what_is_due_now() -> None:
     procs.spawn("other", lambda c: c.sleep(1.0))
     procs.run()
     assert delivered == [7]
+
+
+def test_same_instant_wakes_resume_in_the_order_they_went_to_sleep() -> None:
+    clock = VirtualClock()
+    log: list[str] = []
+
+    def script(name: str, sleeps: list[float]) -> object:
+        def body(c: Clock) -> None:
+            for dt in sleeps:
+                log.append(f"{name}@{c.time():g}")
+                c.sleep(dt)
+            log.append(f"{name}@{c.time():g}")
+
+        return body
+
+    procs = Processes(clock)
+    procs.spawn("a", script("a", [0.0, 1.0]))  # type: ignore[arg-type]  # a zero sleep goes behind b and c
+    procs.spawn("b", script("b", [1.0]))  # type: ignore[arg-type]
+    procs.spawn("c", script("c", [0.5, 0.5]))  # type: ignore[arg-type]
+    procs.run()
+    # At 0: spawn order, then a again (it slept last). At 1: b slept at 0, c at 0.5, a at 0 after b.
+    assert log == ["a@0", "b@0", "c@0", "a@0", "c@0.5", "b@1", "a@1", "c@1"]
+
+
+def test_each_script_runs_on_a_thread_of_its_own_never_two_at_once() -> None:
+    clock = VirtualClock()
+    threads: dict[str, set[int]] = {}
+    running: list[str] = []
+
+    def script(name: str) -> object:
+        def body(c: Clock) -> None:
+            for _ in range(20):
+                running.append(name)
+                assert running == [name]
+                threads.setdefault(name, set()).add(threading.get_ident())
+                running.remove(name)
+                c.sleep(0.1 if name != "b" else 0.15)
+
+        return body
+
+    procs = Processes(clock)
+    for name in "abc":
+        procs.spawn(name, script(name))  # type: ignore[arg-type]
+    procs.run()
+    assert all(len(ids) == 1 for ids in threads.values())  # always the same thread for a script ...
+    idents = {next(iter(ids)) for ids in threads.values()}
+    assert len(idents) == 3 and threading.get_ident() not in idents  # ... its own, not the caller's
+
+
+def test_scripts_that_never_sleep_run_one_after_the_other() -> None:
+    clock = VirtualClock()
+    order: list[str] = []
+    def script(name: str) -> Callable[[Clock], str]:
+        def body(c: Clock) -> str:
+            order.append(name)
+            return name
+
+        return body
+
+    procs = Processes(clock)
+    handles = [procs.spawn(name, script(name)) for name in "abc"]
+    procs.run()
+    assert order == ["a", "b", "c"] and [h.result for h in handles] == ["a", "b", "c"]
+    assert clock.time() == 0.0
+
+
+def test_one_script_only_and_none_at_all() -> None:
+    clock = VirtualClock()
+    def only(c: Clock) -> float:
+        for _ in range(4):
+            c.sleep(0.5)
+        return c.time()
+
+    procs = Processes(clock)
+    one = procs.spawn("only", only)
+    procs.run()
+    assert one.result == 2.0 and procs.hand_overs == 2  # run -> only -> run: its sleeps hand over nothing
+    Processes(clock).run()  # nothing spawned: nothing to do
+
+
+def test_a_script_failing_at_once_stops_those_not_started_yet_and_their_finally_blocks_run() -> None:
+    clock = VirtualClock()
+    started: list[str] = []
+    unwound: list[str] = []
+
+    def script(name: str) -> object:
+        def body(c: Clock) -> None:
+            started.append(name)
+            try:
+                if name == "a":
+                    raise ValueError("bad config")
+                c.sleep(1.0)
+            finally:
+                unwound.append(name)
+
+        return body
+
+    procs = Processes(clock)
+    for name in "abc":
+        procs.spawn(name, script(name))  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="bad config"):
+        procs.run()
+    assert started == ["a"] and unwound == ["a"]  # b and c were stopped before they began
+
+
+def test_stopped_scripts_unwind_in_their_own_threads_and_may_not_sleep_again() -> None:
+    clock = VirtualClock()
+    unwound: list[tuple[str, float]] = []
+
+    def failing(c: Clock) -> None:
+        c.sleep(3.0)
+        raise RuntimeError("aPad 2 lost")
+
+    def polite(c: Clock) -> None:
+        try:
+            while True:
+                c.sleep(1.0)
+        finally:
+            unwound.append(("polite", c.time()))
+            with pytest.raises(BaseException, match="polite"):  # ProcessStopped: no more sleeping
+                c.sleep(1.0)
+
+    procs = Processes(clock)
+    procs.spawn("polite", polite)
+    procs.spawn("failing", failing)
+    with pytest.raises(RuntimeError, match="aPad 2 lost"):
+        procs.run()
+    assert unwound == [("polite", 3.0)]  # stopped at its wake at 3 s, after the failure, the clock still
+
+
+def test_large_numpy_temporaries_in_several_scripts_at_once() -> None:
+    """Issue 19: numpy elides a temporary over 256 KiB (`(x + x) + x` reuses the buffer of `x + x`)
+    after walking the C stack with glibc's `backtrace()`. On greenlets' switched stacks that walk ran
+    off the stack (this test died of a segmentation fault on them); on threads it cannot."""
+    clock = VirtualClock()
+    x = np.ones(1 << 19)  # 4 MiB
+    sums: list[float] = []
+
+    def deep(n: int, c: Clock, period_s: float) -> None:
+        if n:
+            deep(n - 1, c, period_s)
+            return
+        sums.append(float(((x + x) + x)[-1]))
+        c.sleep(period_s)
+
+    def script(k: int) -> object:
+        def body(c: Clock) -> None:
+            for i in range(60):
+                deep((i * 7 + k * 3) % 40, c, 0.1 * (k + 1))
+
+        return body
+
+    procs = Processes(clock)
+    for k in range(5):
+        procs.spawn(f"apad{k + 1}", script(k))  # type: ignore[arg-type]
+    procs.run()
+    assert sums == [3.0] * 300
+
+
+CTRL_C = """
+import os, signal, sys, threading, time
+from missiontime import VirtualClock
+from missiontime.processes import Processes
+
+unwound = []
+
+def interrupting(c):
+    c.sleep(1.0)
+    os.kill(os.getpid(), signal.SIGINT)  # lands in the main thread, which runs `run`
+    if sys.argv[1] == "twice":  # a script that never sleeps again: only a second Ctrl-C leaves
+        time.sleep(0.5)  # the first handled (two at once would be one), the baton kept
+        os.kill(os.getpid(), signal.SIGINT)
+        while True:
+            pass
+    try:
+        c.sleep(1.0)
+    finally:
+        unwound.append("interrupting")
+
+def patient(c):
+    try:
+        while True:
+            c.sleep(0.25)
+    finally:
+        unwound.append("patient")
+
+before = threading.active_count()
+procs = Processes(VirtualClock())
+procs.spawn("interrupting", interrupting)
+procs.spawn("patient", patient)
+try:
+    procs.run()
+except KeyboardInterrupt:
+    print("KeyboardInterrupt", sorted(unwound), threading.active_count() - before, signal.getsignal(signal.SIGINT)
+          is signal.default_int_handler)
+"""
+
+
+@pytest.mark.parametrize("presses", ["once", "twice"])
+def test_ctrl_c_in_the_main_thread_stops_the_scripts_and_ends_run(presses: str) -> None:
+    """Ctrl-C reaches the main thread only, the one in `run`: once, every script is stopped at its
+    next sleep and unwinds, and `run` raises KeyboardInterrupt with every thread joined; twice (a
+    script that never sleeps again), `run` leaves at once and the process still ends."""
+    done = subprocess.run([sys.executable, "-c", textwrap.dedent(CTRL_C), presses], capture_output=True, text=True,
+                          timeout=60)
+    assert done.returncode == 0, done.stderr
+    if presses == "once":
+        assert done.stdout.split() == ["KeyboardInterrupt", "['interrupting',", "'patient']", "0", "True"]
+    else:  # the spinning script's thread left behind (a daemon), nobody else unwound: it holds the baton
+        assert done.stdout.split() == ["KeyboardInterrupt", "[]", "2", "True"]
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_getaffinity"), reason="CPU affinity: Linux")
+def test_a_script_runs_with_every_cpu_the_caller_had() -> None:
+    """A hand-over wakes the next script on the CPU handing over; running, it may use them all again."""
+    cpus = os.sched_getaffinity(0)
+    seen: list[set[int]] = []
+
+    def script(c: Clock) -> None:
+        for _ in range(5):
+            seen.append(os.sched_getaffinity(0))
+            c.sleep(0.1)
+
+    procs = Processes(VirtualClock())
+    for name in "ab":
+        procs.spawn(name, script)
+    procs.run()
+    assert seen == [cpus] * 10 and os.sched_getaffinity(0) == cpus

@@ -119,7 +119,8 @@ def test_restore_refuses_rows_that_do_not_fit_the_head() -> None:
 def checkpoint_of(rec: Recorder) -> Checkpoint:
     """A checkpoint whose only real part is the recorder (the rest is carried as it is)."""
     last = rec.step_time_us()[-1] if rec.n_steps else 0
-    return Checkpoint(2, ("test", "greedy", 1), int(last), None, {"rng": 1}, rec, "loop", "registry", None)  # type: ignore[arg-type]
+    return Checkpoint(2, ("test", "greedy", 1), int(last), None, {"rng": 1}, rec, {1: "loop"},  # type: ignore[arg-type,dict-item]
+                      "registry", {}, None, frozenset(), {}, "")  # type: ignore[arg-type]
 
 
 def test_saved_every_few_steps_with_decimation_the_checkpoint_loads_the_same_recorder(tmp_path: Path) -> None:
@@ -134,8 +135,8 @@ def test_saved_every_few_steps_with_decimation_the_checkpoint_loads_the_same_rec
     assert rec.trace_stride >= 32
     ckpt = load(path)
     assert_same(ckpt.recorder, rec)
-    assert (ckpt.run_key, ckpt.time_us, ckpt.fleet_rng_state, ckpt.loop_status) == (
-        ("test", "greedy", 1), 200_000_000, {"rng": 1}, "loop")
+    assert (ckpt.run_key, ckpt.time_us, ckpt.fleet_rng_state, ckpt.loop_statuses) == (
+        ("test", "greedy", 1), 200_000_000, {"rng": 1}, {1: "loop"})
     # Append-only: the trace file holds every row ever kept at the time, more than the recorder now has.
     rows_on_disk = (files.traces_path.stat().st_size - 16) // (8 + ROW_BYTES)
     assert rows_on_disk > len(rec.battery_trace()[0])

@@ -10,7 +10,7 @@ from gcs.mission.strategies.route_optimal import route_optimal
 def rolling(inp: PlanInput, weights: CostWeights) -> Plan:
     """For the slots free now, the route-optimal pick among those that would deplete before the end.
 
-    The loop (`gcs.mission.rolling_loop.rolling_round`) asks again whenever a slot is free, and puts
+    The loop (`gcs.mission.turns.rolling`) asks again whenever a slot is free, and puts
     each docked aMussel back once it is charged (or holds enough to last to the end) instead of
     waiting for the whole load. Filling by least slack alone sends the aPad across the bay for each
     slot (bay24: 900 m a mission against cautious's 430 m); the route-optimal pick weighs the detour.

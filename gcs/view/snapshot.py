@@ -1,7 +1,7 @@
 """The records the console screen reads: one frozen `Snapshot` per frame, an `ApadSnapshot` per aPad
 (with its `SlotSnapshot`s), and the `MarkerColour` classes of the map markers.
 
-`gcs.console.model.ConsoleModel` builds them; the UI reads them from any thread. The snapshot's
+`gcs.view.model.MissionView` builds them; the UI reads them from any thread. The snapshot's
 single-aPad fields are the selected aPad's, so one screen serves one aPad or a swarm.
 """
 

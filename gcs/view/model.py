@@ -13,17 +13,16 @@ snapshot's single-aPad fields are the selected aPad's, so one screen serves one 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from apad_sitl.vocabulary import Primitive, RoverMode
-from gcs.console.columns import FleetColumns, Growing
-from gcs.console.snapshot import ApadSnapshot, SlotSnapshot, Snapshot
 from gcs.link.registry import VehicleRegistry, VehicleView
 from gcs.link.telemetry import PrimitiveView
-from gcs.records.events import Event
+from gcs.view.columns import FleetColumns, Growing
+from gcs.view.snapshot import ApadSnapshot, SlotSnapshot, Snapshot
 from missiontime import mm_ss
 from mussel_sim.vocabulary import MusselState
 
@@ -33,7 +32,21 @@ END_WORDS = {"mission time": "its time is up", "aPad battery": "the aPad's batte
              "operator stop": "the operator stopped it"}
 
 
-class ConsoleModel:
+class MissionEvent(Protocol):
+    """One mission event as the model reads it (the records' `Event` is one): read, never imported,
+    so this package stays below the records."""
+
+    @property
+    def t_s(self) -> float: ...  # mission time
+
+    @property
+    def kind(self) -> str: ...
+
+    @property
+    def fields(self) -> Mapping[str, Any]: ...
+
+
+class MissionView:
     """The console's view of the aPads and the fleet: current state read from the link's registry,
     history sampled once per second of mission time, the mission loops' events."""
 
@@ -99,7 +112,7 @@ class ConsoleModel:
         self._fleet = (table.version, cols)
         return cols
 
-    def event(self, ev: Event) -> None:
+    def event(self, ev: MissionEvent) -> None:
         f = ev.fields
         loop = self.loops.get(int(f.get("apad", self.apad_ids[0])))  # a swarm's loops name their aPad
         if loop is not None:
@@ -214,7 +227,7 @@ class _LoopTrack:
         self.ended_t_s = 0.0
         self._redeploying = False
 
-    def event(self, ev: Event) -> None:
+    def event(self, ev: MissionEvent) -> None:
         if ev.kind == "phase":
             self.phase = str(ev.fields.get("phase", "-"))
             # A cycle is complete when the loop is back to idle after a redeployment.
@@ -253,7 +266,7 @@ def _primitive_text(p: PrimitiveView) -> str:
     return f"{p.primitive.name} {progress}"
 
 
-def _event_text(ev: Event) -> str:
+def _event_text(ev: MissionEvent) -> str:
     f = dict(ev.fields)
     who = f"aPad {f.pop('apad')}: " if "apad" in f else ""  # a swarm's loops name their aPad
     if ev.kind == "phase":

@@ -1,0 +1,156 @@
+"""What a mission leaves: its `Outcome` (the loops, the shares, each aPad's time) and, from the world at
+its end, the `RunResult` (result.json) and the run folder's traces.npz and endpoints.json."""
+
+from __future__ import annotations
+
+import json
+from collections import Counter
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from gcs.mission.accounting import account
+from gcs.mission.control import Phase
+from gcs.mission.loop import EnergySharingLoop
+from gcs.mission.results import MusselResult, RunResult
+from gcs.mission.swarm import FleetShares
+from gcs.mission.time_accounting import ApadTimes, apad_shares, mussel_times, trace_arrays
+from gcs.mission.world import World
+from gcs.records.run_folder import RunFolder
+from mavlink_dialect.transport import UdpTransport
+
+
+@dataclass
+class Outcome:
+    """A mission's loops (by aPad system id), who served whom (several aPads), each aPad's time."""
+
+    loops: dict[int, EnergySharingLoop]
+    shares: FleetShares | None
+    apad_times: dict[int, ApadTimes]
+
+    @property
+    def cost_m(self) -> float:
+        return sum(loop.status.cost_m for loop in self.loops.values())
+
+    @property
+    def cycles(self) -> int:
+        return sum(loop.status.cycles for loop in self.loops.values())
+
+    @property
+    def end_reason(self) -> str:
+        reasons = sorted({str(loop.status.end_reason) for loop in self.loops.values()})
+        return reasons[0] if len(reasons) == 1 else ", ".join(reasons)
+
+
+def collect_result(world: World, outcome: Outcome, wall_s: float) -> RunResult:
+    """The run's figures (the paper's Table II and where the time went), from the world at its end."""
+    loops, apad_times = outcome.loops, outcome.apad_times
+    apads = apad_rows(world, outcome)
+    s = world.scenario
+    rec = world.fleet.recorder
+    summary = rec.summary()
+    uptime = rec.uptime_pct()
+    start_battery = dict(zip(world.start.ids.tolist(), world.start.battery_frac.tolist(), strict=True))
+    dockings: dict[int, list[dict[str, Any]]] = {}
+    for sysid, loop in sorted(loops.items()):
+        for t_s, mussel_id in loop.status.dockings:
+            dockings.setdefault(mussel_id, []).append({"t_s": round(t_s, 2), "apad": sysid})
+    state_s, first_depleted_s = mussel_times(rec)
+    mussels = [
+        MusselResult(int(i), round(start_battery[int(i)], 6), round(float(u), 4),
+                     sorted(dockings.get(int(i), []), key=lambda d: d["t_s"]), states, first)
+        for i, u, states, first in zip(rec.ids, uptime, state_s, first_depleted_s, strict=True)
+    ]
+    apads = [row | apad_shares(apad_times.get(row["sysid"], {})) for row in apads]
+    travelled = sum(v.state.distance_travelled_m for v in world.vehicles.values())
+    stats = world.link.codec.stats
+    homes = {m: (h.lat, h.lon) for m, h in world.homes.items()}
+    whereabouts = [
+        {"id": a.mussel_id, "where": a.where, "detail": a.detail}
+        for a in account(world.fleet.state, world.frame, homes, world.link.vehicles, world.fleet.params.seabed_depth_m)
+    ]
+    vehicles = list(world.vehicles.values())  # the aPads' counters are summed over the swarm
+    messages = {"gcs_sent": stats.sent, "fleet_sent": world.fleet.codec.stats.sent,
+                "apad_sent": sum(v.codec.stats.sent for v in vehicles),
+                "gcs_bad_data": world.link.bad_data,
+                "apad_bad_data": sum(v.codec.stats.bad_data for v in vehicles)}
+    # What each side refused after decoding, by reason (validation, id clashes, handler errors).
+    messages |= {f"gcs_dropped.{reason}": n for reason, n in sorted(world.link.dropped.items())}
+    messages |= {f"fleet_dropped.{reason}": n for reason, n in sorted(world.fleet.dropped.items())}
+    apad_dropped: Counter[str] = sum((Counter(v.dropped) for v in vehicles), Counter())
+    messages |= {f"apad_dropped.{reason}": n for reason, n in sorted(apad_dropped.items())}
+    proxied: Counter[str] = Counter()
+    for proxy in world.proxies:
+        for way, st in (("to_apad", proxy.stats[True]), ("to_gcs", proxy.stats[False])):
+            proxied.update({f"proxy_{way}_{k}": v for k, v in vars(st).items()})
+    messages |= dict(proxied)
+    return RunResult(
+        scenario=s.name,
+        strategy=s.mission.collect_strategy,
+        seed=s.seed,
+        theta=s.mission.theta,
+        duration_s=s.mission.duration_s,
+        uptime={"avg": round(summary.avg_uptime_pct, 4), "max": round(summary.max_uptime_pct, 4),
+                "min": round(summary.min_uptime_pct, 4)},
+        cost_m=round(outcome.cost_m, 3),
+        active_avg=round(summary.avg_active, 4),
+        wall_s=round(wall_s, 3),
+        mussels=mussels,
+        travelled_m=round(travelled, 3),
+        cycles=outcome.cycles,
+        end_reason=outcome.end_reason,
+        out_dir=str(world.folder.path) if world.folder is not None else "",
+        messages=messages,
+        whereabouts=whereabouts,
+        apads=apads,
+    )
+
+
+def apad_rows(world: World, outcome: Outcome) -> list[dict[str, Any]]:
+    """One row per aPad for result.json: its share, travel, dockings and how its time was spent."""
+    loops = outcome.loops
+    rows = []
+    duration_s = world.scenario.mission.duration_s
+    for sysid, loop in sorted(loops.items()):
+        vehicle = world.vehicles.get(sysid)
+        spent = loop.status.phase_s
+        first = outcome.shares.first if outcome.shares is not None else None
+        last = outcome.shares.partition if outcome.shares is not None else None
+        rows.append({
+            "sysid": sysid,
+            "mussels": first.shares.get(sysid, []) if first is not None else sorted(world.homes),  # its share at start
+            "share_at_end": last.shares.get(sysid, []) if last is not None else sorted(world.homes),
+            "travelled_m": round(vehicle.state.distance_travelled_m, 3) if vehicle is not None else None,
+            "cost_m": round(loop.status.cost_m, 3),
+            "dockings": len(loop.status.dockings),
+            "cycles": loop.status.cycles,
+            "idle_share": round(spent.get(Phase.IDLE_WAIT, 0.0) / duration_s, 4),
+            "phase_s": {str(p): round(t, 1) for p, t in spent.items()},
+            "end_reason": str(loop.status.end_reason),
+        })
+    return rows
+
+
+def write_endpoints(world: World, folder: RunFolder) -> None:
+    """endpoints.json: the UDP ports a run over real sockets opened (ephemeral, so unknowable from
+    outside otherwise): each aPad's, its fault proxy's and the GCS link's. Tests spray them."""
+    apads = {str(s): v.transport for s, v in world.vehicles.items()}
+    ports: dict[str, Any] = {
+        "apad": {s: t.local_port for s, t in apads.items() if isinstance(t, UdpTransport)},
+        "proxy": [p.listen_port for p in world.proxies],
+        "gcs": world.link.udp_ports(),
+    }
+    folder.endpoints.write_text(json.dumps(ports) + "\n")
+
+
+def write_outputs(world: World, result: RunResult, folder: RunFolder, apad_times: dict[int, ApadTimes]) -> None:
+    """traces.npz and result.json."""
+    rec = world.fleet.recorder
+    steps, battery = rec.battery_trace()
+    arrays: dict[str, Any] = dict(
+        ids=rec.ids, step_time_us=rec.step_time_us(), active_count=rec.active_count(),
+        battery_steps=steps, battery=battery, trace_ids=rec.trace_ids, **trace_arrays(rec, apad_times),
+    )
+    np.savez_compressed(folder.traces, **arrays)
+    folder.result.write_text(json.dumps(result.to_json(), indent=1) + "\n")

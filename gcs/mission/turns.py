@@ -1,0 +1,75 @@
+"""The loop's shapes: one turn of each, chosen by the strategy's traits (`strategies.Traits`).
+
+`rounds` is the paper's: wait for a full pool, collect, charge everything, redeploy everything.
+`rolling` puts each aMussel back as soon as it is charged and fills a freed slot at once. A turn
+strings phases (`gcs.mission.phases`) together; the loop (`gcs.mission.loop`) repeats the turn its
+strategy asks for. A new shape is a new function here and a trait that picks it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from gcs.mission.control import Phase
+from gcs.mission.phases import (
+    Crew,
+    charge_and_redeploy,
+    collect,
+    collection_route,
+    idle_wait,
+    plan_collection,
+    plan_redeployment,
+    redeploy,
+)
+from gcs.mission.strategies import traits
+
+Turn = Callable[[Crew], None]
+
+REPLAN_S = 10.0  # a strategy that takes none of the pool is asked again this much later
+LOOK_S = 5.0  # the rolling wait plans again this often for a free slot
+
+
+def rounds(crew: Crew) -> None:
+    """Idle wait, plan and collect; then, with anything on board, charge it all and take it all home."""
+    idle_wait(crew)
+    route = plan_collection(crew)
+    if route:
+        collect(crew, route)
+    elif not crew.knows.docked():  # the strategy takes none of the pool yet: look again later
+        crew.act.set_phase(Phase.IDLE_WAIT)
+        crew.act.sleep(REPLAN_S)
+    if crew.knows.docked():
+        charge_and_redeploy(crew)
+
+
+def rolling(crew: Crew) -> None:
+    """Wait until an aMussel on board is charged or a free slot has a candidate the strategy takes;
+    put back the charged ones (nearest first), then fetch what the strategy plans for the free slots."""
+    knows, act, strategy = crew.knows, crew.act, crew.status.strategy
+    act.set_phase(Phase.IDLE_WAIT)
+    act.command(act.api.hold)
+    next_look_s = 0.0
+
+    def work() -> bool:
+        nonlocal next_look_s
+        if any(knows.charged(m, strategy) for m in knows.docked().values()):
+            return True
+        if knows.clock.time() < next_look_s or not knows.free_slots() or knows.too_late_to_call_up():
+            return False
+        next_look_s = knows.clock.time() + LOOK_S
+        return bool(act.link_up() and (knows.orphans() or collection_route(crew)))
+
+    act.wait_until(work)
+    done = {m for m in knows.docked().values() if knows.charged(m, strategy)}
+    if done:
+        redeploy(crew, plan_redeployment(crew, only=done))
+        crew.status.cycles += 1
+    if knows.free_slots() and not knows.too_late_to_call_up():
+        route = plan_collection(crew)
+        if route:
+            collect(crew, route)
+
+
+def turn_for(strategy: str) -> Turn:
+    """The turn the loop repeats for this collection strategy."""
+    return rolling if traits(strategy).rolling else rounds
