@@ -138,7 +138,14 @@ def _resume_point(out: Path | None, stem: str, scenario: Scenario) -> tuple[Path
     """The folder, log epoch and checkpoint of the console mission to resume; `CheckpointError` (one
     line) if there is none or it is unusable. The folder's logs are cut back to the checkpoint."""
     from gcs.console.runner import ResumePoint
-    from gcs.records.checkpoint import CheckpointError, CheckpointFiles, cut_logs, scenario_key
+    from gcs.records.checkpoint import (
+        CheckpointError,
+        CheckpointFiles,
+        check_setup,
+        cut_logs,
+        scenario_key,
+        setup_digest,
+    )
     from gcs.records.run_folder import CHECKPOINT
 
     folder = RunFolder(out) if out is not None else RunFolder.newest_resumable(Path("runs"), stem)
@@ -155,6 +162,7 @@ def _resume_point(out: Path | None, stem: str, scenario: Scenario) -> tuple[Path
     key = scenario_key(scenario)
     if saved.run_key != key:
         raise CheckpointError(f"the checkpoint in {folder.path} is of run {saved.run_key}, not {key}")
+    check_setup(saved, setup_digest(scenario))
     cut_logs(folder, saved)  # the stretch after it runs again: each event logged once
     return folder.path, epoch_us, ResumePoint(files, saved)
 

@@ -12,7 +12,6 @@ so a silent aPad cannot hold the quit past its bound; a live aPad is waited for 
 
 from __future__ import annotations
 
-import functools
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -115,7 +114,6 @@ class CommandQueue:
         self._commands: list[tuple[int, OperatorCommand]] = []  # (target aPad, command)
         self._operator_events: list[tuple[str, dict[str, object]]] = []  # from the UI, logged on the world thread
         self._to_sink: dict[int, int] = {}  # aMussel -> the aPad to relay its sink command
-        self._silent_at_quit: set[int] = set()  # aPads whose answers the quit stopped waiting for
         self._lock = threading.Lock()
 
     def put(self, apad: int, command: OperatorCommand) -> None:
@@ -162,18 +160,28 @@ class CommandQueue:
 
     def flush(self, world: World) -> None:
         """Log the operator's actions the UI queued. The quit among them also stops every command's
-        wait for an aPad that has fallen silent (`quit_give_up`), from this moment on."""
+        wait for an aPad that has fallen silent (`QuitWaits`), from this moment on."""
         with self._lock:
             taken, self._operator_events = self._operator_events, []
         for action, fields in taken:
             world.events.emit(world.clock.time(), "operator", action=action, **fields)
-            if action == QUIT:
-                world.link.commands.give_up = functools.partial(self.quit_give_up, world)
+            if action == QUIT and world.link.commands.give_up is None:
+                world.link.commands.give_up = QuitWaits(world)
 
-    def quit_give_up(self, world: World, apad: int, command: int) -> str | None:
-        """Quitting: why a command to aPad `apad` is not waited for (its link lost: it answers nothing,
-        and it holds by its own GCS failsafe), or None (heard lately: waited for as ever). The first
-        time for an aPad, a `quit_apad_silent` event. On the world thread (the command client's wait)."""
+
+class QuitWaits:
+    """Once the operator has quit: a command to an aPad whose link is lost is not waited for (it
+    answers nothing, and it holds by its own GCS failsafe); one heard lately is waited for as ever.
+    The command client's `give_up` hook, called on the world thread in its ACK waits."""
+
+    def __init__(self, world: World) -> None:
+        self.world = world
+        self.silent: set[int] = set()  # aPads whose answers the quit stopped waiting for
+
+    def __call__(self, apad: int, command: int) -> str | None:
+        """Why a command to aPad `apad` is not waited for, or None. The first time for an aPad, a
+        `quit_apad_silent` event."""
+        world = self.world
         view = world.link.vehicles.get(apad)
         if view is None:
             return None  # never heard: nothing is sent to it
@@ -181,8 +189,8 @@ class CommandQueue:
         if silent_us <= seconds_to_us(LOST_S):
             return None
         silent_s = round(us_to_s(silent_us), 1)
-        if apad not in self._silent_at_quit:
-            self._silent_at_quit.add(apad)
+        if apad not in self.silent:
+            self.silent.add(apad)
             world.events.emit(world.clock.time(), "quit_apad_silent", apad=apad, silent_s=silent_s,
                               command=command_words(command))
         return f"silent {silent_s:g} s (LINK LOST), its answer not waited for"

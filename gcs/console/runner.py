@@ -18,9 +18,10 @@ commands for its own aPad there, on its own clock, so a command never runs insid
 ACK wait for the same aPad, and never two threads at once.
 
 With an output folder the mission checkpoints itself there every `CHECKPOINT_PERIOD_S` of mission
-time (deleted when the mission ends, when result.json is written), so `vil gcs --resume` continues
-it after a crash: the world is built on a clock starting at the checkpoint's time, the saved state
-put back, and each loop first settles what the crash interrupted (`EnergySharingLoop.run(resume=True)`).
+time from the loops' start (deleted once the mission has ended and result.json is written), so
+`vil gcs --resume` continues it after a crash: the world is built on a clock starting at the
+checkpoint's time, the saved state put back, and each loop first settles what the crash interrupted
+(`EnergySharingLoop.run(resume=True)`).
 
 Nothing here imports Textual: tests drive a runner directly.
 """
@@ -52,7 +53,7 @@ from gcs.mission.loop import EnergySharingLoop, LoopControl
 from gcs.mission.outcome import write_outputs
 from gcs.mission.session import MissionSession
 from gcs.mission.world import World
-from gcs.records.checkpoint import Checkpoint, CheckpointError, CheckpointFiles
+from gcs.records.checkpoint import Checkpoint, CheckpointError, CheckpointFiles, setup_digest
 from gcs.records.events import Event
 from gcs.records.run_folder import RunFolder
 from gcs.view.model import END_WORDS, MissionView, area_outline
@@ -117,7 +118,8 @@ class ConsoleRunner:
         resume = config.resume
         files = resume.files if resume is not None else (
             CheckpointFiles(RunFolder(config.out_dir).checkpoint) if config.out_dir is not None else None)
-        return MissionSession(world, files, resume.checkpoint if resume is not None else None, controls=controls)
+        return MissionSession(world, files, resume.checkpoint if resume is not None else None, controls=controls,
+                              setup=setup_digest(config.scenario))
 
     # --- the UI's doors (any thread) -------------------------------------------------------------
 
@@ -227,6 +229,7 @@ class ConsoleRunner:
             if self.config.out_dir is not None:  # the mission's figures, as `vil run` writes them
                 write_outputs(world, session.result(time.perf_counter() - started_s), RunFolder(self.config.out_dir),
                               session.apad_times)
+            session.finish()
             sampling.active = False  # the plots and the clock stop at the mission's end
             why = END_WORDS.get(end, end)
             self._notice = f"mission ended at {mm_ss(clock.time())}: {why}; the aPad holds (q quits)"

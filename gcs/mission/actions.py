@@ -246,6 +246,14 @@ class ApadActions:
         if battery_v is not None and battery_v <= self.settings.battery_end_v:
             raise MissionEnded(EndReason.APAD_BATTERY)
 
+    def begin_redeployment(self) -> None:
+        """A redeployment starts: none of its aMussels let go yet."""
+        self.leaving.clear()
+
+    def let_go(self, mussel_id: int) -> None:
+        """An aMussel released and told to sink: `finish` sees it off its slot."""
+        self.leaving.add(mussel_id)
+
     def finish(self) -> None:
         """Leave the aPad holding (a dock in progress was already waited out), and see every aMussel
         this redeployment let go reported off its slot: the simulated fleet applies a release at its

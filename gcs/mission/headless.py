@@ -45,15 +45,17 @@ def run_mission(
     folder = RunFolder(out_dir) if out_dir is not None else None
     files = checkpoint.CheckpointFiles(folder.checkpoint) if folder is not None else None
     saved = None
+    setup = checkpoint.setup_digest(scenario, options)
     if resume:
         if files is None or folder is None:
             raise checkpoint.CheckpointError("resuming needs the run's output folder")
         saved = files.read()
+        checkpoint.check_setup(saved, setup)  # before anything is cut
         checkpoint.cut_logs(folder, saved)  # the stretch after it is simulated again
     world = lockstep_world(scenario, out_dir, options, append_logs=saved is not None, muted_logs=saved is not None)
     if folder is not None:
         write_endpoints(world, folder)
-    session = MissionSession(world, files, saved, replay=True)
+    session = MissionSession(world, files, saved, replay=True, setup=setup)
     try:
         if progress is not None:
             world.clock.scheduler.every(PROGRESS_PERIOD_S, lambda now_us: progress(us_to_s(now_us)), "progress",
@@ -65,6 +67,7 @@ def run_mission(
         result = session.result(time.perf_counter() - wall_start)
         if folder is not None:
             write_outputs(world, result, folder, session.apad_times)
+        session.finish()
         return result
     finally:
         session.close()

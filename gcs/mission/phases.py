@@ -242,7 +242,7 @@ def redeploy(crew: Crew, route: list[tuple[int, int]]) -> None:
     """Take each aMussel home, undock it and send it down."""
     knows, act, status, api = crew.knows, crew.act, crew.status, crew.knows.api
     act.set_phase(Phase.REDEPLOY)
-    act.leaving.clear()
+    act.begin_redeployment()
     for slot, mussel_id in route:
         act.check_end()  # between legs: no trip starts after the end (the rest stay on their slots)
         status.target_mussel = mussel_id
@@ -254,7 +254,7 @@ def redeploy(crew: Crew, route: list[tuple[int, int]]) -> None:
             if api.mussels[mussel_id].simulated:  # a local party: the command cannot be lost
                 act.command(api.command_mussel, mussel_id, MusselCommand.SINK, knows.apad_id)
                 knows.release(mussel_id)
-                act.leaving.add(mussel_id)  # not waited for here: the next leg gives it time
+                act.let_go(mussel_id)  # not waited for here: the next leg gives it time
             else:
                 act.sink(mussel_id)  # over a radio: seen to leave the surface (releases the claim)
             crew.log("released", mussel=mussel_id, slot=slot)
@@ -271,8 +271,9 @@ def charge_and_redeploy(crew: Crew) -> None:
 # --- after a crash ------------------------------------------------------------------------------
 
 def recover(crew: Crew) -> None:
-    """After a crash: finish latches in motion, send down whatever was called up and not docked,
-    and complete a charging cycle whose aMussels are still on board."""
+    """After a crash: finish latches in motion, send down whatever was called up and not docked
+    (of this aPad's share, with no other aPad's claim on it), and complete a charging cycle whose
+    aMussels are still on board."""
     knows, act, api = crew.knows, crew.act, crew.knows.api
     act.sleep(2.0, interruptible=False)  # hear the aPad's slots and the fleet's status afresh
 
@@ -283,7 +284,8 @@ def recover(crew: Crew) -> None:
         crew.log("gave_up", what="waiting for latches in motion", slots=moving())
     on_board = set(knows.docked().values())
     for mussel_id in api.mussels.select((MusselState.FLOATING, MusselState.SURFACING)):
-        if mussel_id not in on_board:
+        # Several aPads: only what is this one's to handle (another may be latching it right now).
+        if mussel_id not in on_board and knows.serves(mussel_id):
             crew.log("recover", mussel=mussel_id, action="sink", state=knows.state(mussel_id).name)
             act.sink(mussel_id)
     if knows.docked():

@@ -108,7 +108,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="MAVLink 2 signing with the passphrase in FILE (default: $VIL_SIGNING_KEY if set)")
     parser.add_argument("--resume", action="store_true",
                         help="after a crash: continue the newest DIR/SCENARIO-STRATEGY-seedN-runK/ holding a "
-                             "checkpoint, in that folder, each event written once")
+                             "checkpoint, in that folder, each event written once; give the flags the run was "
+                             "started with. The mission is replayed to its checkpoint (its logs muted), so the "
+                             "results are those of a run never interrupted")
     parser.add_argument("--jobs", type=flags.integer_in(1, MAX_JOBS), default=os.cpu_count() or 1,
                         help="parallel runs (default: CPU count)")
 

@@ -46,11 +46,12 @@ WaitFn = Callable[[int], bool]  # wait for aPad `sysid` to be heard; False: give
 class MissionSession:
     """One mission over `world`. `checkpoints`: save the mission there every `CHECKPOINT_PERIOD_S`
     (removed once it ends). `saved`: resume from this checkpoint, by replaying to it (`replay`,
-    lockstep) or by restoring it. `controls`: each aPad's `LoopControl` (the console's)."""
+    lockstep) or by restoring it; either way it must have been started with the same `setup`
+    (`checkpoint.setup_digest`). `controls`: each aPad's `LoopControl` (the console's)."""
 
     def __init__(
         self, world: World, checkpoints: CheckpointFiles | None = None, saved: Checkpoint | None = None,
-        replay: bool = False, controls: Mapping[int, LoopControl] | None = None,
+        replay: bool = False, controls: Mapping[int, LoopControl] | None = None, setup: str = "",
     ) -> None:
         self.world = world
         self.apad_ids = tuple(a.system_id for a in world.scenario.apads)
@@ -61,7 +62,10 @@ class MissionSession:
         self._saved = saved
         self._replaying = saved is not None and replay
         self._controls = dict(controls or {})
+        self._setup = setup
         self._task: Task | None = None
+        if saved is not None:
+            checkpoint.check_setup(saved, setup)
         restoring = saved is not None and not replay
         if restoring:
             assert saved is not None
@@ -94,14 +98,15 @@ class MissionSession:
             world.request_telemetry(apad_id=sysid)
         if self.swarm:
             self._share_fleet()
-        if self._checkpoints is not None:
-            clock = world.clock
-            self._task = clock.scheduler.every(CHECKPOINT_PERIOD_S, self._checkpoint, "checkpoint",
-                                               clock.now_us + seconds_to_us(CHECKPOINT_PERIOD_S))
         return True
 
     def run(self) -> str:
-        """Every aPad's loop to the mission's end; the reason it ended (several: each reason once)."""
+        """Every aPad's loop to the mission's end, checkpointed from now on; the reason it ended
+        (several: each reason once). `finish` once the front end has written the results."""
+        if self._checkpoints is not None:
+            clock = self.world.clock
+            self._task = clock.scheduler.every(CHECKPOINT_PERIOD_S, self._checkpoint, "checkpoint",
+                                               clock.now_us + seconds_to_us(CHECKPOINT_PERIOD_S))
         if self.swarm:
             processes = Processes(self.world.clock)
             for sysid in self.apad_ids:
@@ -114,10 +119,13 @@ class MissionSession:
         if self._replaying:
             raise CheckpointError("the mission ended before its replay reached the checkpoint: "
                                   "it was written by another version of vil or of the scenario")
-        if self._checkpoints is not None:
-            self._checkpoints.remove()  # the mission ended: nothing to resume
-            self._checkpoints = None
         return self.outcome().end_reason
+
+    def finish(self) -> None:
+        """The mission ended and its results are written: nothing to resume, the checkpoint goes."""
+        if self._checkpoints is not None:
+            self._checkpoints.remove()
+            self._checkpoints = None
 
     def close(self) -> None:
         """Keep the checkpoint (a mission that did not end can be resumed) and close its files."""
@@ -151,6 +159,8 @@ class MissionSession:
                                        status=self._statuses.get(sysid))
         loop.status.apad_time_us = self.apad_times[sysid]  # the same dict: a checkpoint of the status holds it
         self.loops[sysid] = loop
+        if loop.status.end_reason is not None:  # restored: this aPad's loop had ended before the crash
+            return loop.status.end_reason
         end = loop.run(resume=self.resuming)
         if end == EndReason.APAD_BATTERY and self.watch is not None:
             self.watch.retire(sysid)  # out for good: its share goes to the others now
@@ -163,7 +173,7 @@ class MissionSession:
             return
         assert self._checkpoints is not None
         retired = frozenset(self.watch.retired) if self.watch is not None else frozenset()
-        checkpoint.save(self._checkpoints, checkpoint.capture(self.world, statuses, self.shares, retired))
+        checkpoint.save(self._checkpoints, checkpoint.capture(self.world, statuses, self.shares, retired, self._setup))
 
     def _arrive(self, now_us: int, statuses: dict[int, LoopStatus]) -> None:
         """A replay at a checkpoint instant: at the saved one, the same state or a `CheckpointError`;

@@ -95,6 +95,7 @@ class Checkpoint:
     retired: frozenset[int]  # several aPads: those whose loop has ended for good
     log_sizes: dict[str, int]  # each log's length, by its file name in the run folder
     fingerprint: str  # the mission's state at `time_us`: a replay must arrive at the same
+    setup: str  # `setup_digest` of what the mission was started with: a replay needs the same
 
     @property
     def events_bytes(self) -> int:
@@ -111,10 +112,24 @@ def run_key(world: World) -> tuple[str, str, int]:
     return scenario_key(world.scenario)
 
 
+def setup_digest(scenario: Scenario, options: object = None) -> str:
+    """What a mission was started with, as a digest: the scenario with every override, and the link's
+    options (faults, failing aPads, signing) where they shape the mission."""
+    return hashlib.sha256(repr((scenario, options)).encode()).hexdigest()
+
+
+def check_setup(ckpt: Checkpoint, setup: str) -> None:
+    """A checkpoint resumes only the mission started as this one is (flags and scenario alike)."""
+    if ckpt.setup != setup:
+        raise CheckpointError("the checkpoint's mission was started with other settings (scenario file, "
+                              "--duration, --fail-apad, link faults ...): resume with the same ones")
+
+
 def fingerprint(world: World, statuses: Mapping[int, LoopStatus]) -> str:
     """A digest of the mission's state now: the fleet's arrays, the recorder's step count, each
-    loop's cost, cycles, phase and dockings. Equal digests at one instant: a replay has arrived where
-    the checkpointed run was. (Not the event log's length: a resumed run logged `mission_resume`.)"""
+    loop's cost, cycles, phase and dockings, each embedded aPad's hull, primitive and mode. Equal
+    digests at one instant: a replay has arrived where the checkpointed run was. (Not the event log's
+    length: a resumed run logged `mission_resume`.)"""
     digest = hashlib.sha256()
     state = world.fleet.state
     for f in fields(state):
@@ -123,12 +138,14 @@ def fingerprint(world: World, statuses: Mapping[int, LoopStatus]) -> str:
     digest.update(repr((world.clock.now_us, world.fleet.recorder.head().n_steps)).encode())
     for sysid, st in sorted(statuses.items()):
         digest.update(repr((sysid, round(st.cost_m, 6), st.cycles, str(st.phase), st.dockings)).encode())
+    for sysid, v in sorted(world.vehicles.items()):
+        digest.update(repr((sysid, v.state, v.primitive, v.mode, v.armed)).encode())
     return digest.hexdigest()
 
 
 def capture(
     world: World, statuses: Mapping[int, LoopStatus], shares: FleetShares | None = None,
-    retired: frozenset[int] = frozenset(),
+    retired: frozenset[int] = frozenset(), setup: str = "",
 ) -> Checkpoint:
     vehicles = {sysid: VehicleSnapshot(v.state, v.primitive, v.mode, v.armed, v.speed_override_mps)
                 for sysid, v in world.vehicles.items()}
@@ -137,7 +154,7 @@ def capture(
     return Checkpoint(
         FORMAT_VERSION, run_key(world), world.clock.now_us, fleet.state, dict(fleet.rng.bit_generator.state),
         fleet.recorder, dict(statuses), world.link.registry, vehicles, shares, retired, world.log_sizes(),
-        fingerprint(world, statuses),
+        fingerprint(world, statuses), setup,
     )
 
 

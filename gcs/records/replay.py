@@ -82,10 +82,19 @@ def _read_json(path: Path) -> dict[str, object]:
 
 @dataclass
 class RunFiles:
-    folder: Path
+    """A recorded run: its folder, the .tlog to replay (the folder's, or one given), what it reported."""
+
+    run: RunFolder
     tlog: Path
-    events: Path
     result: dict[str, object]
+
+    @property
+    def folder(self) -> Path:
+        return self.run.path
+
+    @property
+    def events(self) -> Path:
+        return self.run.events
 
 
 def run_files(path: str | Path) -> RunFiles:
@@ -100,7 +109,7 @@ def run_files(path: str | Path) -> RunFiles:
     else:
         raise ReplayError(f"{folder.path}: no such run folder or .tlog")
     result = {**_read_json(folder.console), **_read_json(folder.result)}
-    return RunFiles(folder.path, tlog, folder.events, result)
+    return RunFiles(folder, tlog, result)
 
 
 def find_scenario(files: RunFiles, explicit: str | Path | None = None) -> Scenario | None:

@@ -18,7 +18,6 @@ from numpy.typing import NDArray
 from gcs.mission.scenario import Scenario
 from gcs.records.events import Event
 from gcs.records.replay import ReplayError, find_scenario, load_replay, read_events, run_files
-from gcs.records.run_folder import RunFolder
 from gcs.view.snapshot import Snapshot
 from mavlink_dialect import tlog
 from mussel_sim.geo import flat_m
@@ -135,7 +134,7 @@ class RunData:
 def load_run(run: str | Path, scenario: str | Path | None = None) -> RunData:
     """Everything a report shows of one run; `ReplayError` / `ScenarioError` on bad input."""
     files = run_files(run)
-    check_result(files.result, RunFolder(files.folder).result)
+    check_result(files.result, files.run.result)
     found = find_scenario(files, scenario)
     frames = load_replay(run, scenario).frames
     last = frames[-1]

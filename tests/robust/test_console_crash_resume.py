@@ -121,8 +121,9 @@ def test_sigkill_of_the_console_with_amussels_docked_then_resume(tmp_path: Path)
 
     second = Console(tmp_path, "--resume")  # finds runs/console-pool12-run1 by its checkpoint
     try:
-        _wait("mission end", lambda: b'"mission_end"' in (run / "events.jsonl").read_bytes(), second)
-        assert not ckpt.exists()  # the mission ended: nothing left to resume
+        # The mission ended, its results written, nothing left to resume.
+        _wait("mission end", lambda: b'"mission_end"' in (run / "events.jsonl").read_bytes()
+              and (run / "result.json").exists() and not ckpt.exists(), second)
         second.press(b"q")
         second.proc.wait(WALL_TIMEOUT_S)
     finally:
@@ -251,7 +252,8 @@ def test_sigkill_of_a_two_apad_console_then_resume(tmp_path: Path) -> None:
 
     second = Console(tmp_path, *scenario, "--resume")
     try:
-        _wait("mission end", lambda: (run / "events.jsonl").read_bytes().count(b'"mission_end"') == 2, second)
+        _wait("mission end", lambda: (run / "events.jsonl").read_bytes().count(b'"mission_end"') == 2
+              and not ckpt.exists(), second)
         second.press(b"q")
         second.proc.wait(WALL_TIMEOUT_S)
     finally:

@@ -18,6 +18,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from gcs.records.checkpoint import CheckpointError, load
@@ -77,6 +78,17 @@ def test_killed_at_five_points_and_resumed_a_swarm_mission_is_the_one_never_inte
 
     kills = [_run_killed_after(args, killed, at_s, k > 0, err) for k, at_s in enumerate(kill_at_s)]
     assert all(a < b for a, b in itertools.pairwise(kills))  # five distinct points
+    # And one kill before a resume reached its checkpoint (mid-replay, logs muted): the logs are cut
+    # back to the checkpoint and nothing more is written; the checkpoint stands.
+    sizes = load(killed.checkpoint).log_sizes
+    logs = {p.name: p.read_bytes()[: sizes[p.name]] for p in killed.path.iterdir() if p.suffix in (".tlog", ".jsonl")}
+    with err.open("a") as err_file:
+        early = subprocess.Popen([*VIL, *args, "--resume"], stdout=subprocess.DEVNULL, stderr=err_file)
+    time.sleep(1.5)
+    early.kill()
+    early.wait(10)
+    assert load(killed.checkpoint).time_us / 1e6 == kills[-1]
+    assert {p.name: p.read_bytes() for p in killed.path.iterdir() if p.suffix in (".tlog", ".jsonl")} == logs
     done = subprocess.run([*VIL, *args, "--resume"], capture_output=True, text=True, timeout=WALL_TIMEOUT_S)
     assert done.returncode == 0, done.stderr
 
@@ -93,3 +105,7 @@ def test_killed_at_five_points_and_resumed_a_swarm_mission_is_the_one_never_inte
     resumes = [line for line in events if json.loads(line)["event"] == "mission_resume"]
     assert [round(json.loads(line)["t_s"]) for line in resumes] == [round(t) for t in kills]
     assert [line for line in events if line not in resumes] == whole.events.read_text().splitlines()
+    t_killed, t_whole = np.load(killed.traces), np.load(whole.traces)
+    assert t_killed.files == t_whole.files
+    for key in t_whole.files:
+        np.testing.assert_array_equal(t_killed[key], t_whole[key])

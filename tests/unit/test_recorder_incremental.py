@@ -120,7 +120,7 @@ def checkpoint_of(rec: Recorder) -> Checkpoint:
     """A checkpoint whose only real part is the recorder (the rest is carried as it is)."""
     last = rec.step_time_us()[-1] if rec.n_steps else 0
     return Checkpoint(2, ("test", "greedy", 1), int(last), None, {"rng": 1}, rec, {1: "loop"},  # type: ignore[arg-type,dict-item]
-                      "registry", {}, None, frozenset(), {}, "")  # type: ignore[arg-type]
+                      "registry", {}, None, frozenset(), {}, "", "")  # type: ignore[arg-type]
 
 
 def test_saved_every_few_steps_with_decimation_the_checkpoint_loads_the_same_recorder(tmp_path: Path) -> None:
