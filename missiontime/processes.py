@@ -52,6 +52,8 @@ from missiontime.clocks import Clock, Scheduler, seconds_to_us, us_to_s
 
 T = TypeVar("T")
 
+HOME_LOOK_S = 0.1  # `run` looks for the baton's return this often (wall time), running signal handlers between
+
 
 class ProcessStopped(BaseException):
     """Raised inside a script's sleep when the coordinator stops it (another script or the world
@@ -258,7 +260,11 @@ class Processes:
             except BaseException as exc:  # no thread for a script: the started ones are run to their stop
                 self._fail(exc)
             self._hand_to(self._next())
-            self._home.acquire()  # the last script to end hands the baton back
+            # The last script to end hands the baton back. Waited for in slices: the OS may deliver a
+            # Ctrl-C to a script's thread, and Python runs its handler in the main thread only when
+            # that thread runs again (a lock wait without a timeout may never return to it).
+            while not self._home.acquire(timeout=HOME_LOOK_S):
+                pass
         finally:  # left without the baton only by a second Ctrl-C: the threads are abandoned, not joined
             restore()
             self.current = None

@@ -132,6 +132,8 @@ class CommandQueue:
         with self._lock:
             take = [c for c in self._commands if serving in (None, c[0]) or not running(c[0])]
             self._commands = [c for c in self._commands if not any(c is t for t in take)]
+        if take:
+            self.flush(world)  # what the operator did before (the pause a command brings) is logged first
         for sysid, command in take:
             action, fields = action_of(command)
             who = {"apad": sysid} if self.swarm else {}
