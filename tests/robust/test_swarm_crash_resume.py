@@ -57,8 +57,8 @@ def _run_killed_after(args: list[str], folder: RunFolder, after_s: float, resume
 # Each: the scenario, and the mission times of the checkpoints after which the five kills fall (bay120's
 # aPad 3 falls silent between two of them: the share is taken over, and the resumes replay that too).
 CASES = {
-    "pool12x2": (["pool12x2", "--duration", "20min"], (150, 350, 550, 750, 950)),
-    "bay120-fail-apad": (["bay120", "--duration", "10min", "--fail-apad", "3:200s"], (60, 160, 260, 360, 460)),
+    "pool12x2": (["pool12x2", "--duration", "12min"], (100, 200, 300, 400, 500)),
+    "bay120-fail-apad": (["bay120", "--duration", "8min", "--fail-apad", "3:130s"], (40, 100, 160, 220, 280)),
 }
 
 
@@ -78,17 +78,6 @@ def test_killed_at_five_points_and_resumed_a_swarm_mission_is_the_one_never_inte
 
     kills = [_run_killed_after(args, killed, at_s, k > 0, err) for k, at_s in enumerate(kill_at_s)]
     assert all(a < b for a, b in itertools.pairwise(kills))  # five distinct points
-    # And one kill before a resume reached its checkpoint (mid-replay, logs muted): the logs are cut
-    # back to the checkpoint and nothing more is written; the checkpoint stands.
-    sizes = load(killed.checkpoint).log_sizes
-    logs = {p.name: p.read_bytes()[: sizes[p.name]] for p in killed.path.iterdir() if p.suffix in (".tlog", ".jsonl")}
-    with err.open("a") as err_file:
-        early = subprocess.Popen([*VIL, *args, "--resume"], stdout=subprocess.DEVNULL, stderr=err_file)
-    time.sleep(1.5)
-    early.kill()
-    early.wait(10)
-    assert load(killed.checkpoint).time_us / 1e6 == kills[-1]
-    assert {p.name: p.read_bytes() for p in killed.path.iterdir() if p.suffix in (".tlog", ".jsonl")} == logs
     done = subprocess.run([*VIL, *args, "--resume"], capture_output=True, text=True, timeout=WALL_TIMEOUT_S)
     assert done.returncode == 0, done.stderr
 
