@@ -130,7 +130,8 @@ class RunFolder:
         return apad_logs.events_path(self.path, system_id)
 
     def logs(self, apad_ids: tuple[int, ...] | list[int]) -> list[Path]:
-        """Every log a mission appends to as it runs (what a resume cuts back), aPads' included."""
+        """Every log a mission appends to as it runs, the aPads' included: the files a checkpoint's
+        `log_sizes` name (the writers report their sizes: `World.log_sizes`)."""
         out = [self.gcs_tlog, self.events]
         for sysid in apad_ids:
             out += [self.apad_tlog(sysid), self.apad_events(sysid)]
