@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.metadata
 import sys
 from collections.abc import Callable, Sequence
 from typing import NamedTuple
@@ -46,6 +47,7 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
         description="Vehicle-in-the-loop ground-control station for an aPad / aMussel marine robot swarm.",
         epilog="vil COMMAND --help explains each command.",
     )
+    parser.add_argument("--version", action="version", version=f"vil {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     chosen = next((a for a in argv if not a.startswith("-")), None)
     for command in COMMANDS:
@@ -58,6 +60,14 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
         getattr(module, command.add_arguments)(parser_)
         parser_.set_defaults(runner=getattr(module, command.run))
     return parser
+
+
+def _version() -> str:
+    """The installed distribution's version (a source tree that was never installed: unknown)."""
+    try:
+        return importlib.metadata.version("vil")
+    except importlib.metadata.PackageNotFoundError:
+        return "unknown (not installed)"
 
 
 def main(argv: Sequence[str] | None = None) -> int:

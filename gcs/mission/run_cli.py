@@ -14,7 +14,8 @@ scenario, strategy and seed that holds a checkpoint, and writes each event once.
 
 Exit status: 0 every run finished with every aMussel where it should be; 2 bad input (one line
 on stderr); 3 the runs finished but some aMussel is not where it should be (left at the surface,
-off its position, or on a slot the GCS does not know): a red table says who is where.
+off its position, or on a slot the GCS does not know): a red table says who is where; 130
+interrupted (Ctrl-C): one line says where the checkpoint is and the exact command that resumes it.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shlex
 import sys
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, replace
@@ -51,12 +53,14 @@ from gcs.records import checkpoint
 from gcs.records.checkpoint import CheckpointError
 from gcs.records.run_folder import CHECKPOINT, RunFolder
 from mavlink_dialect.signing import SigningKeyError, load_key
+from missiontime import mm_ss
 
 # The paper's Table II runs: (scenario, collection strategy).
 TABLE_II = (("pool12", "cautious"), ("pool12", "greedy"), ("pool12", "none"), ("bay24", "greedy"))
 # Over many seeds every scenario runs these, so the shape of Table II can be checked per seed.
 SHAPE_STRATEGIES = ("cautious", "greedy", "none")
 EXIT_MISPLACED = 3  # the runs finished, but some aMussel is not where it should be (the table says who)
+EXIT_INTERRUPTED = 130  # Ctrl-C, as a shell reports SIGINT
 MAX_SEEDS = 1000
 MAX_JOBS = 256
 # One-way delay bound: slower than this the GCS never hears the aPad's first heartbeat in time (10 s
@@ -193,23 +197,58 @@ def seed_notice(scenario: Scenario, seed: int | None, faults: bool) -> str | Non
             "add --draw-fleet to draw the fleet from the seed too")
 
 
-def _place(jobs: list[Job]) -> list[Job]:
-    """Each job's folder: a new one, or (resuming) the newest of its run with a usable checkpoint of it."""
+def _place(jobs: list[Job], command: str) -> list[Job]:
+    """Each job's folder: a new one (which keeps `command`, what resumes it), or (resuming) the newest
+    of its run with a usable checkpoint of it."""
     placed = []
     for job in jobs:
         stem = run_stem(job.scenario)
         if not job.resume:
-            placed.append(replace(job, out_dir=RunFolder.new(job.out_dir, stem).path))
+            made = RunFolder.new(job.out_dir, stem)
+            made.command.write_text(command + "\n", encoding="utf-8")
+            placed.append(replace(job, out_dir=made.path))
             continue
         folder = RunFolder.newest_resumable(job.out_dir, stem)
         if folder is None:
-            raise CheckpointError(f"nothing to resume: no {CHECKPOINT} in any {job.out_dir / stem}-runK/")
+            raise CheckpointError(f"nothing to resume: no {CHECKPOINT} in any {job.out_dir / stem}-runK/"
+                                  + _resumable_hint(job.out_dir))
         saved = checkpoint.load(folder.checkpoint)  # a corrupt one is refused here, not mid-run
         key = checkpoint.scenario_key(job.scenario)
         if saved.run_key != key:
             raise CheckpointError(f"{folder.checkpoint} is of run {saved.run_key}, not {key}")
         placed.append(replace(job, out_dir=folder.path))
     return placed
+
+
+def _resumable_hint(root: Path) -> str:
+    """What could be resumed under `root` instead, and how (the run's own command: every flag counts)."""
+    others = RunFolder.resumable(root)
+    if not others:
+        return ""
+    newest = others[0]
+    how = newest.resume_command()
+    more = f" (and {len(others) - 1} more)" if len(others) > 1 else ""
+    return (f"; {newest.path} holds one{more}: " + (f"resume it with: {how}" if how else
+            "resume it with the scenario and flags it was started with, and --resume"))
+
+
+def _command_line(args: argparse.Namespace) -> str:
+    """The command as given (`vil run ...`), quoted for a shell."""
+    return shlex.join(["vil", *getattr(args, "argv", ["run"])])
+
+
+def _interrupted(jobs: list[Job]) -> str:
+    """One line for a Ctrl-C: what was kept, and the exact command to go on."""
+    kept = [f for f in (RunFolder(j.out_dir) for j in jobs) if f.checkpoint.exists()]
+    if not kept:
+        return "interrupted before the first checkpoint: nothing to resume (run the command again)"
+    try:
+        at = ", ".join(mm_ss(checkpoint.load(f.checkpoint).time_us / 1e6) for f in kept)
+    except CheckpointError:
+        at = "?"
+    how = kept[0].resume_command() or "the same command with --resume"
+    where = str(kept[0].path) if len(kept) == 1 else f"{len(kept)} run folders under {kept[0].path.parent}"
+    return f"interrupted; checkpoint kept in {where} (mission time {at}); resume with: {how}"
 
 
 def _run_job(job: Job) -> RunResult:
@@ -219,7 +258,7 @@ def _run_job(job: Job) -> RunResult:
 def run(args: argparse.Namespace) -> int:
     console = Console()
     try:
-        jobs = _place(_jobs(args))
+        jobs = _place(_jobs(args), _command_line(args))
     except (ScenarioError, SigningKeyError, CheckpointError) as exc:
         print(f"vil run: {exc}", file=sys.stderr)
         return 2
@@ -227,11 +266,19 @@ def run(args: argparse.Namespace) -> int:
         print(f"vil run: --out {args.out}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     RunFolder(jobs[-1].out_dir).point_latest()
+    for job in jobs:
+        if job.resume:
+            saved_s = checkpoint.load(RunFolder(job.out_dir).checkpoint).time_us / 1e6
+            print(f"vil run: resuming {job.out_dir} from its checkpoint at {mm_ss(saved_s)} (the mission is "
+                  "replayed to it, its logs muted)", file=sys.stderr)
     try:
         results = _run_all(jobs, args.jobs, console)
     except TimeoutError as exc:  # e.g. an --outage over the start: the aPad was never heard
         print(f"vil run: {exc}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:  # Ctrl-C: an ordinary way to stop; the checkpoint says where to go on
+        print(f"vil run: {_interrupted(jobs)}", file=sys.stderr)
+        return EXIT_INTERRUPTED
     results.sort(key=lambda r: ([(j.scenario.name, j.scenario.mission.collect_strategy) for j in jobs]
                                 .index((r.scenario, r.strategy)), r.seed))
     if args.seeds:
@@ -249,10 +296,9 @@ def run(args: argparse.Namespace) -> int:
             console.print(where_time_went)
     mission_s = sum(r.duration_s for r in results)
     run_s = sum(r.wall_s for r in results)
-    out_dirs = sorted({str(Path(r.out_dir).parent) for r in results})
     console.print(f"{len(results)} run(s) of {mission_s / 60 / len(results):.0f} mission minutes, "
                   f"{run_s / len(results):.1f} s each (real-time factor {mission_s / run_s:.0f}); "
-                  f"logs, .tlog and traces in {', '.join(out_dirs)}/")
+                  f"logs, .tlog and traces in {_folders(results)}")
     if args.json:
         payload = [r.to_json() for r in results]
         args.json.write_text(json.dumps(payload[0] if len(payload) == 1 else payload, indent=1) + "\n")
@@ -261,6 +307,15 @@ def run(args: argparse.Namespace) -> int:
         console.print(misplaced)
         return EXIT_MISPLACED
     return 0
+
+
+def _folders(results: list[RunResult]) -> str:
+    """The run folders, by name: all of them when they are few, else where they are and the first."""
+    folders = [f"{r.out_dir}/" for r in results]
+    if len(folders) <= 4:
+        return ", ".join(folders)
+    parents = sorted({str(Path(r.out_dir).parent) for r in results})
+    return f"{len(folders)} folders in {', '.join(parents)}/ ({Path(folders[0]).name}, ...)"
 
 
 def _run_all(jobs: list[Job], n_jobs: int, console: Console) -> list[RunResult]:
@@ -275,8 +330,11 @@ def _run_all(jobs: list[Job], n_jobs: int, console: Console) -> list[RunResult]:
                                 progress=lambda t_s: progress.update(task, completed=int(t_s)))]
         task = progress.add_task(f"{len(jobs)} missions", total=len(jobs))
         results = []
-        with ProcessPoolExecutor(max_workers=min(n_jobs, len(jobs))) as pool:
+        pool = ProcessPoolExecutor(max_workers=min(n_jobs, len(jobs)))
+        try:
             for future in as_completed([pool.submit(_run_job, job) for job in jobs]):
                 results.append(future.result())
                 progress.advance(task)
+        finally:  # a Ctrl-C reached the workers too: what has not started never will
+            pool.shutdown(wait=True, cancel_futures=True)
         return results

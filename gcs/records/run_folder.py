@@ -8,6 +8,7 @@
     traces.npz           active count and battery traces per step, where the time went
     endpoints.json       the UDP ports a run over real sockets opened
     console.json         a console run's scenario and the Unix time of its mission time 0
+    command.txt          the `vil` command line that started the run (what resumes it: add --resume)
     checkpoint.pkl       the checkpoint of a mission under way (+ .steps, .traces side files)
     report/              what `vil report` writes
 
@@ -34,6 +35,7 @@ RESULT = "result.json"
 TRACES = "traces.npz"
 ENDPOINTS = "endpoints.json"
 CONSOLE = "console.json"
+COMMAND = "command.txt"
 CHECKPOINT = "checkpoint.pkl"
 REPORT = "report"
 
@@ -74,6 +76,12 @@ class RunFolder:
             if (path / CHECKPOINT).exists():
                 return cls(path)
         return None
+
+    @classmethod
+    def resumable(cls, root: Path) -> list[RunFolder]:
+        """Every run folder under `root` holding a checkpoint, the last modified first."""
+        found = [p for p in root.glob(f"*/{CHECKPOINT}") if p.parent.name != LATEST] if root.is_dir() else []
+        return [cls(p.parent) for p in sorted(found, key=lambda p: p.stat().st_mtime, reverse=True)]
 
     def point_latest(self) -> None:
         """Make `latest` beside this folder point at it (replaced atomically; best effort, never fatal)."""
@@ -118,6 +126,18 @@ class RunFolder:
     @property
     def checkpoint(self) -> Path:
         return self.path / CHECKPOINT
+
+    @property
+    def command(self) -> Path:
+        return self.path / COMMAND
+
+    def resume_command(self) -> str | None:
+        """The command that resumes this run (its own command line and --resume), if it kept one."""
+        try:
+            line = self.command.read_text(encoding="utf-8").strip()
+        except OSError:
+            return None
+        return line if "--resume" in line.split() else f"{line} --resume" if line else None
 
     @property
     def report(self) -> Path:

@@ -1,0 +1,82 @@
+"""The first hour with `vil run` (issue 23): Ctrl-C is an ordinary way to stop (one line: what was
+kept, the exact command to go on; exit 130), a resume says where it resumed from, `--resume` with
+other flags points at the run that can be resumed and how, the summary names the folder it made,
+and `vil --version` answers. Real processes, real signals."""
+
+from __future__ import annotations
+
+import importlib.metadata
+import os
+import shlex
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from gcs.records.checkpoint import CheckpointError, load
+from gcs.records.run_folder import RunFolder
+
+pytestmark = [pytest.mark.sitl, pytest.mark.slow]
+
+VIL = [sys.executable, "-m", "gcs.cli"]
+ROOT = Path(__file__).resolve().parents[2]
+WALL_TIMEOUT_S = 120.0
+
+
+def _vil(cwd: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([*VIL, *args], cwd=cwd, capture_output=True, text=True, timeout=WALL_TIMEOUT_S,
+                          env={**os.environ, "PYTHONPATH": str(ROOT), "COLUMNS": "100"})
+
+
+def test_ctrl_c_of_vil_run_is_one_line_with_the_command_that_resumes_it(tmp_path: Path) -> None:
+    args = ["run", "pool12", "--strategy", "greedy", "--duration", "2h", "--out", "out"]
+    folder = RunFolder(tmp_path / "out" / "pool12-greedy-seed1-run1")
+    proc = subprocess.Popen([*VIL, *args], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env={**os.environ, "PYTHONPATH": str(ROOT)})
+    try:
+        deadline = time.monotonic() + WALL_TIMEOUT_S
+        while True:  # well into the mission: a checkpoint to keep
+            assert proc.poll() is None and time.monotonic() < deadline
+            try:
+                if folder.checkpoint.exists() and load(folder.checkpoint).time_us > 300e6:
+                    break
+            except CheckpointError:  # caught mid-write
+                pass
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=WALL_TIMEOUT_S)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and err.count("\n") == 1, err
+    assert f"checkpoint kept in {Path('out') / folder.path.name}" in err
+    command = err.split("resume with: ")[1].strip()
+    assert command == shlex.join(["vil", *args, "--resume"])
+
+    done = _vil(tmp_path, *shlex.split(command)[1:])  # the very command it printed
+    assert done.returncode == 0, done.stderr
+    saved_at = err.split("(mission time ")[1].split(")")[0]
+    assert f"resuming {Path('out') / folder.path.name} from its checkpoint at {saved_at}" in done.stderr
+    assert f"in {Path('out') / folder.path.name}/" in " ".join(done.stdout.split())  # the summary names it
+    assert folder.result.exists() and not folder.checkpoint.exists()
+
+
+def test_resume_with_other_flags_names_the_run_that_can_be_resumed_and_how(tmp_path: Path) -> None:
+    folder = RunFolder(tmp_path / "out" / "pool12-greedy-seed1-run1")
+    folder.path.mkdir(parents=True)
+    folder.checkpoint.write_bytes(b"")  # a run left mid-mission (its content is not read here)
+    folder.command.write_text("vil run pool12 --strategy greedy --duration 2h --out out\n")
+    done = _vil(tmp_path, "run", "pool12", "--out", "out", "--resume")
+    assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+    assert "nothing to resume" in done.stderr and "pool12-cautious-seed1" in done.stderr
+    assert (f"{Path('out') / folder.path.name} holds one: resume it with: "
+            "vil run pool12 --strategy greedy --duration 2h --out out --resume") in done.stderr
+
+
+def test_vil_version_names_the_installed_version(tmp_path: Path) -> None:
+    done = _vil(tmp_path, "--version")
+    assert done.returncode == 0 and done.stdout.strip() == f"vil {importlib.metadata.version('vil')}"
