@@ -7,13 +7,36 @@ with them), so `vil --help` answers at once.
 from __future__ import annotations
 
 import argparse
+import difflib
 import importlib
 import importlib.metadata
 import sys
 from collections.abc import Callable, Sequence
-from typing import NamedTuple
+from typing import NamedTuple, NoReturn
 
 Runner = Callable[[argparse.Namespace], int]
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """A bad flag is one line, not a usage block: what is wrong, a close flag where one is obvious
+    (a misspelling), and where the flags are explained."""
+
+    def error(self, message: str) -> NoReturn:
+        hint = f" ({self.prog} --help explains every flag)"
+        self.exit(2, f"{self.prog}: error: {message}{self.suggestion(message)}{hint}\n")
+
+    def suggestion(self, message: str) -> str:
+        """"; did you mean --strategy?" for an unknown flag close to one of this parser's."""
+        if not message.startswith("unrecognized arguments:"):
+            return ""
+        unknown = [a.split("=")[0] for a in message.split(":", 1)[1].split() if a.startswith("--")]
+        # argparse keeps its option strings in a private table; there is no public read of them.
+        known = [o for o in self._option_string_actions if o.startswith("--")]
+        for flag in unknown:
+            close = difflib.get_close_matches(flag, known, n=1, cutoff=0.6)
+            if close:
+                return f"; did you mean {close[0]}?"
+        return ""
 
 
 class Command(NamedTuple):
@@ -42,7 +65,7 @@ COMMANDS = (
 
 
 def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="vil",
         description="Vehicle-in-the-loop ground-control station for an aPad / aMussel marine robot swarm.",
         epilog="vil COMMAND --help explains each command.",
@@ -50,6 +73,7 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"vil {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     chosen = next((a for a in argv if not a.startswith("-")), None)
+    parser.set_defaults(chosen=None)
     for command in COMMANDS:
         if command.name != chosen:
             sub.add_parser(command.name, help=command.summary)
@@ -58,7 +82,7 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
         parser_ = sub.add_parser(command.name, help=command.summary, description=module.__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
         getattr(module, command.add_arguments)(parser_)
-        parser_.set_defaults(runner=getattr(module, command.run))
+        parser_.set_defaults(runner=getattr(module, command.run), chosen=parser_)
     return parser
 
 
@@ -72,7 +96,11 @@ def _version() -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    args = build_parser(argv).parse_args(argv)
+    parser = build_parser(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:  # reported by the command's own parser: its name, and its flags to suggest from
+        (args.chosen or parser).error(f"unrecognized arguments: {' '.join(extra)}")
+    del args.chosen
     args.argv = argv  # the command line as given (`vil gcs --web` serves the same one to browsers)
     runner: Runner = args.runner
     return runner(args)

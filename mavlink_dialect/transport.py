@@ -329,8 +329,10 @@ class SerialTransport:
 
 def _host_port(address: str, rest: str) -> tuple[str, int]:
     host, sep, port = rest.rpartition(":")
-    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+    if not sep or not host or not port:
         raise AddressError(f"bad address {address!r}: expected HOST:PORT after the scheme")
+    if not port.isdigit() or not 0 < int(port) < 65536:
+        raise AddressError(f"bad address {address!r}: port {port} is not a port number (1 to 65535)")
     return host, int(port)
 
 

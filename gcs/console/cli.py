@@ -26,7 +26,7 @@ from gcs.mission import flags
 from gcs.mission.scenario import MISSIONS_DIR, Scenario, ScenarioError, load_scenario, resolve_scenario
 from gcs.records.run_folder import RunFolder
 from mavlink_dialect.signing import SigningKeyError, load_key
-from missiontime import unix_time_us
+from missiontime import mm_ss, unix_time_us
 
 if TYPE_CHECKING:
     from gcs.console.runner import ResumePoint
@@ -187,6 +187,10 @@ def run_replay(args: argparse.Namespace) -> int:
         replay = load_replay(args.run, args.scenario)
     except (ReplayError, ScenarioError, OSError) as exc:
         print(f"vil replay: {exc}", file=sys.stderr)
+        return 2
+    if args.start > replay.end_s:
+        print(f"vil replay: --start {mm_ss(args.start)} is past the end of {args.run} ({mm_ss(replay.end_s)})",
+              file=sys.stderr)
         return 2
     ReplayConsole(replay, start_s=args.start, playing=not args.paused, speed=args.speed).run()
     return 0

@@ -2,13 +2,26 @@
 
 from __future__ import annotations
 
+import os
+import sys
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
 from rich import box
+from rich.console import Console
 from rich.table import Table
+
+PIPED_WIDTH = 1000  # written to a file or a pipe, output is as wide as it needs, never cut at 80 columns
+
+
+def output_console() -> Console:
+    """Where the tables go: the terminal's width on a terminal (or $COLUMNS if set); a file or a
+    pipe gets every column and every line whole (rich would cut them at 80 columns)."""
+    piped = not sys.stdout.isatty() and "COLUMNS" not in os.environ
+    return Console(width=PIPED_WIDTH) if piped else Console()
+
 
 # The paper's Table II (40 min, theta = 30): avg %, max %, min %, cost m, active.
 PAPER_TABLE_II: dict[tuple[str, str], tuple[float, float, float, float, float]] = {

@@ -39,6 +39,7 @@ from gcs.mission.results import (
     RunResult,
     apads_table,
     misplaced_table,
+    output_console,
     results_table,
     seed_stats,
     seed_stats_table,
@@ -256,7 +257,7 @@ def _run_job(job: Job) -> RunResult:
 
 
 def run(args: argparse.Namespace) -> int:
-    console = Console()
+    console = output_console()
     try:
         jobs = _place(_jobs(args), _command_line(args))
     except (ScenarioError, SigningKeyError, CheckpointError) as exc:

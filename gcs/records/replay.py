@@ -98,8 +98,11 @@ class RunFiles:
 
 
 def run_files(path: str | Path) -> RunFiles:
-    """The files of the run at `path`: a run folder (`runs/latest` too) or a .tlog in one."""
+    """The files of the run at `path`: a run folder (`runs/latest` too), a .tlog in one, or any other
+    file of one (its result.json, say: the folder it is in)."""
     folder = RunFolder.at(path)
+    if folder.path.is_file() and folder.path.suffix != ".tlog":  # result.json, events.jsonl ...: their run
+        folder = RunFolder.at(folder.path.parent)
     if folder.path.is_dir():
         tlog = folder.gcs_tlog
         if not tlog.exists():

@@ -22,6 +22,7 @@ from pathlib import Path
 from rich.console import Console
 
 from gcs.mission import flags
+from gcs.mission.results import output_console
 from gcs.sweep import store
 from gcs.sweep.cells import make_cells
 from gcs.sweep.cluster import ClusterError
@@ -47,7 +48,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    console = Console()
+    console = output_console()
     if args.spec == "report":
         return _report(args.dir, console)
     if args.dir is not None:

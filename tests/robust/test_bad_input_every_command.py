@@ -28,8 +28,9 @@ def vil(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]
 
 
 def refused(done: subprocess.CompletedProcess[str], *expect: str) -> str:
-    """The one error line (argparse adds its usage lines above it); asserts exit 2 and no traceback."""
+    """The one error line (no usage block above it); asserts exit 2 and no traceback."""
     assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert done.stderr.count("\n") == 1, done.stderr
     last = done.stderr.strip().splitlines()[-1]
     assert all(e in last for e in expect), done.stderr
     return last
@@ -205,3 +206,24 @@ def test_damaged_run_files_are_one_line(tmp_path: Path, run_folder: Path, comman
     done = vil(command, str(folder), *(["-o", str(tmp_path / "report")] if command == "report" else []), cwd=tmp_path)
     assert done.stderr.count("\n") == 1
     refused(done, f"vil {command}: {folder / name}", expect)
+
+
+def test_a_misspelt_flag_is_one_line_naming_the_command_and_the_flag_meant() -> None:
+    for args, meant in ((("run", "--stratgy", "greedy"), "--strategy"), (("sweep", "x.toml", "--schduler", "a"),
+                                                                       "--scheduler")):
+        line = refused(vil(*args), f"vil {args[0]}: error: unrecognized arguments", f"did you mean {meant}?")
+        assert f"vil {args[0]} --help" in line
+
+
+def test_a_replay_start_past_the_runs_end_is_refused_naming_both(run_folder: Path) -> None:
+    refused(vil("replay", str(run_folder), "--start", "90min"), "--start 90:00 is past the end", "(01:00)")
+
+
+def test_a_report_of_a_file_in_a_run_folder_is_the_report_of_that_run(run_folder: Path, tmp_path: Path) -> None:
+    done = vil("report", str(run_folder / "result.json"), "--out", str(tmp_path / "report"))
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "report" / "index.html").exists()
+
+
+def test_a_port_out_of_range_is_named() -> None:
+    refused(vil("sitl", "--listen", "udp:127.0.0.1:99999"), "port 99999 is not a port number")

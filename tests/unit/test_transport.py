@@ -88,7 +88,8 @@ def test_serial_over_a_real_pty() -> None:
     [
         ("localhost", "expected udp:HOST:PORT"),
         ("udp:127.0.0.1", "expected HOST:PORT"),
-        ("udp:127.0.0.1:99999", "expected HOST:PORT"),
+        ("udp:127.0.0.1:99999", "port 99999 is not a port number"),
+        ("tcp:127.0.0.1:0", "port 0 is not a port number"),
         ("carrier-pigeon:x:1", "unknown scheme"),
         ("serial:/dev/does-not-exist:57600", "cannot open serial port"),
         ("serial:/dev/ttyS0:fast", "baud rate must be a number"),
