@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import logging
 import os
+import signal
+import threading
 import traceback
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -51,10 +53,27 @@ def dask_client(scheduler: str | None, workers: int | None = None, processes: bo
             yield client
         return
     n = workers or os.cpu_count() or 1
-    # The scheduler's HTTP server on a free port: the default 8787 may be another cluster's.
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=":0",
-                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+    # The scheduler's HTTP server on a free port: the default 8787 may be another cluster's. The
+    # worker processes start with Ctrl-C ignored (they inherit it): a Ctrl-C in the terminal reaches
+    # the whole process group, and only this process should answer it, by closing the cluster in order.
+    with _ctrl_c_ignored():
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=":0",
+                               silence_logs=logging.ERROR)
+    with cluster, Client(cluster) as client:
         yield client
+
+
+@contextmanager
+def _ctrl_c_ignored() -> Iterator[None]:
+    """SIGINT ignored meanwhile (in the main thread; elsewhere signals cannot be set: nothing done)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def describe(client: Client) -> str:
