@@ -200,16 +200,23 @@ def seed_notice(scenario: Scenario, seed: int | None, faults: bool) -> str | Non
 
 def _place(jobs: list[Job], command: str) -> list[Job]:
     """Each job's folder: a new one (which keeps `command`, what resumes it), or (resuming) the newest
-    of its run with a usable checkpoint of it."""
+    of its run with a usable checkpoint of it. Resuming several runs (a Ctrl-C stops them where they
+    are), one with no checkpoint runs from its start in a new folder, and says so; none: an error."""
+    if all(j.resume for j in jobs) and len(jobs) > 1 and not any(
+            RunFolder.newest_resumable(j.out_dir, run_stem(j.scenario)) for j in jobs):
+        jobs = jobs[:1]  # the error below, for the first
     placed = []
     for job in jobs:
         stem = run_stem(job.scenario)
+        folder = RunFolder.newest_resumable(job.out_dir, stem) if job.resume else None
+        if job.resume and folder is None and len(jobs) > 1:
+            print(f"vil run: no checkpoint of {stem} under {job.out_dir}: it runs from the start", file=sys.stderr)
+            job = replace(job, resume=False)
         if not job.resume:
             made = RunFolder.new(job.out_dir, stem)
-            made.command.write_text(command + "\n", encoding="utf-8")
+            made.command.write_text(command.removesuffix(" --resume") + "\n", encoding="utf-8")
             placed.append(replace(job, out_dir=made.path))
             continue
-        folder = RunFolder.newest_resumable(job.out_dir, stem)
         if folder is None:
             raise CheckpointError(f"nothing to resume: no {CHECKPOINT} in any {job.out_dir / stem}-runK/"
                                   + _resumable_hint(job.out_dir))

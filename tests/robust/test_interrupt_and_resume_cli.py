@@ -80,3 +80,29 @@ def test_resume_with_other_flags_names_the_run_that_can_be_resumed_and_how(tmp_p
 def test_vil_version_names_the_installed_version(tmp_path: Path) -> None:
     done = _vil(tmp_path, "--version")
     assert done.returncode == 0 and done.stdout.strip() == f"vil {importlib.metadata.version('vil')}"
+
+
+def test_ctrl_c_of_several_runs_to_the_process_group_then_the_printed_command_finishes_them(tmp_path: Path) -> None:
+    """Ctrl-C in a terminal reaches every process of the job (the parallel runs' workers too): one
+    line; the printed command resumes the runs that kept a checkpoint and runs the others."""
+    args = ["run", "--duration", "20min", "--out", "out", "--jobs", "2"]  # Table II: four runs, two at a time
+    proc = subprocess.Popen([*VIL, *args], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env={**os.environ, "PYTHONPATH": str(ROOT)}, start_new_session=True)
+    try:
+        deadline = time.monotonic() + WALL_TIMEOUT_S
+        while len(list((tmp_path / "out").glob("*/checkpoint.pkl"))) < 2:
+            assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+            time.sleep(0.05)
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=WALL_TIMEOUT_S)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and err.count("\n") == 1 and "checkpoint kept in" in err, err
+    command = err.split("resume with: ")[1].strip()
+    assert command == shlex.join(["vil", *args, "--resume"])
+    done = _vil(tmp_path, *shlex.split(command)[1:])
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.count("resuming ") >= 1
+    assert " ".join(done.stdout.split()).count("-seed1-run") == 4  # the summary names four folders
