@@ -205,7 +205,8 @@ class _Table:
             raise self.fail(key, f"expected a file path, got {value!r}")
         resolved = (self.path.parent / value).resolve()
         if not resolved.is_file():
-            raise self.fail(key, f"no such file: {resolved}")
+            raise self.fail(key, f"no such file: {resolved} (a path in a scenario is relative to the scenario "
+                                 f"file's folder, {self.path.parent.resolve()})")
         return resolved
 
     def pair(self, key: str, default: Any = None, lo: float | None = None, hi: float | None = None

@@ -36,7 +36,8 @@ def check_inputs(scenario: Scenario) -> None:
             if config.n != scenario.fleet.count:
                 n = scenario.fleet.count
                 raise ValueError(f"holds {config.n} aMussels, the scenario says {n} (to draw {n} from the seed: "
-                                 "vil run --draw-fleet, or no fleet.start_config)")
+                                 "vil run --draw-fleet, draw_fleet = true in a sweep spec, or no "
+                                 "fleet.start_config)")
             _check_inside(config, area)
             simulated = config.ids.tolist()
     except OSError as exc:
