@@ -48,6 +48,7 @@ class Modes:
         self._apad = apad
         self.last_gcs_heartbeat_us: int | None = None  # mission time of the last GCS HEARTBEAT
         self.failsafe_active = False
+        self.failsafe_holds = 0  # times the failsafe stopped what the aPad was doing and held
         self._scheduler: Scheduler | None = None
         self._deadline: Task | None = None
         host.on(mavlink.MAVLINK_MSG_ID_HEARTBEAT, self._on_heartbeat)
@@ -158,6 +159,7 @@ class Modes:
         busy = p.kind != Primitive.HOLD and p.progress == Progress.IN_PROGRESS
         if busy and not self.failsafe_active:
             self.failsafe_active = True
+            self.failsafe_holds += 1
             host.statustext(mavlink.MAV_SEVERITY_WARNING, "GCS failsafe: heartbeat lost, holding")
             silent_us = host.now_us - (self.last_gcs_heartbeat_us or 0)
             host.event("failsafe", reason="gcs heartbeat lost", silent_s=round(silent_us / US_PER_S, 6))

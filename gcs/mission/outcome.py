@@ -104,7 +104,35 @@ def collect_result(world: World, outcome: Outcome, wall_s: float) -> RunResult:
         messages=messages,
         whereabouts=whereabouts,
         apads=apads,
+        happened=happenings(world, outcome),
     )
+
+
+def happenings(world: World, outcome: Outcome) -> dict[str, Any]:
+    """What happened that a user would want to know besides the figures, from the run's own records:
+    the link faults injected and aPads failed on purpose, the aPads' failsafe holds (embedded SITL
+    aPads: a real one's are on the aPad), the loop's link losses, Go Tos the failsafe preempted,
+    steps given up at a bound, aPads lost to the swarm and the re-shares. Zeros are left out."""
+    counts = world.events.counts
+    options = world.options
+    happened: dict[str, Any] = {}
+    if options.faults is not None and options.faults.any:
+        f = options.faults
+        happened["faults"] = {k: v for k, v in (("loss", f.loss_frac), ("latency_s", f.latency_s),
+                                                ("jitter_s", f.jitter_s), ("duplicate", f.duplicate_frac),
+                                                ("outages_s", [list(w) for w in f.outages_s])) if v}
+    if options.fail_apads:
+        happened["failed_apads"] = [{"apad": sysid, "at_s": t_s} for sysid, t_s in options.fail_apads]
+    if world.vehicles:
+        happened["failsafe_holds"] = sum(v.modes.failsafe_holds for v in world.vehicles.values())
+    for kind, name in (("link_lost", "link_losses"), ("goto_resumed", "gotos_resumed"), ("gave_up", "gave_up")):
+        happened[name] = counts.get(kind, 0)
+    shares = outcome.shares
+    if shares is not None:
+        happened["reshares"] = max(shares.reshares - 1, 0)  # the first sharing is not a re-share
+        happened["apads_lost"] = [{"apad": a, "at_s": round(us / 1e6, 2)}
+                                  for a, us in sorted(shares.lost_since_us.items())]
+    return {k: v for k, v in happened.items() if v}
 
 
 def apad_rows(world: World, outcome: Outcome) -> list[dict[str, Any]]:
@@ -128,6 +156,8 @@ def apad_rows(world: World, outcome: Outcome) -> list[dict[str, Any]]:
             "idle_share": round(spent.get(Phase.IDLE_WAIT, 0.0) / duration_s, 4),
             "phase_s": {str(p): round(t, 1) for p, t in spent.items()},
             "end_reason": str(loop.status.end_reason),
+            **({"lost_at_s": round(outcome.shares.lost_since_us[sysid] / 1e6, 2)}
+               if outcome.shares is not None and sysid in outcome.shares.lost_since_us else {}),
         })
     return rows
 

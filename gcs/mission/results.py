@@ -13,6 +13,8 @@ from rich import box
 from rich.console import Console
 from rich.table import Table
 
+from missiontime import mm_ss
+
 PIPED_WIDTH = 1000  # written to a file or a pipe, output is as wide as it needs, never cut at 80 columns
 
 
@@ -60,6 +62,9 @@ class RunResult:
     out_dir: str = ""
     messages: dict[str, int] = field(default_factory=dict)  # MAVLink counters of the run
     whereabouts: list[dict[str, Any]] = field(default_factory=list)  # every aMussel at the end (gcs.mission.accounting)
+    # What happened that a user would want to know: faults injected, failsafe holds, link losses,
+    # aPads lost, re-shares, steps given up (`gcs.mission.outcome.happenings`)
+    happened: dict[str, Any] = field(default_factory=dict)
     # One row per aPad (gcs.mission.outcome.apad_rows), with its travelling, docking and holding shares
     # of the mission time (gcs.mission.time_accounting).
     apads: list[dict[str, Any]] = field(default_factory=list)
@@ -87,6 +92,31 @@ def misplaced_table(results: list[RunResult]) -> Table | None:
     return table
 
 
+def happened_lines(results: list[RunResult]) -> list[str]:
+    """One line per run that had something besides the figures to say (`RunResult.happened`)."""
+    lines = []
+    for r in results:
+        h = r.happened
+        parts = []
+        if "faults" in h:
+            f = h["faults"]
+            said = [f"loss {100 * f['loss']:g} %" if "loss" in f else "", f"latency {f['latency_s']:g} s"
+                    if "latency_s" in f else "", f"jitter {f['jitter_s']:g} s" if "jitter_s" in f else "",
+                    f"duplicates {100 * f['duplicate']:g} %" if "duplicate" in f else ""]
+            said += [f"outage {mm_ss(a)}-{mm_ss(b)}" for a, b in f.get("outages_s", [])]
+            parts.append("link faults: " + ", ".join(x for x in said if x))
+        parts += [f"aPad {a['apad']} made to fail at {mm_ss(a['at_s'])}" for a in h.get("failed_apads", [])]
+        parts += [f"aPad {a['apad']} lost at {mm_ss(a['at_s'])}" for a in h.get("apads_lost", [])]
+        for key, words in (("reshares", "fleet re-shared"), ("failsafe_holds", "failsafe hold"),
+                           ("link_losses", "link loss"), ("gotos_resumed", "Go To resumed after a hold"),
+                           ("gave_up", "step given up at its bound")):
+            if h.get(key):
+                parts.append(f"{words} x{h[key]}")
+        if parts:
+            lines.append(f"{r.scenario} {r.strategy} s{r.seed}: " + "; ".join(parts))
+    return lines
+
+
 def apads_table(results: list[RunResult]) -> Table | None:
     """One row per aPad of every run with several: its share, travel, dockings, idle time; None if none."""
     swarm = [r for r in results if len(r.apads) > 1]
@@ -102,7 +132,7 @@ def apads_table(results: list[RunResult]) -> Table | None:
             travelled = a["travelled_m"]
             row = [str(a["sysid"]), str(len(a["mussels"])), "-" if travelled is None else f"{travelled:.1f}",
                    f"{a['cost_m']:.1f}", str(a["dockings"]), str(a["cycles"]), f"{100 * a['idle_share']:.1f}",
-                   str(a["end_reason"])]
+                   f"lost at {mm_ss(a['lost_at_s'])}" if "lost_at_s" in a else str(a["end_reason"])]
             table.add_row(*([f"{r.scenario} {r.strategy} s{r.seed}"] if several else []), *row)
     return table
 

@@ -38,6 +38,7 @@ from gcs.mission.headless import run_mission, run_stem
 from gcs.mission.results import (
     RunResult,
     apads_table,
+    happened_lines,
     misplaced_table,
     output_console,
     results_table,
@@ -302,6 +303,8 @@ def run(args: argparse.Namespace) -> int:
         where_time_went = time_table(results)
         if where_time_went is not None:
             console.print(where_time_went)
+    for line in happened_lines(results):  # faults, holds, link losses, lost aPads: what the figures do not say
+        console.print(line, highlight=False)
     mission_s = sum(r.duration_s for r in results)
     run_s = sum(r.wall_s for r in results)
     console.print(f"{len(results)} run(s) of {mission_s / 60 / len(results):.0f} mission minutes, "

@@ -97,6 +97,7 @@ class World:
     real: RealFleet | None = None  # estimates of the real aMussels heard on the bridge
     geofence_deg: list[tuple[float, float]] = field(default_factory=list)  # (lat, lon) ring; empty: none
     folder: RunFolder | None = None  # where the logs go; None: no logs
+    options: LinkOptions = field(default_factory=lambda: LinkOptions())  # how the aPads are reached
 
     @property
     def vehicle(self) -> SitlVehicle | None:
@@ -223,7 +224,8 @@ def build_world(
         int(i): Location(float(lat), float(lon))
         for i, lat, lon in zip(config.ids, config.lat_deg, config.lon_deg, strict=True)
     }
-    world = World(scenario, clock, link, api, fleet, frame, config, homes, events, geofence_deg=fence, folder=folder)
+    world = World(scenario, clock, link, api, fleet, frame, config, homes, events, geofence_deg=fence, folder=folder,
+                  options=options)
     world.mute_logs(muted_logs)
     world.real = RealFleet(link.registry.mussels, link.registry.mussel_heard_us,
                            discharge_profile(scenario.fleet.discharge), charge_profile(scenario.fleet.charge),

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TextIO
@@ -31,10 +32,12 @@ class EventLog:
         # The file's length: a checkpoint keeps it, so a resumed run cuts what the crashed one logged later.
         self.bytes = path.stat().st_size if path is not None and append else 0
         self.muted = False
+        self.counts: Counter[str] = Counter()  # every event emitted, by kind (the list keeps the last `keep`)
 
     def emit(self, t_s: float, kind: str, **fields: Any) -> Event:
         event = Event(t_s, kind, fields)
         self.events.append(event)
+        self.counts[kind] += 1
         if len(self.events) > self.keep:
             del self.events[: len(self.events) - self.keep]
         if self._file is not None and not self.muted:
