@@ -117,7 +117,8 @@ class ConsoleApp(App[None]):
 
 class LiveConsole(ConsoleApp):
     TITLE = "vil gcs"
-    HELP_INTRO = ("Live console. Override, go-to, dock and undock pause the loop; p resumes it. q quits within a "
+    HELP_INTRO = ("Live console. The up and down arrow keys (or a click) pick the aMussel in the fleet table that g, "
+                  "d and u act on. Override, go-to, dock and undock pause the loop; p resumes it. q quits within a "
                   "second (asks first if aMussels are at the surface); Q, ctrl+q quit at once: the aPads hold, "
                   "floating aMussels sink. Top line: each link's last heartbeat (amber 1.5 s, LINK LOST 3 s), "
                   "lost frames, signing, restarts.")

@@ -93,12 +93,15 @@ def run_gcs(args: argparse.Namespace) -> int:
         except CheckpointError as exc:
             print(f"vil gcs: {exc}", file=sys.stderr)
             return 2
+        if args.speed is None and args.sitl:
+            args.speed = saved_speed(RunFolder(out))  # a watched simulation goes on at the pace it had
     else:
         epoch_us, resume = unix_time_us(), None
         try:
             out = args.out or RunFolder.new(Path("runs"), stem).path
             out.mkdir(parents=True, exist_ok=True)
-            record = {"scenario": scenario.name, "scenario_path": str(path.resolve()), "epoch_us": epoch_us}
+            record = {"scenario": scenario.name, "scenario_path": str(path.resolve()), "epoch_us": epoch_us,
+                      "speed": args.speed}
             RunFolder(out).console.write_text(json.dumps(record))
         except OSError as exc:
             print(f"vil gcs: cannot write the logs in {args.out or 'runs'}: {exc.strerror or exc}", file=sys.stderr)
@@ -133,6 +136,16 @@ def run_gcs(args: argparse.Namespace) -> int:
         return 1
     print(f"vil gcs: logs in {out} (replay: vil replay {out})")
     return 0
+
+def saved_speed(folder: RunFolder) -> float | None:
+    """The --speed a console run was started with (console.json), if it was one and the value is sane."""
+    try:
+        speed = json.loads(folder.console.read_text(encoding="utf-8")).get("speed")
+    except (OSError, ValueError, AttributeError):
+        return None
+    ok = isinstance(speed, int | float) and not isinstance(speed, bool) and SPEED_RANGE[0] <= speed <= SPEED_RANGE[1]
+    return float(speed) if ok else None
+
 
 def _resume_point(out: Path | None, stem: str, scenario: Scenario) -> tuple[Path, int, ResumePoint]:
     """The folder, log epoch and checkpoint of the console mission to resume; `CheckpointError` (one

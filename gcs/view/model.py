@@ -46,6 +46,9 @@ class MissionEvent(Protocol):
     def fields(self) -> Mapping[str, Any]: ...
 
 
+QUIET_PHASES = frozenset({"idle wait", "plan collection", "plan redeployment"})  # not in the event log shown
+
+
 class MissionView:
     """The console's view of the aPads and the fleet: current state read from the link's registry,
     history sampled once per second of mission time, the mission loops' events."""
@@ -125,7 +128,9 @@ class MissionView:
             self.strategy = str(f["strategy"])
         elif ev.kind == "strategy_switch":
             self.strategy = str(f.get("new", self.strategy))
-        if ev.kind != "phase" or f.get("phase") != "idle wait":  # idle wait repeats every cycle
+        # Not the idle wait (it repeats every cycle), nor the planning phases: their plan's own event
+        # follows at once and says more (the strategy, the route), so each plan is one line.
+        if ev.kind != "phase" or f.get("phase") not in QUIET_PHASES:
             self.log.append(_event_text(ev))
             del self.log[:-50]
         self._own_version += 1

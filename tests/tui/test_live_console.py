@@ -50,6 +50,7 @@ def test_map_and_table_appear_and_q_leaves_the_apad_holding() -> None:
             await pilot.press("question_mark")
             await pilot.pause(0.1)
             assert "Override: hold" in screen_text(app) and "esc closes" in screen_text(app)
+            assert "arrow keys" in " ".join(screen_text(app).split())  # what g, d and u act on
             await pilot.press("escape")
             await pilot.pause(0.1)
             assert "esc closes" not in screen_text(app)

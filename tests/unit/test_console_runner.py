@@ -268,3 +268,15 @@ def test_a_swarm_runner_pauses_hands_the_strategy_to_and_stops_every_loop() -> N
     assert runner.world is not None
     ends = {e.fields["apad"]: e.fields["reason"] for e in runner.world.events.events if e.kind == "mission_end"}
     assert ends == {1: "operator stop", 2: "operator stop"}
+
+
+def test_a_plan_is_one_line_in_the_console_log_not_its_phase_and_then_its_plan() -> None:
+    model = MissionView(VehicleRegistry(), 1, 0.8, 60.0, "test", np.array([1, 2]))
+    for kind, fields in (("phase", {"phase": "plan collection"}),
+                         ("plan_collection", {"strategy": "cautious", "route": [2, 1]}),
+                         ("phase", {"phase": "collect"}),
+                         ("phase", {"phase": "plan redeployment"}),
+                         ("plan_redeployment", {"strategy": "greedy", "route": [1, 2]})):
+        model.event(Event(1.0, kind, fields))
+    log = model.snapshot(1.0).log
+    assert len(log) == 3 and not any("plan collection" in line or "plan redeployment" in line for line in log), log
