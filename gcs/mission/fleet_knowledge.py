@@ -9,6 +9,8 @@ commands nothing: the aPad's actions (`gcs.mission.actions`) and the loop's phas
 
 from __future__ import annotations
 
+import math
+
 from apad_sitl.vocabulary import Latch
 from gcs.api import ApadApi, Location
 from gcs.link.telemetry import SlotView
@@ -112,6 +114,15 @@ class FleetKnowledge:
             if battery <= per_s * need_s:
                 return f"its battery ({battery:.3f}) would give out before it could be docked ({need_s:.0f} s)"
         return None
+
+    def pool_needed(self, min_pool: int) -> int:
+        """Candidates to wait for before a collection: the scenario's `min_pool` is for the whole fleet;
+        with several aPads each waits for its share's part of it (`min_pool` x share / fleet, at least
+        one), or an aPad with a share of 6 would wait for 4 of its 6 as one aPad waits for 4 of 12."""
+        if self.shares is None or not self.shares.owner:
+            return min_pool
+        share = sum(1 for owner in self.shares.owner.values() if owner == self.apad_id)
+        return max(1, math.ceil(min_pool * share / len(self.shares.owner)))
 
     def too_late_to_call_up(self) -> bool:
         return self.settings.mission.duration_s - self.clock.time() < self.settings.call_up_margin_s

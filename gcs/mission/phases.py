@@ -59,7 +59,7 @@ def idle_wait(crew: Crew) -> None:
             return False
         if knows.orphans() and knows.free_slots() and act.link_up():
             return True  # left floating by a lost aPad: fetch them now
-        need = min(mission.min_pool, len(knows.free_slots()))
+        need = min(knows.pool_needed(mission.min_pool), len(knows.free_slots()))
         return need > 0 and len(knows.candidates()) >= need and act.link_up()
 
     act.wait_until(pool_full)

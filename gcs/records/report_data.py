@@ -211,7 +211,7 @@ def indices(result: dict[str, object], last: Snapshot) -> Indices:
 def _title(result: dict[str, object], folder: Path) -> str:
     if "scenario" in result and "strategy" in result:
         return f"{result['scenario']} {result['strategy']} seed {result.get('seed', '?')}"
-    return folder.name
+    return folder.resolve().name  # `runs/latest` is the folder it points at
 
 
 def _track(frames: list[Snapshot], column: int) -> ApadTrack:

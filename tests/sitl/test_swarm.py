@@ -104,3 +104,18 @@ def test_a_leg_passing_another_apad_is_a_conflict_and_one_clear_of_it_is_not() -
         assert route_conflicts(world.api, 1, beside_one, separation_m=3.0) == [2]
     finally:
         world.close()
+
+
+def test_each_apad_waits_for_its_shares_part_of_the_pool_not_the_whole_fleets() -> None:
+    """docs/strategies.md, pool12x2: with min_pool 4 of a fleet of 12, an aPad with a share of 6 waits
+    for 2 candidates (it waited for 4 of its 6 and set off late); one aPad waits for 4 as ever."""
+    world = lockstep_world(load_scenario("pool12x2"))
+    try:
+        shares = FleetShares(owner={m: 1 if m <= 6 else 2 for m in range(1, 13)})
+        assert world.mission_loop(apad_id=1, shares=shares).knows.pool_needed(4) == 2
+        shares.owner = {m: 1 if m == 1 else 2 for m in range(1, 13)}  # a share of one
+        assert world.mission_loop(apad_id=1, shares=shares).knows.pool_needed(4) == 1
+        assert world.mission_loop(apad_id=2, shares=shares).knows.pool_needed(4) == 4  # ceil(4 x 11 / 12)
+        assert world.mission_loop(apad_id=1).knows.pool_needed(4) == 4  # alone: the scenario's min_pool
+    finally:
+        world.close()
