@@ -138,12 +138,12 @@ class StatusPanel(Static):
         t.append("   strategy ", style=AXIS).append(snap.strategy, style="bold")
         if snap.pending_strategy and snap.pending_strategy != snap.strategy:
             t.append(f" → {snap.pending_strategy} at next plan", style=APAD)
-        t.append("\nprimitive ", style=AXIS).append(snap.primitive).append(f"   mode {snap.mode}", style=AXIS)
+        t.append("\nprimitive ", style=AXIS).append(snap.primitive)  # can be long: the mode is on the aPad line
         volts = "-" if snap.apad_battery_v is None else f"{snap.apad_battery_v:.2f} V ({snap.apad_battery_pct} %)"
         active = int(np.count_nonzero(snap.state == MusselState.ACTIVE))
         t.append("\ncost      ", style=AXIS).append(f"{snap.cost_m:.1f} m", style="bold")
         t.append(f"   cycles {snap.cycles}   active {active}/{snap.mussel_ids.size}")
-        t.append("\naPad      ", style=AXIS).append(volts)
+        t.append("\naPad      ", style=AXIS).append(volts).append(f"   mode {snap.mode}", style=AXIS)
         t.append("\nslots    ", style=AXIS)
         for s in snap.slots:
             body = f"{s.slot}:{s.mussel_id or '-'}{'⚡' if s.charging else ''}"

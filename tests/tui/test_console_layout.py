@@ -78,3 +78,16 @@ def test_live_console_at_80x24_and_100x30_keeps_every_key() -> None:
             assert "p Pause" in screen_text(app) and "d Dock" in screen_text(app)
 
     asyncio.run(scenario())
+
+
+def test_at_120_columns_the_status_shows_a_go_tos_mode_whole(recorded_run: Path) -> None:
+    """Issue 23: at 120 columns the status line cut "mode GUI..." after a long Go To primitive."""
+    replay = load_replay(recorded_run)
+    t_s = next(f.t_s for f in replay.frames if "GO" in f.primitive.upper() and f.mode == "GUIDED")
+
+    async def scenario() -> None:
+        app = ReplayConsole(replay, start_s=t_s, playing=False)
+        async with app.run_test(size=(120, 40)) as pilot:
+            await wait_for(pilot, lambda: "mode GUIDED" in screen_text(app))
+
+    asyncio.run(scenario())
