@@ -203,14 +203,12 @@ def _place(jobs: list[Job], command: str) -> list[Job]:
     """Each job's folder: a new one (which keeps `command`, what resumes it), or (resuming) the newest
     of its run with a usable checkpoint of it. Resuming several runs (a Ctrl-C stops them where they
     are), one with no checkpoint runs from its start in a new folder, and says so; none: an error."""
-    if all(j.resume for j in jobs) and len(jobs) > 1 and not any(
-            RunFolder.newest_resumable(j.out_dir, run_stem(j.scenario)) for j in jobs):
-        jobs = jobs[:1]  # the error below, for the first
+    found = [RunFolder.newest_resumable(j.out_dir, run_stem(j.scenario)) if j.resume else None for j in jobs]
+    some = len(jobs) > 1 and any(found)  # several runs, some of them stopped mid-mission: resume those
     placed = []
-    for job in jobs:
+    for job, folder in zip(jobs, found, strict=True):
         stem = run_stem(job.scenario)
-        folder = RunFolder.newest_resumable(job.out_dir, stem) if job.resume else None
-        if job.resume and folder is None and len(jobs) > 1:
+        if job.resume and folder is None and some:
             print(f"vil run: no checkpoint of {stem} under {job.out_dir}: it runs from the start", file=sys.stderr)
             job = replace(job, resume=False)
         if not job.resume:
