@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from apad_sitl import primitives as prim
 from apad_sitl.geofence import Geofence
-from apad_sitl.host import ACCEPT, DENIED, Command, CommandRegistry, PartHost, Reply, whole
+from apad_sitl.host import ACCEPT, DENIED, Command, CommandRegistry, PartHost, Reply, invalid_reason, whole
 from apad_sitl.primitives import REFUSAL_TEXT, MusselFix, PrimitiveState, Refusal
 from apad_sitl.state import ApadState
 from apad_sitl.vocabulary import N_SLOTS, Latch, Primitive, Progress
@@ -62,7 +62,7 @@ class MusselFixTable(Mapping[int, MusselFix]):
         else:
             self._store(mussel_id, lat_e7, lon_e7, state)
             return True
-        self.dropped[f"invalid:{STATUS}:{field}"] += 1
+        self.dropped[invalid_reason(STATUS, field)] += 1
         return False
 
     def update_many(
@@ -148,7 +148,7 @@ def checked_statuses(
         for field, ok in checks:
             bad = int(np.count_nonzero(good & ~ok))
             if bad:
-                drops.append((f"invalid:{STATUS}:{field}", bad))
+                drops.append((invalid_reason(STATUS, field), bad))
             good &= ok
         idl, lats, lons, states = i[good].tolist(), la[good].tolist(), lo[good].tolist(), st[good].tolist()
     return list(zip(idl, zip(lats, lons, states, strict=True), strict=True)), drops

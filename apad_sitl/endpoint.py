@@ -40,7 +40,7 @@ from apad_sitl.commands import CommandTable
 from apad_sitl.dege7 import DegE7
 from apad_sitl.docking import CheckedStatuses, Docking, MusselFixTable, checked_statuses
 from apad_sitl.geofence import Geofence
-from apad_sitl.host import MessageHandler
+from apad_sitl.host import MessageHandler, invalid_reason, unsupported_reason
 from apad_sitl.logs import VehicleLog
 from apad_sitl.mission_protocol import MissionProtocol
 from apad_sitl.modes import Modes, mode_name
@@ -341,11 +341,11 @@ class SitlVehicle:
 
     def count_invalid(self, message: str, field: str) -> None:
         """Count a received `message` dropped (or refused) because `field` holds no legal value."""
-        self.dropped[f"invalid:{message}:{field}"] += 1
+        self.dropped[invalid_reason(message, field)] += 1
 
     def count_unsupported(self, message: str) -> None:
         """Count a received `message` that asks for something the aPad does not do."""
-        self.dropped[f"unsupported:{message}"] += 1
+        self.dropped[unsupported_reason(message)] += 1
 
     # ------------------------------------------------------------------ physics
 

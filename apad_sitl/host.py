@@ -24,6 +24,16 @@ from mavlink_dialect import mavlink
 MessageHandler = Callable[[Any], None]  # a decoded pymavlink message in
 
 
+def invalid_reason(message: str, field: str) -> str:
+    """The drop counter's key for a received `message` whose `field` holds no legal value."""
+    return f"invalid:{message}:{field}"
+
+
+def unsupported_reason(message: str) -> str:
+    """The drop counter's key for a received `message` asking for what the aPad does not do."""
+    return f"unsupported:{message}"
+
+
 class PartHost(Protocol):
     """The few things the parts share, and all they may use of the vehicle that hosts them."""
 

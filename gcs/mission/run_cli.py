@@ -135,6 +135,7 @@ class Job:
     out_dir: Path  # the run's own folder (claimed by `_place`)
     options: LinkOptions | None = None
     resume: bool = False
+    resume_from_s: float = 0.0  # resuming: the mission time of its checkpoint (read once, by `_place`)
 
 
 def _link_options(args: argparse.Namespace) -> LinkOptions | None:
@@ -223,7 +224,7 @@ def _place(jobs: list[Job], command: str) -> list[Job]:
         key = checkpoint.scenario_key(job.scenario)
         if saved.run_key != key:
             raise CheckpointError(f"{folder.checkpoint} is of run {saved.run_key}, not {key}")
-        placed.append(replace(job, out_dir=folder.path))
+        placed.append(replace(job, out_dir=folder.path, resume_from_s=saved.time_us / 1e6))
     return placed
 
 
@@ -275,9 +276,8 @@ def run(args: argparse.Namespace) -> int:
     RunFolder(jobs[-1].out_dir).point_latest()
     for job in jobs:
         if job.resume:
-            saved_s = checkpoint.load(RunFolder(job.out_dir).checkpoint).time_us / 1e6
-            print(f"vil run: resuming {job.out_dir} from its checkpoint at {mm_ss(saved_s)} (the mission is "
-                  "replayed to it, its logs muted)", file=sys.stderr)
+            print(f"vil run: resuming {job.out_dir} from its checkpoint at {mm_ss(job.resume_from_s)} (the "
+                  "mission is replayed to it, its logs muted)", file=sys.stderr)
     try:
         results = _run_all(jobs, args.jobs, console)
     except TimeoutError as exc:  # e.g. an --outage over the start: the aPad was never heard

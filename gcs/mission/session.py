@@ -66,11 +66,11 @@ class MissionSession:
         self._task: Task | None = None
         if saved is not None:
             checkpoint.check_setup(saved, setup)
-        restoring = saved is not None and not replay
-        if restoring:
-            assert saved is not None
+        if saved is not None and not replay:  # the console's way back: the saved state put in
             checkpoint.restore(world, saved)
-        self._statuses: dict[int, LoopStatus] = dict(saved.loop_statuses) if restoring and saved else {}
+            self._statuses: dict[int, LoopStatus] = dict(saved.loop_statuses)
+        else:
+            self._statuses = {}
         self.apad_times: dict[int, ApadTimes] = {
             sysid: self._statuses[sysid].apad_time_us if sysid in self._statuses else {} for sysid in self.apad_ids}
         if self._replaying:
@@ -88,7 +88,7 @@ class MissionSession:
 
     def start(self, wait: WaitFn | None = None) -> bool:
         """Wait for each aPad (`wait`, default bounded by `APAD_WAIT_S`), request its telemetry, share
-        the fleet (several aPads), start checkpointing. False if `wait` gave up."""
+        the fleet (several aPads). False if `wait` gave up."""
         world = self.world
         for sysid in self.apad_ids:
             if wait is None:
@@ -143,8 +143,8 @@ class MissionSession:
     def _share_fleet(self) -> None:
         """The first sharing of the fleet among every aPad heard (a restored mission's own), and the
         watch that re-shares it."""
-        world, saved = self.world, self._saved
-        restored = saved if saved is not None and not self._replaying and saved.shares is not None else None
+        world = self.world
+        restored = self._saved if self.resuming else None
         self.shares = shares = restored.shares if restored is not None and restored.shares else FleetShares()
         self.watch = watch = SwarmWatch(
             world.link.registry, shares, world.frame, {a.system_id: a.battery_end_v for a in world.scenario.apads},

@@ -343,12 +343,19 @@ def _one_line(exc: BaseException) -> str:
 
 def cut_logs(folder: RunFolder, ckpt: Checkpoint) -> None:
     """Cut every log of the run back to its length at the checkpoint (what the crashed run logged
-    after it is logged again by the resumed one). A log shorter than that is not this run's."""
+    after it is logged again by the resumed one). Every log is checked before any is cut: a name that
+    is not a file of the folder, or a log shorter than the checkpoint says (not this run's), leaves
+    them all as they are."""
     try:
+        cuts = []
         for name, size in sorted(ckpt.log_sizes.items()):
             path = folder.path / name
+            if Path(name).name != name or not isinstance(size, int) or size < 0:
+                raise CheckpointError(f"checkpoint {folder.checkpoint} names a log it cannot have: {name!r}")
             if path.stat().st_size < size:
                 raise CheckpointError(f"{path} is shorter than at the checkpoint: not the log of this run")
+            cuts.append((path, size))
+        for path, size in cuts:
             os.truncate(path, size)
     except FileNotFoundError as exc:
         raise CheckpointError(f"a log of the checkpointed run is missing: {exc.filename}") from None

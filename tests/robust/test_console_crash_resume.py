@@ -93,6 +93,18 @@ def _wait(what: str, condition: Any, console: Console) -> None:
         time.sleep(0.02)
 
 
+def _killed_once(cwd: Path, what: str, condition: Any, *args: str) -> None:
+    """A console `vil gcs ARGS` killed with SIGKILL once `condition()` holds."""
+    first = Console(cwd, *args)
+    try:
+        _wait(what, condition, first)
+        os.kill(first.proc.pid, signal.SIGKILL)
+        first.proc.wait(10)
+    finally:
+        first.close()
+    assert first.proc.returncode == -signal.SIGKILL
+
+
 def test_sigkill_of_the_console_with_amussels_docked_then_resume(tmp_path: Path) -> None:
     run = tmp_path / RUN
     ckpt = run / CHECKPOINT
@@ -103,14 +115,7 @@ def test_sigkill_of_the_console_with_amussels_docked_then_resume(tmp_path: Path)
         saved = load(ckpt)
         return saved.time_us > KILL_AFTER_S * 1e6 and saved.loop_statuses[1].phase == Phase.CHARGING_WAIT
 
-    first = Console(tmp_path)
-    try:
-        _wait("checkpoint in a charging wait", charging_late_enough, first)
-        os.kill(first.proc.pid, signal.SIGKILL)
-        first.proc.wait(10)
-    finally:
-        first.close()
-    assert first.proc.returncode == -signal.SIGKILL
+    _killed_once(tmp_path, "checkpoint in a charging wait", charging_late_enough)
     saved = load(ckpt)  # the last checkpoint before the kill: the resume starts here
     at_s = saved.time_us / 1e6
     docked = sorted(int(i) for i, s in zip(saved.fleet_state.ids, saved.fleet_state.state, strict=True)
@@ -239,13 +244,7 @@ def test_sigkill_of_a_two_apad_console_then_resume(tmp_path: Path) -> None:
         return saved.time_us > KILL_AFTER_S * 1e6 and len(saved.loop_statuses) == 2 and bool(
             (saved.fleet_state.state == MusselState.DOCKED).any())
 
-    first = Console(tmp_path, *scenario)
-    try:
-        _wait("checkpoint with aMussels docked", docked_late_enough, first)
-        os.kill(first.proc.pid, signal.SIGKILL)
-        first.proc.wait(10)
-    finally:
-        first.close()
+    _killed_once(tmp_path, "checkpoint with aMussels docked", docked_late_enough, *scenario)
     saved = load(ckpt)
     at_s = saved.time_us / 1e6
     before = (run / "events.jsonl").read_bytes()

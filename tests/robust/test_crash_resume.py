@@ -200,3 +200,16 @@ def test_a_replay_that_does_not_arrive_at_the_checkpoint_is_refused(
     with pytest.raises(checkpoint.CheckpointError, match="not where it was"):
         run_mission(scenario, tmp_path, resume=True)
     assert (tmp_path / "events.jsonl").stat().st_size == saved.events_bytes
+
+
+def test_cut_logs_cuts_nothing_when_any_log_is_wrong_and_refuses_a_name_outside_the_folder(tmp_path: Path) -> None:
+    folder = RunFolder(tmp_path)
+    folder.gcs_tlog.write_bytes(b"x" * 100)
+    folder.events.write_bytes(b"y" * 10)
+    one_short = SimpleNamespace(log_sizes={folder.gcs_tlog.name: 50, folder.events.name: 11})
+    with pytest.raises(checkpoint.CheckpointError, match="shorter"):
+        checkpoint.cut_logs(folder, one_short)  # type: ignore[arg-type]
+    assert folder.gcs_tlog.stat().st_size == 100  # checked before any was cut
+    outside = SimpleNamespace(log_sizes={"../gcs.tlog": 1})
+    with pytest.raises(checkpoint.CheckpointError, match="cannot have"):
+        checkpoint.cut_logs(folder, outside)  # type: ignore[arg-type]

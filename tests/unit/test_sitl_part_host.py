@@ -18,7 +18,7 @@ from typing import Any
 import pytest
 
 from apad_sitl import primitives as prim
-from apad_sitl.host import Command, CommandHandler, MessageHandler, Reply
+from apad_sitl.host import Command, CommandHandler, MessageHandler, Reply, invalid_reason, unsupported_reason
 from apad_sitl.params import ApadParams
 from apad_sitl.state import ApadState
 from apad_sitl.vocabulary import RoverMode
@@ -58,10 +58,10 @@ class RecordingHost:
         return target_system in (0, self.system_id) and target_component in (0, self.component_id)
 
     def count_invalid(self, message: str, field: str) -> None:
-        self.dropped[f"invalid:{message}:{field}"] += 1
+        self.dropped[invalid_reason(message, field)] += 1
 
     def count_unsupported(self, message: str) -> None:
-        self.dropped[f"unsupported:{message}"] += 1
+        self.dropped[unsupported_reason(message)] += 1
 
     def event(self, event: str, /, **fields: Any) -> None:
         self.events.append((event, fields))
