@@ -72,6 +72,11 @@ class RunResult:
     def to_json(self) -> dict[str, Any]:
         return asdict(self)
 
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> RunResult:
+        """The result `to_json` wrote (a run's result.json read back)."""
+        return cls(**{**data, "mussels": [MusselResult(**m) for m in data["mussels"]]})
+
     @property
     def misplaced(self) -> list[dict[str, Any]]:
         """The aMussels that did not end where they should: left at the surface, off their

@@ -136,6 +136,7 @@ class Job:
     options: LinkOptions | None = None
     resume: bool = False
     resume_from_s: float = 0.0  # resuming: the mission time of its checkpoint (read once, by `_place`)
+    finished: RunResult | None = None  # resuming several: this one had ended, its result is kept
 
 
 def _link_options(args: argparse.Namespace) -> LinkOptions | None:
@@ -210,6 +211,11 @@ def _place(jobs: list[Job], command: str) -> list[Job]:
     for job, folder in zip(jobs, found, strict=True):
         stem = run_stem(job.scenario)
         if job.resume and folder is None and some:
+            done = _finished(job.out_dir, stem, command)
+            if done is not None:
+                print(f"vil run: {stem} had finished in {done.out_dir}/: its result is kept", file=sys.stderr)
+                placed.append(replace(job, out_dir=Path(done.out_dir), resume=False, finished=done))
+                continue
             print(f"vil run: no checkpoint of {stem} under {job.out_dir}: it runs from the start", file=sys.stderr)
             job = replace(job, resume=False)
         if not job.resume:
@@ -226,6 +232,20 @@ def _place(jobs: list[Job], command: str) -> list[Job]:
             raise CheckpointError(f"{folder.checkpoint} is of run {saved.run_key}, not {key}")
         placed.append(replace(job, out_dir=folder.path, resume_from_s=saved.time_us / 1e6))
     return placed
+
+
+def _finished(root: Path, stem: str, command: str) -> RunResult | None:
+    """The result of the newest run of `stem` if the same command made it and it ended (a result, no
+    checkpoint): the run of the interrupted batch that finished before the Ctrl-C."""
+    folder = RunFolder.newest(root, stem)
+    if folder is None or folder.checkpoint.exists() or not folder.result.exists() or not folder.command.exists():
+        return None
+    if folder.command.read_text(encoding="utf-8").strip() != command.removesuffix(" --resume"):
+        return None
+    try:
+        return RunResult.from_json(json.loads(folder.result.read_text(encoding="utf-8")))
+    except (OSError, ValueError, TypeError, KeyError):  # unreadable or of another version: run it again
+        return None
 
 
 def _resumable_hint(root: Path) -> str:
@@ -260,7 +280,13 @@ def _interrupted(jobs: list[Job]) -> str:
 
 
 def _run_job(job: Job) -> RunResult:
-    return run_mission(job.scenario, job.out_dir, options=job.options, resume=job.resume)
+    """One run in a pool worker. A Ctrl-C (the whole process group gets it) ends the worker, not just
+    this run: a worker that only lost its run would take the next queued one, and the pool would
+    wait for it."""
+    try:
+        return run_mission(job.scenario, job.out_dir, options=job.options, resume=job.resume)
+    except KeyboardInterrupt:  # the run's logs are closed and its checkpoint kept by now
+        os._exit(EXIT_INTERRUPTED)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -328,6 +354,12 @@ def _folders(results: list[RunResult]) -> str:
 
 
 def _run_all(jobs: list[Job], n_jobs: int, console: Console) -> list[RunResult]:
+    kept = [j.finished for j in jobs if j.finished is not None]
+    to_run = [j for j in jobs if j.finished is None]
+    return kept + (_run_jobs(to_run, n_jobs, console) if to_run else [])
+
+
+def _run_jobs(jobs: list[Job], n_jobs: int, console: Console) -> list[RunResult]:
     columns = (TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
                TextColumn("mission s" if len(jobs) == 1 else "runs"), TimeElapsedColumn())
     with Progress(*columns, console=console, transient=True) as progress:

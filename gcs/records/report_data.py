@@ -99,6 +99,7 @@ class MusselFacts:
 class RunData:
     folder: Path
     title: str
+    strategy: str  # as the run used it: "cautious", or "cautious, then weighted" after the operator's switch
     result: dict[str, object]
     indices: Indices
     scenario: Scenario | None
@@ -145,10 +146,12 @@ def load_run(run: str | Path, scenario: str | Path | None = None) -> RunData:
     state = np.where(np.isnan(battery), UNHEARD, state).astype(np.uint8)
     tracks = tuple(_track(sampled, column) for column in range(len(last.apads)))
     events = tuple(read_events(files.events))
+    strategy = strategies_used(files.result, events)
     outline = last.outline_lat_deg, last.outline_lon_deg
     return RunData(
         folder=files.folder,
-        title=_title(files.result, files.folder),
+        title=_title(files.result, strategy, files.folder),
+        strategy=strategy,
         result=files.result,
         indices=indices(files.result, last),
         scenario=found,
@@ -208,10 +211,23 @@ def indices(result: dict[str, object], last: Snapshot) -> Indices:
                    float(last.hist_active.mean()) if last.hist_active.size else 0.0, "replay")
 
 
-def _title(result: dict[str, object], folder: Path) -> str:
+def _title(result: dict[str, object], strategy: str, folder: Path) -> str:
     if "scenario" in result and "strategy" in result:
-        return f"{result['scenario']} {result['strategy']} seed {result.get('seed', '?')}"
+        return f"{result['scenario']} {strategy} seed {result.get('seed', '?')}"
     return folder.resolve().name  # `runs/latest` is the folder it points at
+
+
+def strategies_used(result: dict[str, object], events: tuple[Event, ...]) -> str:
+    """The collection strategy the run started with and each one the operator switched to, in order
+    ("cautious, then weighted"); result.json's when the events do not say; "-" when neither does."""
+    used: list[str] = []
+    for ev in events:
+        name = ev.fields.get("strategy" if ev.kind == "mission_start" else "new")
+        if ev.kind in ("mission_start", "strategy_switch") and isinstance(name, str) and name not in used[-1:]:
+            used.append(name)
+    if not used:
+        return str(result.get("strategy", "-"))
+    return ", then ".join(used)
 
 
 def _track(frames: list[Snapshot], column: int) -> ApadTrack:
@@ -277,7 +293,10 @@ def _mussels(frames: list[Snapshot], state: NDArray[np.uint8], result: dict[str,
             start_battery=float(rec.get("start_battery", heard[0] if heard.size else np.nan)),
             end_battery=float(heard[-1]) if heard.size else float("nan"),
             uptime_pct=float(rec.get("uptime_pct", last.uptime_pct[c])),
-            dockings=len(dockings) if "dockings" in rec else docked_events.get(mussel, 0),
+            # The loop's list misses the operator's manual docks; the 1 Hz states would miss one shorter
+            # than a sample: each is a lower bound, so the larger holds.
+            dockings=max(len(dockings) if "dockings" in rec else docked_events.get(mussel, 0),
+                         _entries_into_docked(state[:, c])),
             depleted_s=state_s.get(MusselState.DEPLETED.name.lower(), 0.0),
             first_depleted_s=_first_depleted(rec, t_s, state[:, c]),
             state_s=state_s,
@@ -287,6 +306,12 @@ def _mussels(frames: list[Snapshot], state: NDArray[np.uint8], result: dict[str,
             end_lat_deg=float(last.lat_deg[c]), end_lon_deg=float(last.lon_deg[c]),
         ))
     return tuple(out)
+
+
+def _entries_into_docked(state: NDArray[np.uint8]) -> int:
+    """How many times the sampled states enter DOCKED (a docking the telemetry saw)."""
+    docked = state == MusselState.DOCKED
+    return int(np.count_nonzero(docked[1:] & ~docked[:-1]) + (1 if docked.size and docked[0] else 0))
 
 
 def _first_depleted(rec: dict[str, Any], t_s: NDArray[np.float64], state: NDArray[np.uint8]) -> float | None:

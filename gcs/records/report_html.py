@@ -117,7 +117,7 @@ def _facts(data: RunData) -> str:
     facts = [
         ("run folder", str(data.folder.resolve())),
         ("scenario", str(r.get("scenario") or (data.scenario.name if data.scenario else "-"))),
-        ("strategy", str(r.get("strategy", "-"))), ("seed", str(r.get("seed", "-"))),
+        ("strategy", data.strategy), ("seed", str(r.get("seed", "-"))),
         ("mission time", f"{data.end_s / 60:.1f} of {data.duration_s / 60:.1f} min"),
         ("ended", data.end_reason),
         ("aMussels", str(data.ids.size)), ("aPads", ", ".join(str(t.system_id) for t in data.tracks)),

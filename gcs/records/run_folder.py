@@ -78,6 +78,12 @@ class RunFolder:
         return None
 
     @classmethod
+    def newest(cls, root: Path, stem: str) -> RunFolder | None:
+        """The highest-numbered `root/STEM-runK`; None if there is none."""
+        numbers = _numbers(root, stem)
+        return cls(numbers[max(numbers)]) if numbers else None
+
+    @classmethod
     def resumable(cls, root: Path) -> list[RunFolder]:
         """Every run folder under `root` holding a checkpoint, the last modified first."""
         found = [p for p in root.glob(f"*/{CHECKPOINT}") if p.parent.name != LATEST] if root.is_dir() else []

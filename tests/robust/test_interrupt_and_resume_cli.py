@@ -84,13 +84,15 @@ def test_vil_version_names_the_installed_version(tmp_path: Path) -> None:
 
 def test_ctrl_c_of_several_runs_to_the_process_group_then_the_printed_command_finishes_them(tmp_path: Path) -> None:
     """Ctrl-C in a terminal reaches every process of the job (the parallel runs' workers too): one
-    line; the printed command resumes the runs that kept a checkpoint and runs the others."""
-    args = ["run", "--duration", "20min", "--out", "out", "--jobs", "2"]  # Table II: four runs, two at a time
+    line; the printed command keeps the run that had finished, resumes the one that kept a
+    checkpoint and runs the others."""
+    args = ["run", "--duration", "20min", "--out", "out", "--jobs", "1"]  # Table II: four runs, one at a time
     proc = subprocess.Popen([*VIL, *args], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env={**os.environ, "PYTHONPATH": str(ROOT)}, start_new_session=True)
+    out = tmp_path / "out"
     try:
         deadline = time.monotonic() + WALL_TIMEOUT_S
-        while len(list((tmp_path / "out").glob("*/checkpoint.pkl"))) < 2:
+        while not (list(out.glob("*/result.json")) and list(out.glob("*/checkpoint.pkl"))):
             assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
             time.sleep(0.05)
         os.killpg(proc.pid, signal.SIGINT)
@@ -100,9 +102,16 @@ def test_ctrl_c_of_several_runs_to_the_process_group_then_the_printed_command_fi
             os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 130, err
     assert "Traceback" not in err and err.count("\n") == 1 and "checkpoint kept in" in err, err
+    kept = {p.parent: p.read_text() for p in out.glob("*/result.json")}  # one, or more if the signal came late
+    assert kept
     command = err.split("resume with: ")[1].strip()
     assert command == shlex.join(["vil", *args, "--resume"])
     done = _vil(tmp_path, *shlex.split(command)[1:])
     assert done.returncode == 0, done.stderr
-    assert done.stderr.count("resuming ") >= 1
-    assert " ".join(done.stdout.split()).count("-seed1-run") == 4  # the summary names four folders
+    said = " ".join(done.stderr.split())
+    assert all(f"had finished in out/{folder.name}/" in said for folder in kept), done.stderr
+    assert said.count("had finished") == len(kept) and said.count("resuming ") <= 1, done.stderr
+    assert all(folder.joinpath("result.json").read_text() == text for folder, text in kept.items())  # not run again
+    summary = " ".join(done.stdout.split())
+    assert summary.count("-seed1-run") == 4 and all(f"{folder.name}/" in summary for folder in kept)
+    assert not any(list(out.glob(f"{folder.name.removesuffix('-run1')}-run2")) for folder in kept)  # none made again

@@ -19,8 +19,10 @@ from shapely.geometry import LinearRing
 
 from gcs.cli import main
 from gcs.mission.headless import run_mission
+from gcs.mission.loop import LoopControl
 from gcs.mission.scenario import load_scenario
-from gcs.mission.world import LinkOptions
+from gcs.mission.world import MISSION_TELEMETRY_HZ, LinkOptions, lockstep_world
+from gcs.records.report_data import load_run
 
 pytestmark = pytest.mark.tui
 
@@ -177,3 +179,29 @@ def test_bad_input_is_one_line(recorded_run: Path, tmp_path: Path, capsys: pytes
     err = capsys.readouterr().err
     assert err == f"vil report: {run / 'result.json'}: mussels[0].uptime_pct is 'high', not a number\n"
     assert not (tmp_path / "out").exists()
+
+
+def test_a_strategy_switch_and_a_docking_the_loop_did_not_list_are_reported(tmp_path: Path) -> None:
+    """Issue 23: a console session read "strategy -" (it was cautious, then weighted) and an aMussel
+    "docked" yet "never collected, 0 dockings" (docked by the operator, so not in the loop's list)."""
+    run = tmp_path / "switched"
+    world = lockstep_world(load_scenario("pool12"), run)
+    control = LoopControl()
+    try:
+        world.clock.scheduler.every(60.0, lambda now_us: setattr(control, "strategy", "weighted"), "switch", 60_000_000)
+        world.clock.scheduler.every(470.0, lambda now_us: setattr(control, "stop", True), "stop", 470_000_000)
+        world.api.wait_apad(timeout_s=10.0)
+        world.api.set_telemetry_rates(MISSION_TELEMETRY_HZ)
+        world.mission_loop(control).run()
+    finally:
+        world.close()
+    data = load_run(run, "pool12")
+    docked_at_end = [m for m in data.mussels if m.end_state == "docked"]
+    assert docked_at_end  # weighted (from 420 s) docked some by 470 s
+    (run / "result.json").write_text(json.dumps(  # a result whose lists name no docking at all
+        {"scenario": "pool12", "strategy": "cautious", "seed": 1,
+         "mussels": [{"id": int(i), "dockings": []} for i in data.ids]}))
+    data = load_run(run, "pool12")
+    assert data.strategy == "cautious, then weighted" and data.title == "pool12 cautious, then weighted seed 1"
+    for m in data.mussels:
+        assert (m.end_state == "docked") <= (m.dockings >= 1 and not m.never_collected), m
