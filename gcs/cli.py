@@ -61,6 +61,8 @@ COMMANDS = (
             "run"),
     Command("sweep", "many headless missions over strategies, seeds and scenario fields, on Dask", "gcs.sweep.cli",
             "add_arguments", "run"),
+    Command("scenario", "check scenario files (schema and reader), or write a new one from an area",
+            "gcs.mission.scenario_cli", "add_arguments", "run"),
 )
 
 
