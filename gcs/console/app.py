@@ -26,7 +26,7 @@ from gcs.console.help import HelpScreen
 from gcs.console.linkbar import LinkBar
 from gcs.console.runner import ConsoleRunner, DockMussel, GoToMussel, Hold, UndockMussel
 from gcs.console.widgets import LEGEND, Chart, ConsoleFooter, EventPanel, FleetTable, MapView, StatusPanel
-from gcs.mission.strategies import COLLECT
+from gcs.mission.strategies import strategy_names
 from gcs.records.replay import Replay
 from gcs.view.snapshot import Snapshot
 from mussel_sim.vocabulary import MusselState
@@ -210,8 +210,9 @@ class LiveConsole(ConsoleApp):
 
     def action_switch_strategy(self) -> None:
         snap = self.runner.snapshot
-        now = (snap.pending_strategy or snap.strategy) if snap else COLLECT[0]
-        following = COLLECT[(COLLECT.index(now) + 1) % len(COLLECT)] if now in COLLECT else COLLECT[0]
+        names = strategy_names()  # the shipped ones, then any loaded from outside (--strategy FILE.py:FUNCTION)
+        now = (snap.pending_strategy or snap.strategy) if snap else names[0]
+        following = names[(names.index(now) + 1) % len(names)] if now in names else names[0]
         self.runner.switch_strategy(following)
         self.notify(f"strategy {following} from the next planning step")
 

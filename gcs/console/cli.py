@@ -5,6 +5,8 @@
     vil gcs --connect udp:127.0.0.1:14550 --scenario missions/pool12.toml
     vil gcs --sitl --resume                          # continue the console mission that crashed
     vil gcs --sitl --web 8000                        # the same console in a browser: http://127.0.0.1:8000/
+    vil gcs --sitl --web 0.0.0.0:8000                # for the boat's network, behind a token: open the
+                                                     #   printed http://ADDRESS:8000/?token=... (403 without it)
     vil replay runs/latest --speed 16                # the last run; or runs/pool12-cautious-seed1-run1
 
 Everything `vil gcs` is given (scenario and its files, address, output folder) is opened before the
@@ -21,9 +23,10 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gcs.console.web import serve_console, web_address
+from gcs.console.web import TOKEN_ENV, WebTokenError, read_web_token, serve_console, web_address
 from gcs.mission import flags
 from gcs.mission.scenario import MISSIONS_DIR, Scenario, ScenarioError, load_scenario, resolve_scenario
+from gcs.mission.strategies import StrategyError, load_strategy
 from gcs.records.run_folder import RunFolder
 from mavlink_dialect.signing import SigningKeyError, load_key
 from missiontime import mm_ss, unix_time_us
@@ -43,6 +46,10 @@ def add_gcs_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--sitl-link", choices=("memory", "udp"), default="memory",
                         help="with --sitl: in-memory pair or a localhost UDP socket (real MAVLink bytes either way)")
     parser.add_argument("--scenario", metavar="FILE", help=f"scenario TOML (default {DEFAULT_SCENARIO.name})")
+    parser.add_argument("--strategy", metavar="NAME",
+                        help="collection strategy (default: the scenario's): a shipped one, FILE.py:FUNCTION, "
+                             "MODULE:FUNCTION or an installed vil.strategies entry point (docs/strategies.md); "
+                             "the s key cycles through the shipped ones and it")
     parser.add_argument("--speed", type=flags.number_in(*SPEED_RANGE), metavar="X",
                         help="with --sitl: run the world X times faster than real time (lockstep, deterministic; "
                              f"{SPEED_RANGE[0]:g} to {SPEED_RANGE[1]:g})")
@@ -60,32 +67,47 @@ def add_gcs_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--web", type=web_address, metavar="[HOST:]PORT",
                         help="serve this console to browsers (a tablet on deck) instead of this terminal: each "
                              "browser session runs it with these same arguments, one at a time; HOST default "
-                             "127.0.0.1 (this machine only), 0.0.0.0 for every network")
+                             "127.0.0.1 (this machine only), 0.0.0.0 for every network. Bound to anything but "
+                             "loopback, a random token is made at start and the printed address carries it "
+                             "(http://HOST:PORT/?token=...): without it, from any peer, the page and its websocket "
+                             "answer 403; a browser that opened that address once keeps a cookie")
+    parser.add_argument("--web-token-file", type=Path, metavar="FILE",
+                        help=f"with --web: the token is FILE's first line instead of a random one (default: "
+                             f"${TOKEN_ENV} if set); a given token is asked for on loopback too")
     parser.add_argument("--bridge", metavar="ADDR",
                         help="listen here (udp:HOST:PORT or serial:DEV[:BAUD]) for real aMussels' AMUSSEL_STATUS "
                              "reports; they join the simulated fleet (the scenario's fleet.real_ids)")
 
 
 def run_gcs(args: argparse.Namespace) -> int:
-    from gcs.console.app import QUIT_BOUND_S, LiveConsole
-    from gcs.console.runner import ConsoleConfig, ConsoleRunner, open_world
     from gcs.mission.scenario_models import check_inputs
-    from gcs.records.checkpoint import CheckpointError
 
     try:
         path = resolve_scenario(args.scenario or DEFAULT_SCENARIO)
         scenario = load_scenario(path)
-        check_inputs(scenario)
+        if args.strategy is not None:
+            scenario = scenario.with_overrides(strategy=load_strategy(args.strategy))
+        check_inputs(scenario)  # a strategy from outside plans once on the start here
         key = load_key(args.signing_key)
-    except (ScenarioError, OSError, SigningKeyError) as exc:
+        web_token = read_web_token(args.web_token_file) if args.web is not None else None
+    except (ScenarioError, OSError, SigningKeyError, WebTokenError, StrategyError) as exc:
         print(f"vil gcs: {exc}", file=sys.stderr)
+        return 2
+    if args.web_token_file is not None and args.web is None:
+        print("vil gcs: --web-token-file needs --web (the token guards the browser console)", file=sys.stderr)
         return 2
     if args.speed is not None and not args.sitl:
         print("vil gcs: --speed needs --sitl (a real aPad runs in real time)", file=sys.stderr)
         return 2
     if args.web is not None:  # checked as above; each browser session then runs the console itself
         host, port = args.web
-        return serve_console(getattr(args, "argv", sys.argv[1:]), host, port, title=f"vil gcs: {scenario.name}")
+        return serve_console(getattr(args, "argv", sys.argv[1:]), host, port, title=f"vil gcs: {scenario.name}",
+                             given_token=web_token)
+    # Imported here: `--web` serves the console from its sessions' processes, not this one (~1.5 s saved).
+    from gcs.console.app import QUIT_BOUND_S, LiveConsole
+    from gcs.console.runner import ConsoleConfig, ConsoleRunner, open_world
+    from gcs.records.checkpoint import CheckpointError
+
     stem = f"console-{scenario.name}"
     if args.resume:
         try:

@@ -19,7 +19,7 @@ from gcs.mission.accounting import SURFACE_DEPTH_M
 from gcs.mission.actions import ApadActions
 from gcs.mission.control import LoopControl, LoopLog, LoopSettings, LoopStatus, Phase
 from gcs.mission.fleet_knowledge import FleetKnowledge
-from gcs.mission.strategies import CollectStrategy, CostWeights, PlanInput, plan
+from gcs.mission.strategies import CollectStrategy, CostWeights, PlanInput, StrategyError, plan
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
 RESHARED = "another aPad's since the fleet was re-shared"
@@ -83,7 +83,22 @@ def collection_route(crew: Crew, reserved: int = 0) -> list[int]:
     """The strategy's route over the charging pool for the free slots but `reserved`."""
     knows = crew.knows
     inp = collection_input(crew, knows.candidates(), len(knows.free_slots()) - reserved)
-    return plan(crew.status.strategy, inp, crew.weights)[knows.apad_id]
+    return strategy_route(crew, inp)
+
+
+FALLBACK = CollectStrategy.CAUTIOUS  # plans the step a strategy failed (docs/strategies.md)
+
+
+def strategy_route(crew: Crew, inp: PlanInput) -> list[int]:
+    """The strategy's route for this aPad. A strategy that raises or plans what the loop cannot act
+    on (an aMussel that is not a candidate, one twice, more than the free slots) is logged
+    (`strategy_failed`, with why) and the paper's cautious plans this step instead: the mission goes
+    on, and the strategy is asked again at the next step."""
+    try:
+        return plan(crew.status.strategy, inp, crew.weights).get(crew.knows.apad_id, [])
+    except StrategyError as exc:
+        crew.log("strategy_failed", strategy=crew.status.strategy, why=str(exc), instead=str(FALLBACK))
+        return plan(FALLBACK, inp, crew.weights)[crew.knows.apad_id]
 
 
 def collection_input(crew: Crew, ids: list[int], capacity: int) -> PlanInput:
@@ -181,7 +196,7 @@ def recheck_route(crew: Crew, route: list[int]) -> list[int]:
     floating = [m for m in keep if knows.floating(m)]
     rest = [m for m in keep if m not in floating]
     inp = collection_input(crew, rest, len(rest))
-    new = floating + plan(crew.status.strategy, inp, crew.weights)[knows.apad_id] if rest else floating
+    new = floating + strategy_route(crew, inp) if rest else floating
     if sorted(new) != sorted(keep):  # a strategy that would not take them all: keep the planned order
         new = keep
     crew.status.route = new

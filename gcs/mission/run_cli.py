@@ -7,6 +7,7 @@
     vil run pool12 --loss 0.2 --latency 200ms --duplicate 0.05 # aPad link over UDP through a fault proxy
     VIL_SIGNING_KEY=secret vil run pool12      # MAVLink 2 signing on the aPad link (or --signing-key FILE)
     vil run pool12 --resume                    # continue the run in its folder after a crash (kill -9)
+    vil run pool12 --strategy mine.py:slack_first,cautious   # a strategy of your own beside a shipped one
 
 Every run gets a new folder, OUT/SCENARIO-STRATEGY-seedN-runK (K one past the highest there), and
 OUT/latest points at the last one started; `--resume` continues the newest folder of the same
@@ -49,7 +50,7 @@ from gcs.mission.results import (
 )
 from gcs.mission.scenario import SEED_MAX, THETA_RANGE, Scenario, ScenarioError, load_scenario
 from gcs.mission.scenario_models import check_inputs
-from gcs.mission.strategies import COLLECT
+from gcs.mission.strategies import COLLECT, StrategyError, load_strategy, source_of
 from gcs.mission.world import LinkOptions
 from gcs.records import checkpoint
 from gcs.records.checkpoint import CheckpointError
@@ -76,8 +77,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="scenario file (TOML) or a name in missions/ (pool12, bay24); none: the Table II reproduction",
     )
     parser.add_argument("--strategy", type=_strategies, metavar="NAME[,NAME...]",
-                        help=f"collection strategy or a comma list of them ({', '.join(COLLECT)}); "
-                             "default: the scenario's")
+                        help=f"collection strategy or a comma list of them: shipped ({', '.join(COLLECT)}), "
+                             "FILE.py:FUNCTION, MODULE:FUNCTION or an installed vil.strategies entry point "
+                             "(docs/strategies.md); default: the scenario's")
     parser.add_argument("--seed", type=flags.integer_in(0, SEED_MAX),
                         help="seed of the run's random draws (default: the scenario's); with a saved start "
                              "configuration the fleet stays the saved one: the seed then draws the drift only")
@@ -122,10 +124,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _strategies(text: str) -> list[str]:
-    names = [n.strip() for n in text.split(",") if n.strip()]
-    unknown = [n for n in names if n not in COLLECT]
-    if unknown or not names:
-        raise argparse.ArgumentTypeError(f"invalid choice: {text!r} (choose from {', '.join(COLLECT)})")
+    """Each strategy named, loaded if it comes from a file, module or package (gcs.mission.strategies.plugins)."""
+    specs = [n.strip() for n in text.split(",") if n.strip()]
+    if not specs:
+        raise argparse.ArgumentTypeError(f"no strategy in {text!r} (shipped: {', '.join(COLLECT)})")
+    try:
+        names = [load_strategy(spec) for spec in specs]
+    except StrategyError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
     return list(dict.fromkeys(names))  # a name twice would run (or resume) the same folder twice
 
 
@@ -137,6 +143,7 @@ class Job:
     resume: bool = False
     resume_from_s: float = 0.0  # resuming: the mission time of its checkpoint (read once, by `_place`)
     finished: RunResult | None = None  # resuming several: this one had ended, its result is kept
+    strategy_source: str = ""  # what loads the strategy in a worker process (a strategy from outside the package)
 
 
 def _link_options(args: argparse.Namespace) -> LinkOptions | None:
@@ -181,7 +188,9 @@ def _jobs(args: argparse.Namespace) -> list[Job]:
         base = cache.setdefault(name, load_scenario(name))
         for seed in seeds:
             s = base.with_overrides(strategy=strategy, seed=seed, duration_s=args.duration, theta=args.theta)
-            jobs.append(Job(s, args.out, options, args.resume))
+            if strategy is not None and source_of(strategy) != strategy and seed == seeds[0]:
+                check_inputs(s)  # a strategy from outside plans once on the start: a bad plan is a line now
+            jobs.append(Job(s, args.out, options, args.resume, strategy_source=source_of(s.mission.collect_strategy)))
     return jobs
 
 
@@ -284,6 +293,7 @@ def _run_job(job: Job) -> RunResult:
     this run: a worker that only lost its run would take the next queued one, and the pool would
     wait for it."""
     try:
+        load_strategy(job.strategy_source or job.scenario.mission.collect_strategy)
         return run_mission(job.scenario, job.out_dir, options=job.options, resume=job.resume)
     except KeyboardInterrupt:  # the run's logs are closed and its checkpoint kept by now
         os._exit(EXIT_INTERRUPTED)

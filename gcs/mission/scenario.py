@@ -8,14 +8,17 @@ looked for in the working directory first, then among the shipped missions/ (`re
 
 from __future__ import annotations
 
-import math
 import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from gcs.mission.strategies import COLLECT, REDEPLOY, CollectStrategy, RedeployStrategy
-from missiontime.durations import WEEK_S, parse_duration_s
+# ScenarioError and out_of_range are read from here by the rest of the package, parse_duration_s by tests.
+from gcs.mission.scenario_fields import REQUIRED, Derived, Fields, FieldTable, ScenarioError
+from gcs.mission.scenario_fields import out_of_range as out_of_range
+from gcs.mission.strategies import COLLECT, REDEPLOY, RedeployStrategy, StrategyError, load_strategy
+from missiontime.durations import WEEK_S
+from missiontime.durations import parse_duration_s as parse_duration_s
 from mussel_sim.battery import CHARGE_PROFILES, DISCHARGE_PROFILES
 
 MISSIONS_DIR = Path(__file__).resolve().parents[2] / "missions"
@@ -23,23 +26,6 @@ MAX_DURATION_S = WEEK_S  # a week at sea; longer is a typo that would run for ho
 THETA_RANGE = (1e-3, 1e4)  # aMussel time scale, for the file and `--theta`
 SEED_MAX = 2**63 - 1  # seeds are int64 in results and folder names
 MAX_CURRENT_MPS = 5.0  # per component: more is not a sea we work in (as `vil sitl --current`)
-
-
-class ScenarioError(ValueError):
-    """One line for the user: file, field, what is wrong."""
-
-
-def out_of_range(value: float, lo: float | None = None, hi: float | None = None) -> str | None:
-    """Why `value` is not a finite number in [lo, hi], or None: the one range check for files and flags."""
-    if not math.isfinite(value):
-        return f"{value} is not a finite number"
-    if lo is not None and hi is not None and not lo <= value <= hi:
-        return f"{value} is outside [{lo}, {hi}]"
-    if lo is not None and value < lo:
-        return f"{value} is below {lo}"
-    if hi is not None and value > hi:
-        return f"{value} is above {hi}"
-    return None
 
 
 @dataclass(frozen=True)
@@ -84,7 +70,7 @@ class MissionConfig:
     pool_threshold: float  # below this battery an aMussel is a charging candidate
     charged_threshold: float  # docked aMussels are released above this
     min_pool: int  # idle until this many candidates
-    collect_strategy: str  # a CollectStrategy (a str: files, flags and results name it so)
+    collect_strategy: str  # a registered strategy's name: shipped, or loaded from outside (strategies.plugins)
     redeploy_strategy: str  # a RedeployStrategy
     distance_scale: float  # planner cost scale factors
     energy_scale: float
@@ -122,128 +108,12 @@ class Scenario:
     ) -> Scenario:
         mission = self.mission
         if strategy is not None:
-            mission = replace(mission, collect_strategy=CollectStrategy(strategy))
+            mission = replace(mission, collect_strategy=load_strategy(strategy))
         if duration_s is not None:
             mission = replace(mission, duration_s=duration_s)
         if theta is not None:
             mission = replace(mission, theta=theta)
         return replace(self, mission=mission, seed=self.seed if seed is None else seed)
-
-
-class _Table:
-    """Typed, range-checked reads from one TOML table; leftovers are reported as unknown fields."""
-
-    def __init__(self, path: Path, data: dict[str, Any], prefix: str) -> None:
-        self.path, self.data, self.prefix = path, dict(data), prefix
-
-    def fail(self, key: str, what: str) -> ScenarioError:
-        return ScenarioError(f"{self.path}: {self.prefix}{key}: {what}")
-
-    def _take(self, key: str, default: Any) -> Any:
-        if key in self.data:
-            return self.data.pop(key)
-        if default is _REQUIRED:
-            raise self.fail(key, "missing")
-        return default
-
-    def number(self, key: str, default: Any = None, lo: float | None = None, hi: float | None = None) -> float:
-        value = self._take(key, default)
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise self.fail(key, f"expected a number, got {value!r}")
-        problem = out_of_range(value, lo, hi)
-        if problem:
-            raise self.fail(key, problem)
-        return float(value)
-
-    def integer(self, key: str, default: Any = None, lo: int | None = None, hi: int | None = None) -> int:
-        value = self._take(key, default)
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise self.fail(key, f"expected an integer, got {value!r}")
-        problem = out_of_range(value, lo, hi)
-        if problem:
-            raise self.fail(key, problem)
-        return value
-
-    def text(self, key: str, default: Any = None, choices: tuple[str, ...] | None = None) -> str:
-        value = self._take(key, default)
-        if not isinstance(value, str):
-            raise self.fail(key, f"expected a string, got {value!r}")
-        if choices is not None and value not in choices:
-            raise self.fail(key, f"{value!r} is not one of {', '.join(choices)}")
-        return value
-
-    def flag(self, key: str, default: bool = False) -> bool:
-        value = self._take(key, default)
-        if not isinstance(value, bool):
-            raise self.fail(key, f"expected true or false, got {value!r}")
-        return value
-
-    def integers(self, key: str, lo: int, hi: int) -> tuple[int, ...]:
-        """A list of distinct integers in [lo, hi] (default empty)."""
-        value = self._take(key, [])
-        if not isinstance(value, list) or not all(isinstance(v, int) and not isinstance(v, bool) for v in value):
-            raise self.fail(key, f"expected a list of integers, got {value!r}")
-        bad = [v for v in value if out_of_range(v, lo, hi)]
-        if bad:
-            raise self.fail(key, f"{bad[0]} is outside [{lo}, {hi}]")
-        if len(set(value)) != len(value):
-            raise self.fail(key, f"ids must differ, got {value}")
-        return tuple(value)
-
-    def duration(self, key: str, default: Any = None) -> float:
-        value = self._take(key, default)
-        try:
-            return parse_duration_s(value)
-        except ValueError as exc:
-            raise self.fail(key, str(exc)) from None
-
-    def file(self, key: str, default: Any = None) -> Path | None:
-        value = self._take(key, default)
-        if value is None:
-            return None
-        if not isinstance(value, str):
-            raise self.fail(key, f"expected a file path, got {value!r}")
-        resolved = (self.path.parent / value).resolve()
-        if not resolved.is_file():
-            raise self.fail(key, f"no such file: {resolved} (a path in a scenario is relative to the scenario "
-                                 f"file's folder, {self.path.parent.resolve()})")
-        return resolved
-
-    def pair(self, key: str, default: Any = None, lo: float | None = None, hi: float | None = None
-             ) -> tuple[float, float]:
-        value = self._take(key, default)
-        if (
-            not isinstance(value, list | tuple) or len(value) != 2
-            or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
-        ):
-            raise self.fail(key, f"expected two numbers [a, b], got {value!r}")
-        for v in value:
-            problem = out_of_range(v, lo, hi)
-            if problem:
-                raise self.fail(key, problem)
-        return float(value[0]), float(value[1])
-
-    def tables(self, key: str) -> list[_Table]:
-        """`[key]` (one table) or `[[key]]` (an array of tables; named `key[i].field` in errors)."""
-        value = self._take(key, {})
-        if isinstance(value, dict):
-            return [_Table(self.path, value, f"{self.prefix}{key}.")]
-        if not isinstance(value, list) or not value or not all(isinstance(v, dict) for v in value):
-            raise self.fail(key, "expected a table or an array of tables")
-        return [_Table(self.path, v, f"{self.prefix}{key}[{i}].") for i, v in enumerate(value)]
-
-    def sub(self, key: str) -> _Table:
-        value = self._take(key, {})
-        if not isinstance(value, dict):
-            raise self.fail(key, "expected a table")
-        return _Table(self.path, value, f"{self.prefix}{key}.")
-
-    def done(self) -> None:
-        for key in self.data:
-            raise self.fail(key, "unknown field")
-
-
-_REQUIRED = object()
 
 
 def shipped_scenarios() -> list[str]:
@@ -287,57 +157,83 @@ def read_toml(path: Path, error: type[ValueError] = ScenarioError, what: str = "
 
 def scenario_from_data(path: Path, data: dict[str, Any]) -> Scenario:
     """Validate a scenario's parsed TOML (`vil sweep` patches fields into it); paths are relative to `path`."""
-    root = _Table(path, data, "")
+    return read_scenario(FieldTable(path, data, ""), path)
+
+
+def _collect_strategy(m: Fields, path: Path) -> str:
+    """A shipped strategy, or one from outside the package loaded now (a file from the scenario's folder)."""
+    spec = m.text("collect_strategy", "cautious", about=f"shipped: {', '.join(COLLECT)}; or FILE.py:FUNCTION (from "
+                  "the scenario's folder), MODULE:FUNCTION, an installed vil.strategies entry point")
+    try:
+        return load_strategy(spec, path.parent)
+    except StrategyError as exc:
+        raise m.fail("collect_strategy", str(exc)) from None
+
+
+def read_scenario(root: Fields, path: Path) -> Scenario:
+    """The one reader of scenario data, field by field: from a `FieldTable` it checks a file; from
+    `scenario_schema.SchemaTable` it writes the JSON Schema of the format (so each field is described
+    here, once: kind, default, range, choices, and in `about` what it means where its name does not say)."""
     top = root.sub("scenario")
-    name = top.text("name", path.stem)
-    seed = top.integer("seed", 1, lo=0, hi=SEED_MAX)
+    name = top.text("name", Derived(path.stem, "the file's name without .toml"),
+                    about="names the run folders and results")
+    seed = top.integer("seed", 1, lo=0, hi=SEED_MAX, about="the seed of every random draw (a drawn fleet too)")
     top.done()
 
     m = root.sub("mission")
     mission = MissionConfig(
-        duration_s=m.duration("duration", "40m"),
-        theta=m.number("theta", 30.0, *THETA_RANGE),
-        pool_threshold=m.number("pool_threshold", 0.8, lo=0.0, hi=1.0),
-        charged_threshold=m.number("charged_threshold", 0.99, lo=0.0, hi=1.0),
-        min_pool=m.integer("min_pool", 4, lo=1, hi=4),
-        collect_strategy=CollectStrategy(m.text("collect_strategy", "cautious", COLLECT)),
+        duration_s=m.duration("duration", "40m", about="mission time"),
+        theta=m.number("theta", 30.0, *THETA_RANGE, about="aMussel time scale: simulated seconds per mission second"),
+        pool_threshold=m.number("pool_threshold", 0.8, lo=0.0, hi=1.0,
+                                about="below this battery an aMussel is a charging candidate"),
+        charged_threshold=m.number("charged_threshold", 0.99, lo=0.0, hi=1.0,
+                                   about="docked aMussels are released above this battery"),
+        min_pool=m.integer("min_pool", 4, lo=1, hi=4, about="the aPad idles until this many candidates"),
+        collect_strategy=_collect_strategy(m, path),
         redeploy_strategy=RedeployStrategy(m.text("redeploy_strategy", "greedy", REDEPLOY)),
         distance_scale=m.number("distance_scale", 1.0, lo=0.0),
-        energy_scale=m.number("energy_scale", 40.0, lo=0.0),  # weighted: metres per battery lacking (strategies.md)
-        sinking_counts_active=m.flag("sinking_counts_active", True),
+        energy_scale=m.number("energy_scale", 40.0, lo=0.0,
+                              about="weighted: metres per battery lacking (docs/strategies.md)"),
+        sinking_counts_active=m.flag("sinking_counts_active", True, about="the sinking after a release counts as "
+                                     "uptime, as in the paper (eq. 3); false: only once on the seabed"),
     )
     m.done()
 
     e = root.sub("environment")
-    current = e.pair("current_mps", [0.0, 0.0], -MAX_CURRENT_MPS, MAX_CURRENT_MPS)
+    current = e.pair("current_mps", [0.0, 0.0], -MAX_CURRENT_MPS, MAX_CURRENT_MPS,
+                     about="uniform water current [east, north], felt by the aPad and the aMussels alike")
     environment = EnvironmentConfig(current[0], current[1])
     e.done()
 
     f = root.sub("fleet")
-    battery = f.pair("start_battery", [0.6, 1.0], 0.0, 1.0)
+    battery = f.pair("start_battery", [0.6, 1.0], 0.0, 1.0, about="[min, max] of a drawn fleet's batteries")
     fleet = FleetConfig(
-        count=f.integer("count", _REQUIRED, lo=1, hi=65535),
-        area=f.file("area", _REQUIRED),  # type: ignore[arg-type]
-        start_config=f.file("start_config", None),
+        count=f.integer("count", REQUIRED, lo=1, hi=65535, about="simulated aMussels"),
+        area=f.file("area", REQUIRED, about="GeoJSON polygon the aMussels live in"),  # type: ignore[arg-type]
+        start_config=f.file("start_config", None, about="saved ids, positions and batteries (GeoJSON); "
+                            "absent: the fleet is drawn from the seed"),
         battery_min=battery[0],
         battery_max=battery[1],
         discharge=f.text("discharge", "active", tuple(DISCHARGE_PROFILES)),
         charge=f.text("charge", "secondary", tuple(CHARGE_PROFILES)),
-        drift_cm=f.number("drift_cm", 0.5, lo=0.0, hi=100.0),
+        drift_cm=f.number("drift_cm", 0.5, lo=0.0, hi=100.0,
+                          about="half-width of the per-step uniform random drift, per axis"),
         acoustic_range_m=f.number("acoustic_range_m", 100.0, lo=0.0, hi=100_000.0),
         surfacing_time_s=f.number("surfacing_time_s", 20.0, lo=0.0, hi=3600.0),
         sinking_time_s=f.number("sinking_time_s", 20.0, lo=0.0, hi=3600.0),
         status_rate_hz=f.number("status_rate_hz", 1.0, lo=0.01, hi=50.0),
         sensors_rate_hz=f.number("sensors_rate_hz", 0.2, lo=0.01, hi=50.0),
         sensor_field=f.text("sensor_field", "anoxic_patch", ("anoxic_patch", "dummy")),
-        real_ids=f.integers("real_ids", 1, 65535),
-        real_replaces_simulated=f.flag("real_replaces_simulated"),
+        real_ids=f.integers("real_ids", 1, 65535, about="real aMussels expected on the bridge (vil gcs --bridge)"),
+        real_replaces_simulated=f.flag("real_replaces_simulated",
+                                       about="a real id that is also simulated replaces the simulated one"),
     )
     if not 0.0 <= fleet.battery_min <= fleet.battery_max <= 1.0:
         raise f.fail("start_battery", "expected 0 <= min <= max <= 1")
     f.done()
 
-    apads = tuple(_apad(a, default_id=1 + i) for i, a in enumerate(root.tables("apad")))
+    apads = tuple(_apad(a, default_id=1 + i) for i, a in enumerate(
+        root.tables("apad", about="one aPad ([apad]) or several ([[apad]], a swarm), by system id")))
     ids = [a.system_id for a in apads]
     if len(set(ids)) != len(ids):
         raise root.fail("apad", f"system ids must differ, got {ids}")
@@ -345,12 +241,13 @@ def scenario_from_data(path: Path, data: dict[str, Any]) -> Scenario:
     return Scenario(name, path.resolve(), seed, fleet, apads, mission, environment)
 
 
-def _apad(a: _Table, default_id: int) -> ApadConfig:
-    home = a.pair("home", _REQUIRED, -180.0, 180.0)
+def _apad(a: Fields, default_id: int) -> ApadConfig:
+    home = a.pair("home", REQUIRED, -180.0, 180.0, about="[lat, lon] in degrees")
     if not (-90 <= home[0] <= 90 and -180 <= home[1] <= 180):
         raise a.fail("home", f"{list(home)} is not [lat, lon] in degrees")
     apad = ApadConfig(
-        system_id=a.integer("system_id", default_id, lo=1, hi=249),
+        system_id=a.integer("system_id", Derived(default_id, "its place among the aPads, from 1"), lo=1, hi=249,
+                            about="MAVLink system id"),
         home_lat_deg=home[0],
         home_lon_deg=home[1],
         speed_mps=a.number("speed_mps", 0.5, lo=0.01, hi=5.0),
@@ -358,7 +255,8 @@ def _apad(a: _Table, default_id: int) -> ApadConfig:
         dock_reach_m=a.number("dock_reach_m", 2.0, lo=0.1, hi=50.0),
         dock_time_s=a.number("dock_time_s", 10.0, lo=0.0, hi=600.0),
         undock_time_s=a.number("undock_time_s", 5.0, lo=0.0, hi=600.0),
-        battery_end_v=a.number("battery_end_v", 11.0, lo=10.5, hi=16.0),
+        battery_end_v=a.number("battery_end_v", 11.0, lo=10.5, hi=16.0,
+                               about="the mission ends when the aPad battery falls to this"),
     )
     a.done()
     return apad

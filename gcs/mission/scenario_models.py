@@ -11,7 +11,9 @@ import numpy as np
 import shapely
 
 from apad_sitl.params import ApadParams
+from apad_sitl.vocabulary import N_SLOTS
 from gcs.mission.scenario import ApadConfig, Scenario, ScenarioError
+from gcs.mission.strategies import Outlook, PlanInput, StrategyError, plan, source_of
 from mussel_sim.drift import NO_CURRENT, UniformCurrent
 from mussel_sim.fleet_state import FleetParams
 from mussel_sim.geo import LocalFrame
@@ -48,6 +50,26 @@ def check_inputs(scenario: Scenario) -> None:
         detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise ScenarioError(f"{path}: bad {what}: {detail}") from None
     _real_and_simulated(scenario, simulated)
+    _probe_strategy(scenario, area)
+
+
+def _probe_strategy(scenario: Scenario, area: Area) -> None:
+    """A strategy from outside the package plans once on the mission's start (every aMussel a
+    candidate, the first aPad at home with its four slots free), so a bad one is a line now, not an
+    event at its first planning step."""
+    name = scenario.mission.collect_strategy
+    if source_of(name) == name:  # a shipped strategy: the suite tests it
+        return
+    config, _ = start_config(scenario, area, np.random.default_rng(scenario.seed))
+    home = scenario.apads[0]
+    inp = PlanInput(apads={home.system_id: (home.home_lat_deg, home.home_lon_deg)},
+                    capacity={home.system_id: N_SLOTS}, mussel_ids=config.ids.astype(np.int64),
+                    lat_deg=config.lat_deg, lon_deg=config.lon_deg, battery_frac=config.battery_frac,
+                    outlook=Outlook(time_left_s=scenario.mission.duration_s, theta=scenario.mission.theta))
+    try:
+        plan(name, inp)
+    except StrategyError as exc:
+        raise ScenarioError(f"{exc} (tried on {scenario.name}'s start, before the mission)") from None
 
 
 def _check_inside(config: StartConfig, area: Area) -> None:

@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 from gcs.mission.headless import run_mission, run_stem
 from gcs.mission.scenario import Scenario, ScenarioError, load_scenario, scenario_from_data
 from gcs.mission.scenario_models import check_inputs
-from gcs.mission.strategies import COLLECT, STRATEGIES
+from gcs.mission.strategies import COLLECT, STRATEGIES, StrategyError, load_strategy, source_of
 from gcs.mission.world import World
 from gcs.sweep.spec import SweepSpec, Value
 from missiontime import US_PER_S
@@ -40,6 +40,7 @@ class Cell:
     values: dict[str, Value]  # the swept fields' values
     strategy: str
     seed: int
+    strategy_source: str = ""  # what loads a strategy from outside the package on a worker (`load_strategy`)
 
     @property
     def label(self) -> str:
@@ -48,17 +49,18 @@ class Cell:
 
 
 def registered_strategies() -> tuple[str, ...]:
-    """Every collect strategy registered now, in the enum's order (a new one is in the next sweep of "all")."""
+    """Every shipped collect strategy, in the enum's order (a new one is in the next sweep of "all")."""
     return tuple(str(s) for s in COLLECT if s in STRATEGIES)
 
 
 def make_cells(spec: SweepSpec) -> list[Cell]:
-    """Every mission of the spec, each scenario checked with each point's fields (`SpecError` if one fails)."""
-    known = registered_strategies()
-    strategies = spec.strategies if spec.strategies is not None else known
-    unknown = [s for s in strategies if s not in known]
-    if unknown:
-        raise spec.fail(f"sweep.strategies: {unknown[0]!r} is not a strategy (registered: {', '.join(known)})")
+    """Every mission of the spec, each scenario checked with each point's fields (`SpecError` if one fails).
+    A strategy from a file is found from the spec's folder."""
+    try:
+        strategies = (registered_strategies() if spec.strategies is None
+                      else tuple(load_strategy(s, spec.path.parent) for s in spec.strategies))
+    except StrategyError as exc:
+        raise spec.fail(f"sweep.strategies: {exc}") from None
     cells: list[Cell] = []
     for ref in spec.scenarios:
         path, raw = _scenario_toml(spec, ref)
@@ -70,6 +72,8 @@ def make_cells(spec: SweepSpec) -> list[Cell]:
                 if spec.draw_fleet:
                     base = replace(base, fleet=replace(base.fleet, start_config=None))
                 check_inputs(base)
+                for strategy in (s for s in strategies if source_of(s) != s):  # one from outside: a plan on this start
+                    check_inputs(base.with_overrides(strategy=strategy))
             except ScenarioError as exc:
                 given = ", ".join(f"{k} = {v!r}" for k, v in fields.items())
                 raise spec.fail(f"{ref}" + (f" with {given}" if given else "") + f": {exc}") from None
@@ -77,7 +81,8 @@ def make_cells(spec: SweepSpec) -> list[Cell]:
                 for seed in spec.seeds:
                     key = cell_key(base.name, data, strategy, seed, spec.draw_fleet)
                     scenario = base.with_overrides(strategy=strategy, seed=seed)
-                    cells.append(Cell(len(cells), key, scenario, dict(point), strategy, seed))
+                    cells.append(Cell(len(cells), key, scenario, dict(point), strategy, seed,
+                                      source_of(strategy)))
     seen: dict[str, Cell] = {}
     for cell in cells:
         if cell.key in seen:
@@ -119,6 +124,7 @@ def run_cell(cell: Cell, runs_dir: str | None = None) -> dict[str, Any]:
 
     `runs_dir`: keep the run's folder there (.tlog, logs, traces); without it the run writes nothing.
     """
+    load_strategy(cell.strategy_source or cell.strategy)  # a worker process has loaded none yet
     series: dict[str, Any] = {}
 
     def keep_series(world: World) -> None:

@@ -11,7 +11,8 @@ import threading
 import traceback
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any
 
 from distributed import Client, LocalCluster, as_completed
@@ -74,6 +75,27 @@ def _ctrl_c_ignored() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+def ship_strategies(client: Client, cells: list[Cell]) -> list[Cell]:
+    """Strategies from files, sent to every worker as Dask sends user code (`Client.upload_file`: into
+    each worker's folder, on its sys.path); the cells then name each by module (stem:function), so a
+    worker never needs the file at the client's path."""
+    files = {c.strategy_source for c in cells if ":" in c.strategy_source and ".py:" in c.strategy_source}
+    stems: dict[str, str] = {}
+    for source in sorted(files):
+        path = source.rpartition(":")[0]
+        stem = Path(path).stem
+        if stems.setdefault(stem, path) != path:
+            raise ClusterError(f"two strategy files named {stem}.py ({stems[stem]}, {path}): a worker imports "
+                               "each by its name; rename one")
+        try:
+            client.upload_file(path)
+        except Exception as exc:  # a worker that cannot import it says why
+            raise ClusterError(f"sending {path} to the workers failed: {type(exc).__name__}: {exc}") from None
+    return [replace(c, strategy_source=f"{Path(c.strategy_source.rpartition(':')[0]).stem}:"
+                                       f"{c.strategy_source.rpartition(':')[2]}") if c.strategy_source in files else c
+            for c in cells]
 
 
 def describe(client: Client) -> str:

@@ -10,7 +10,7 @@ from rich.console import Console
 
 from gcs.sweep import store
 from gcs.sweep.cells import Cell
-from gcs.sweep.cluster import Failure, dask_client, describe, run_cells
+from gcs.sweep.cluster import Failure, dask_client, describe, run_cells, ship_strategies
 from gcs.sweep.spec import SweepSpec
 
 FAILED = "failed.txt"  # the tracebacks of the missions that failed in the last run
@@ -42,6 +42,8 @@ def sweep(
         runs_dir = str((out / "runs").resolve()) if keep_runs else None
         with dask_client(scheduler, workers, processes) as client:
             console.print(f"on {describe(client)}")
+            if scheduler is not None:  # workers elsewhere: a strategy file goes to them
+                todo = ship_strategies(client, todo)
             ran = run_cells(client, todo, runs_dir, lambda cell, result: store.write_cell(out, cell, result), console)
         outcome.ran, outcome.failed = ran.ran, ran.failed
         console.print(f"ran {ran.ran} missions in {time.perf_counter() - started:.0f} s"

@@ -116,7 +116,7 @@ def test_the_same_command_twice_gives_identical_json_in_two_folders(tmp_path: Pa
     "args, message",
     [
         (["run", "nowhere.toml"], "nowhere.toml: no such scenario file"),
-        (["run", "pool12", "--strategy", "smart"], "invalid choice: 'smart'"),
+        (["run", "pool12", "--strategy", "smart"], "unknown strategy 'smart'"),
         (["run", "pool12", "--duration", "forever"], "is not a duration"),
         (["run", "pool12", "--theta", "-3"], "argument --theta: -3.0 is outside [0.001, 10000.0]"),
     ],

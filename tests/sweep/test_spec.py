@@ -93,7 +93,7 @@ def test_a_swarm_field_is_set_on_every_apad(tmp_path: Path) -> None:
     ('[sweep]\nscenarios = ["pool12"]\n[set]\nwaves.height = 1\n', "waves: unknown field"),
     ('[sweep]\nscenarios = ["pool12"]\ndraw_fleet = false\n[grid]\nfleet.count = [8]\n',
      "holds 12 aMussels, the scenario says 8"),
-    ('[sweep]\nscenarios = ["pool12"]\nstrategies = ["fastest"]\n', "'fastest' is not a strategy"),
+    ('[sweep]\nscenarios = ["pool12"]\nstrategies = ["fastest"]\n', "sweep.strategies: unknown strategy 'fastest'"),
     ('[sweep]\nscenarios = ["nowhere"]\n', "sweep.scenarios: nowhere"),
     ('[sweep]\nscenarios = ["pool12"]\nseeds = "20-1"\n', 'is not a range "FIRST-LAST"'),
     ('[sweep]\nscenarios = ["pool12"]\nseeds = [1, 1]\n', "a seed twice"),

@@ -61,7 +61,7 @@ def write_variant(tmp_path: Path, old: str, new: str) -> Path:
         ("count = 12", 'count = "twelve"', "fleet.count: expected an integer"),
         ('duration = "40m"', 'duration = "40 parsecs"', "mission.duration: '40 parsecs' is not a duration"),
         ('collect_strategy = "cautious"', 'collect_strategy = "smart"',
-         "mission.collect_strategy: 'smart' is not one of"),
+         "mission.collect_strategy: unknown strategy 'smart'"),
         ("theta = 30 ", "theta = -30 ", "mission.theta: -30 is outside"),
         ('area = "areas/pool.geojson"', 'area = "areas/lake.geojson"', "fleet.area: no such file"),
         ("drift_cm = 0.5", "drift_cm = 0.5\ndrfit = 2", "fleet.drfit: unknown field"),

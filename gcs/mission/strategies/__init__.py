@@ -1,6 +1,7 @@
 """Collection and redeployment strategies: one module per strategy behind one interface
-(`base.Strategy`: `(PlanInput, CostWeights) -> Plan`), all registered in `STRATEGIES` by name.
-docs/strategies.md says what each does and when it wins."""
+(`base.Strategy`: `(PlanInput, CostWeights) -> Plan`), all registered in `STRATEGIES` by name; one
+from a file, a module or an installed package is loaded by `plugins.load_strategy`.
+docs/strategies.md says what each does and when it wins, and how to write one of your own."""
 
 from gcs.mission.strategies import (  # noqa: F401  (each module registers its strategy)
     cautious,
@@ -23,14 +24,18 @@ from gcs.mission.strategies.base import (
     PlanInput,
     RedeployStrategy,
     Strategy,
+    StrategyError,
     Traits,
+    check_plan,
     plan,
     route_length_m,
     strategy,
     traits,
 )
+from gcs.mission.strategies.plugins import ENTRY_POINT_GROUP, load_strategy, source_of, strategy_names
 
 __all__ = [
-    "COLLECT", "REDEPLOY", "STRATEGIES", "CollectStrategy", "CostWeights", "Outlook", "Plan", "PlanInput",
-    "RedeployStrategy", "Strategy", "Traits", "plan", "route_length_m", "strategy", "traits",
+    "COLLECT", "ENTRY_POINT_GROUP", "REDEPLOY", "STRATEGIES", "CollectStrategy", "CostWeights", "Outlook", "Plan",
+    "PlanInput", "RedeployStrategy", "Strategy", "StrategyError", "Traits", "check_plan", "load_strategy", "plan",
+    "route_length_m", "source_of", "strategy", "strategy_names", "traits",
 ]

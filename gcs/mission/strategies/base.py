@@ -146,12 +146,50 @@ def traits(name: str) -> Traits:
     return TRAITS.get(name, Traits())
 
 
+class StrategyError(ValueError):
+    """A strategy that cannot be loaded or that failed to plan: what is wrong, in one line."""
+
+
 def plan(name: str, inp: PlanInput, weights: CostWeights = CostWeights()) -> Plan:
+    """Strategy `name`'s plan, checked (`check_plan`); `StrategyError` if it raised or planned wrong."""
+    fn = STRATEGIES.get(name)
+    if fn is None:
+        raise StrategyError(f"unknown strategy {name!r} (known: {', '.join(STRATEGIES)})")
     try:
-        fn = STRATEGIES[name]
-    except KeyError:
-        raise ValueError(f"unknown strategy {name!r} (known: {', '.join(sorted(STRATEGIES))})") from None
-    return fn(inp, weights)
+        made = fn(inp, weights)
+    except Exception as exc:  # a strategy's bug is the strategy's: the loop says so and goes on
+        raise StrategyError(f"strategy {name} raised {type(exc).__name__}: {exc}") from exc
+    return check_plan(name, made, inp)
+
+
+def check_plan(name: str, plan: object, inp: PlanInput) -> Plan:
+    """`plan` as the loop may act on it: a dict of aPad id -> candidate aMussel ids, each aMussel once,
+    no more than the aPad's free slots. `StrategyError` saying what is wrong."""
+    if not isinstance(plan, dict):
+        raise StrategyError(f"strategy {name} returned {type(plan).__name__}, not a dict of aPad id -> aMussel ids")
+    candidates = {int(m) for m in inp.mussel_ids}
+    seen: set[int] = set()
+    for apad, route in plan.items():
+        if apad not in inp.apads:
+            raise StrategyError(f"strategy {name} planned for aPad {apad!r}, which is not planning now")
+        if not isinstance(route, list) or not all(_is_id(m) for m in route):
+            raise StrategyError(f"strategy {name}: aPad {apad}'s route is not a list of aMussel ids: {route!r}")
+        strange = [m for m in route if m not in candidates]
+        if strange:
+            raise StrategyError(f"strategy {name} planned aMussel {strange[0]}, which is not a candidate "
+                                f"(candidates: {sorted(candidates)})")
+        twice = seen.intersection(route) or ({m for m in route if route.count(m) > 1})
+        if twice:
+            raise StrategyError(f"strategy {name} planned aMussel {min(twice)} twice")
+        if len(route) > inp.capacity.get(apad, 0):
+            raise StrategyError(f"strategy {name} planned {len(route)} aMussels for aPad {apad}'s "
+                                f"{inp.capacity.get(apad, 0)} free slots")
+        seen.update(route)
+    return {apad: [int(m) for m in route] for apad, route in plan.items()}
+
+
+def _is_id(value: object) -> bool:
+    return isinstance(value, int | np.integer) and not isinstance(value, bool)
 
 
 def sequence(inp: PlanInput, step_cost: Callable[[float, float, NDArray[np.bool_]], NDArray[np.float64]],

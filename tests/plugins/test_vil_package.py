@@ -1,0 +1,64 @@
+"""`vil` in Python (issue 22): the same figures as `vil run`, the example notebook executed from top
+to bottom by a real Jupyter kernel, and bad input as `vil.Error`."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import nbformat
+import pytest
+from nbclient import NotebookClient
+
+import vil
+
+ROOT = Path(__file__).resolve().parents[2]
+NOTEBOOK = ROOT / "docs" / "examples" / "vil-notebook.ipynb"
+
+pytestmark = [pytest.mark.sitl]
+
+
+def test_vil_run_gives_the_figures_vil_run_prints_for_the_same_scenario_strategy_and_seed(tmp_path: Path) -> None:
+    r = vil.run("pool12", strategy="greedy", seed=2, duration="15m", out=tmp_path / "api")
+    done = subprocess.run([sys.executable, "-m", "gcs.cli", "run", "pool12", "--strategy", "greedy", "--seed", "2",
+                           "--duration", "15m", "--out", str(tmp_path / "cli"), "--json", str(tmp_path / "cli.json")],
+                          capture_output=True, text=True, timeout=300, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert done.returncode == 0, done.stderr
+    cli = json.loads((tmp_path / "cli.json").read_text())
+    up = cli["uptime"]
+    assert (r.uptime_avg, r.uptime_min, r.uptime_max) == (up["avg"], up["min"], up["max"])
+    assert (r.cost_m, r.active_avg, r.cycles, r.strategy, r.seed) == (cli["cost_m"], cli["active_avg"], cli["cycles"],
+                                                                     "greedy", 2)
+    assert r.cost_m > 0 and r.folder.name == "pool12-greedy-seed2-run1"
+    assert list(r.mussels.index) == sorted(m["id"] for m in cli["mussels"])
+    assert r.mussels["uptime_pct"].tolist() == [m["uptime_pct"] for m in sorted(cli["mussels"], key=lambda m: m["id"])]
+    assert r.active["t_s"].iloc[-1] == pytest.approx(900.0, abs=1.0) and r.active["active"].max() <= 12
+    assert vil.load(tmp_path / "api" / "latest").raw == r.raw
+
+
+def test_bad_input_is_a_vil_error_of_one_line(tmp_path: Path) -> None:
+    for call, words in ((lambda: vil.scenario("pool12", fields={"mission.thetta": 60}), "mission.thetta: unknown"),
+                        (lambda: vil.scenario("nowhere"), "no such scenario"),
+                        (lambda: vil.run("pool12", strategy="cautios", out=tmp_path), "did you mean cautious?"),
+                        (lambda: vil.run("pool12", duration="forever", out=tmp_path), "forever"),
+                        (lambda: vil.load(tmp_path), "no result.json")):
+        with pytest.raises(vil.Error) as caught:
+            call()
+        assert words in str(caught.value) and "\n" not in str(caught.value), str(caught.value)
+    assert not list(tmp_path.iterdir())  # nothing started
+
+
+def test_the_example_notebook_runs_from_top_to_bottom(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    notebook = nbformat.read(NOTEBOOK, as_version=4)
+    client = NotebookClient(notebook, timeout=600, kernel_name="python3",
+                            resources={"metadata": {"path": str(tmp_path)}})
+    monkeypatch.setenv("PYTHONPATH", str(ROOT))  # the kernel is a process of its own
+    client.execute()  # raises CellExecutionError, with the cell and its traceback, if any cell fails
+    outputs = [o for cell in notebook.cells if cell.cell_type == "code" for o in cell.get("outputs", [])]
+    text = "".join(str(o.get("text", "")) + str(o.get("data", {}).get("text/plain", "")) for o in outputs)
+    assert "uptime" in text and "mission.thetta: unknown field" in text
+    assert any("image/png" in o.get("data", {}) for o in outputs)  # the active-count figure
+    assert (tmp_path / "sweeps" / "small" / "results.parquet").is_file()

@@ -1,0 +1,21 @@
+"""vil in Python: run, sweep and read missions from a notebook or a script.
+
+    import vil
+    r = vil.run("pool12", strategy="greedy", seed=1)      # the same mission as `vil run pool12 --strategy greedy`
+    r.uptime_avg, r.cost_m                                # the paper's Table II figures
+    r.mussels                                             # a pandas DataFrame: one row per aMussel
+    r.active                                              # active aMussels over mission time
+    s = vil.scenario("pool12", fields={"mission.theta": 60, "fleet.count": 16})   # a variant, built in code
+    frame = vil.sweep("missions/sweeps/smoke.toml", out="sweeps/smoke")           # one row per mission
+    old = vil.load("runs/latest")                         # a recorded run, as `r` above
+
+Strategies are named as everywhere else: a shipped name, "FILE.py:FUNCTION", "MODULE:FUNCTION" or
+an installed `vil.strategies` entry point (docs/strategies.md). Errors are `vil.Error` with one line.
+"""
+
+from __future__ import annotations
+
+from vil.api import Error, load, run, scenario, sweep
+from vil.result import Result
+
+__all__ = ["Error", "Result", "load", "run", "scenario", "sweep"]
