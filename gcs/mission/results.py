@@ -149,13 +149,16 @@ def time_table(results: list[RunResult]) -> Table | None:
     runs = [r for r in results if r.mussels and r.mussels[0].state_s]
     if not runs:
         return None
-    table = Table(title="Where the time went, % of mission", box=box.SIMPLE_HEAD, pad_edge=False, collapse_padding=True,
+    table = Table(title="Where the time went, % of the time run", box=box.SIMPLE_HEAD, pad_edge=False,
+                  collapse_padding=True,
                   caption="aMussels: fleet mean (the rest: on the way up or down); aPad: the rest docking")
     for col in ("run", "active", "docked", "depleted", "1st depl.", "aPad moving", "holding"):
         table.add_column(col, justify="left" if col == "run" else "right", no_wrap=True)
     for r in runs:
-        def pct(state: str, r: RunResult = r) -> str:
-            return f"{100 * sum(m.state_s.get(state, 0.0) for m in r.mussels) / (len(r.mussels) * r.duration_s):.1f}"
+        counted = sum(sum(m.state_s.values()) for m in r.mussels)  # the time run (short of the duration: ended early)
+
+        def pct(state: str, r: RunResult = r, counted: float = counted) -> str:
+            return f"{100 * sum(m.state_s.get(state, 0.0) for m in r.mussels) / counted:.1f}" if counted else "-"
 
         firsts = [m.first_depleted_s for m in r.mussels if m.first_depleted_s is not None]
         apad = [f"{100 * np.mean([a.get(k, 0.0) for a in r.apads]):.1f}" if r.apads else "-"
