@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 from gcs.console.web import TOKEN_ENV, WebTokenError, read_web_token, serve_console, web_address
 from gcs.mission import flags
 from gcs.mission.scenario import MISSIONS_DIR, Scenario, ScenarioError, load_scenario, resolve_scenario
-from gcs.mission.strategies import StrategyError, load_strategy
+from gcs.mission.strategies import StrategyError, load_strategy, source_of
 from gcs.records.run_folder import RunFolder
 from mavlink_dialect.signing import SigningKeyError, load_key
 from missiontime import mm_ss, unix_time_us
@@ -111,8 +111,10 @@ def run_gcs(args: argparse.Namespace) -> int:
     stem = f"console-{scenario.name}"
     if args.resume:
         try:
+            if args.strategy is None:  # the strategy the mission ran with (one from a file is loaded again)
+                scenario = _saved_strategy(args.out, stem, scenario)
             out, epoch_us, resume = _resume_point(args.out, stem, scenario)
-        except CheckpointError as exc:
+        except (CheckpointError, StrategyError) as exc:
             print(f"vil gcs: {exc}", file=sys.stderr)
             return 2
         if args.speed is None and args.sitl:
@@ -123,7 +125,7 @@ def run_gcs(args: argparse.Namespace) -> int:
             out = args.out or RunFolder.new(Path("runs"), stem).path
             out.mkdir(parents=True, exist_ok=True)
             record = {"scenario": scenario.name, "scenario_path": str(path.resolve()), "epoch_us": epoch_us,
-                      "speed": args.speed}
+                      "speed": args.speed, "strategy": source_of(scenario.mission.collect_strategy)}
             RunFolder(out).console.write_text(json.dumps(record))
         except OSError as exc:
             print(f"vil gcs: cannot write the logs in {args.out or 'runs'}: {exc.strerror or exc}", file=sys.stderr)
@@ -167,6 +169,17 @@ def saved_speed(folder: RunFolder) -> float | None:
         return None
     ok = isinstance(speed, int | float) and not isinstance(speed, bool) and SPEED_RANGE[0] <= speed <= SPEED_RANGE[1]
     return float(speed) if ok else None
+
+
+def _saved_strategy(out: Path | None, stem: str, scenario: Scenario) -> Scenario:
+    """`scenario` with the collection strategy console.json says the mission to resume ran with (as
+    it is, if it says none: an older run, or none to resume: `_resume_point` says so)."""
+    folder = RunFolder(out) if out is not None else RunFolder.newest_resumable(Path("runs"), stem)
+    try:
+        spec = json.loads(folder.console.read_text(encoding="utf-8")).get("strategy") if folder else None
+    except (OSError, ValueError, AttributeError):
+        spec = None
+    return scenario.with_overrides(strategy=load_strategy(spec)) if isinstance(spec, str) and spec else scenario
 
 
 def _resume_point(out: Path | None, stem: str, scenario: Scenario) -> tuple[Path, int, ResumePoint]:

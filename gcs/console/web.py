@@ -43,7 +43,7 @@ import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
-from urllib.parse import quote
+from urllib.parse import quote, urlsplit
 
 if TYPE_CHECKING:
     from aiohttp import web
@@ -133,6 +133,16 @@ def read_web_token(path: Path | None, environ: Mapping[str, str] | None = None) 
     return token
 
 
+def same_origin(origin: str | None, host: str) -> bool:
+    """Whether a request's Origin (a browser's page that made it) is this server (`host`: HOST:PORT
+    as the request names it). No Origin: not a browser's cross-site request (curl, a script). A
+    cookie is sent by a page of any port of the same host (SameSite is per site): a websocket from
+    another port's page would carry it, so the origin must be this very server."""
+    if origin is None:
+        return True
+    return urlsplit(origin).netloc.lower() == host.lower()
+
+
 class TokenGate:
     """The console's door when it has a token: a request passes if it shows the token in its query
     (?token=T) or an `Authorization: token T` header, or the cookie given to a browser that showed it
@@ -172,7 +182,8 @@ class TokenGate:
         @web.middleware
         async def check_token(request: web.Request, handler: Handler) -> web.StreamResponse:
             shown = request.query.get("token")
-            if not self.admits(shown, request.cookies.get(self.cookie_name), request.headers.get("Authorization")):
+            admitted = self.admits(shown, request.cookies.get(self.cookie_name), request.headers.get("Authorization"))
+            if not admitted or not same_origin(request.headers.get("Origin"), request.host):
                 peer = request.remote or "an unknown address"
                 if self.count_refusal(peer):
                     more = len(self.refused_peers) > MAX_PEERS_LOGGED

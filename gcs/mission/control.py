@@ -64,6 +64,7 @@ class LoopStatus:
     dockings: list[tuple[float, int]] = field(default_factory=list)  # (mission s, aMussel id) of each dock
     # Mission microseconds the aPad spent travelling, docking, holding (gcs.mission.time_accounting)
     apad_time_us: dict[str, int] = field(default_factory=dict)
+    strategy_failures: int = 0  # planning steps the strategy failed (cautious planned them instead)
 
 
 @dataclass(frozen=True)

@@ -112,7 +112,8 @@ def happenings(world: World, outcome: Outcome) -> dict[str, Any]:
     """What happened that a user would want to know besides the figures, from the run's own records:
     the link faults injected and aPads failed on purpose, the aPads' failsafe holds (embedded SITL
     aPads: a real one's are on the aPad), the loop's link losses, Go Tos the failsafe preempted,
-    steps given up at a bound, aPads lost to the swarm and the re-shares. Zeros are left out."""
+    steps given up at a bound, planning steps a strategy failed, aPads lost to the swarm and the
+    re-shares. Zeros are left out."""
     counts = world.events.counts
     options = world.options
     happened: dict[str, Any] = {}
@@ -127,6 +128,7 @@ def happenings(world: World, outcome: Outcome) -> dict[str, Any]:
         happened["failsafe_holds"] = sum(v.modes.failsafe_holds for v in world.vehicles.values())
     for kind, name in (("link_lost", "link_losses"), ("goto_resumed", "gotos_resumed"), ("gave_up", "gave_up")):
         happened[name] = counts.get(kind, 0)
+    happened["strategy_failures"] = sum(loop.status.strategy_failures for loop in outcome.loops.values())
     shares = outcome.shares
     if shares is not None:
         happened["reshares"] = max(shares.reshares - 1, 0)  # the first sharing is not a re-share

@@ -10,6 +10,7 @@ it never reaches into another phase. The loop's shapes (`gcs.mission.turns`) str
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -93,11 +94,16 @@ def strategy_route(crew: Crew, inp: PlanInput) -> list[int]:
     """The strategy's route for this aPad. A strategy that raises or plans what the loop cannot act
     on (an aMussel that is not a candidate, one twice, more than the free slots) is logged
     (`strategy_failed`, with why) and the paper's cautious plans this step instead: the mission goes
-    on, and the strategy is asked again at the next step."""
+    on, and the strategy is asked again at the next step. The event is logged at the 1st, 10th, 100th, ...
+    failure (with the count): a strategy that always fails cannot flood the log."""
     try:
         return plan(crew.status.strategy, inp, crew.weights).get(crew.knows.apad_id, [])
     except StrategyError as exc:
-        crew.log("strategy_failed", strategy=crew.status.strategy, why=str(exc), instead=str(FALLBACK))
+        crew.status.strategy_failures += 1
+        failures = crew.status.strategy_failures
+        if failures in (1, 10) or (failures >= 100 and math.log10(failures).is_integer()):  # a bounded log
+            crew.log("strategy_failed", strategy=crew.status.strategy, why=str(exc), instead=str(FALLBACK),
+                     failures=failures)
         return plan(FALLBACK, inp, crew.weights)[crew.knows.apad_id]
 
 

@@ -114,7 +114,8 @@ def happened_lines(results: list[RunResult]) -> list[str]:
         parts += [f"aPad {a['apad']} lost at {mm_ss(a['at_s'])}" for a in h.get("apads_lost", [])]
         for key, words in (("reshares", "fleet re-shared"), ("failsafe_holds", "failsafe hold"),
                            ("link_losses", "link loss"), ("gotos_resumed", "Go To resumed after a hold"),
-                           ("gave_up", "step given up at its bound")):
+                           ("gave_up", "step given up at its bound"),
+                           ("strategy_failures", "planning step the strategy failed (cautious planned it)")):
             if h.get(key):
                 parts.append(f"{words} x{h[key]}")
         if parts:

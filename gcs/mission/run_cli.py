@@ -50,7 +50,7 @@ from gcs.mission.results import (
 )
 from gcs.mission.scenario import SEED_MAX, THETA_RANGE, Scenario, ScenarioError, load_scenario
 from gcs.mission.scenario_models import check_inputs
-from gcs.mission.strategies import COLLECT, StrategyError, load_strategy, source_of
+from gcs.mission.strategies import COLLECT, StrategyError, is_plugin, load_strategy, source_of
 from gcs.mission.world import LinkOptions
 from gcs.records import checkpoint
 from gcs.records.checkpoint import CheckpointError
@@ -188,7 +188,7 @@ def _jobs(args: argparse.Namespace) -> list[Job]:
         base = cache.setdefault(name, load_scenario(name))
         for seed in seeds:
             s = base.with_overrides(strategy=strategy, seed=seed, duration_s=args.duration, theta=args.theta)
-            if strategy is not None and source_of(strategy) != strategy and seed == seeds[0]:
+            if strategy is not None and is_plugin(strategy) and seed == seeds[0]:
                 check_inputs(s)  # a strategy from outside plans once on the start: a bad plan is a line now
             jobs.append(Job(s, args.out, options, args.resume, strategy_source=source_of(s.mission.collect_strategy)))
     return jobs

@@ -23,7 +23,15 @@ from numpy.typing import NDArray
 from gcs.mission.headless import run_mission, run_stem
 from gcs.mission.scenario import Scenario, ScenarioError, load_scenario, scenario_from_data
 from gcs.mission.scenario_models import check_inputs
-from gcs.mission.strategies import COLLECT, STRATEGIES, StrategyError, load_strategy, source_of
+from gcs.mission.strategies import (
+    COLLECT,
+    STRATEGIES,
+    StrategyError,
+    fingerprint,
+    is_plugin,
+    load_strategy,
+    source_of,
+)
 from gcs.mission.world import World
 from gcs.sweep.spec import SweepSpec, Value
 from missiontime import US_PER_S
@@ -72,14 +80,14 @@ def make_cells(spec: SweepSpec) -> list[Cell]:
                 if spec.draw_fleet:
                     base = replace(base, fleet=replace(base.fleet, start_config=None))
                 check_inputs(base)
-                for strategy in (s for s in strategies if source_of(s) != s):  # one from outside: a plan on this start
+                for strategy in (s for s in strategies if is_plugin(s)):  # one from outside: a plan on this start
                     check_inputs(base.with_overrides(strategy=strategy))
             except ScenarioError as exc:
                 given = ", ".join(f"{k} = {v!r}" for k, v in fields.items())
                 raise spec.fail(f"{ref}" + (f" with {given}" if given else "") + f": {exc}") from None
             for strategy in strategies:
                 for seed in spec.seeds:
-                    key = cell_key(base.name, data, strategy, seed, spec.draw_fleet)
+                    key = cell_key(base.name, data, strategy, seed, spec.draw_fleet, fingerprint(strategy))
                     scenario = base.with_overrides(strategy=strategy, seed=seed)
                     cells.append(Cell(len(cells), key, scenario, dict(point), strategy, seed,
                                       source_of(strategy)))
@@ -113,8 +121,11 @@ def patched(raw: dict[str, Any], fields: dict[str, Value]) -> dict[str, Any]:
     return data
 
 
-def cell_key(name: str, data: dict[str, Any], strategy: str, seed: int, draw_fleet: bool) -> str:
+def cell_key(name: str, data: dict[str, Any], strategy: str, seed: int, draw_fleet: bool, code: str = "") -> str:
+    """`code`: a strategy from outside the package, its file's digest (an edited file: new cells)."""
     inputs = {"scenario": name, "fields": data, "strategy": strategy, "seed": seed, "draw_fleet": draw_fleet}
+    if code:  # shipped strategies' keys stay what they were
+        inputs["code"] = code
     text = json.dumps(inputs, sort_keys=True, separators=(",", ":"), default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 

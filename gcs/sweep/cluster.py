@@ -4,9 +4,11 @@ writes it (so a cluster on other machines needs no shared folder, unless runs ar
 
 from __future__ import annotations
 
+import hashlib
 import logging
 import os
 import signal
+import tempfile
 import threading
 import traceback
 from collections.abc import Callable, Iterator
@@ -79,22 +81,27 @@ def _ctrl_c_ignored() -> Iterator[None]:
 
 def ship_strategies(client: Client, cells: list[Cell]) -> list[Cell]:
     """Strategies from files, sent to every worker as Dask sends user code (`Client.upload_file`: into
-    each worker's folder, on its sys.path); the cells then name each by module (stem:function), so a
-    worker never needs the file at the client's path."""
-    files = {c.strategy_source for c in cells if ":" in c.strategy_source and ".py:" in c.strategy_source}
-    stems: dict[str, str] = {}
-    for source in sorted(files):
-        path = source.rpartition(":")[0]
-        stem = Path(path).stem
-        if stems.setdefault(stem, path) != path:
-            raise ClusterError(f"two strategy files named {stem}.py ({stems[stem]}, {path}): a worker imports "
-                               "each by its name; rename one")
-        try:
-            client.upload_file(path)
-        except Exception as exc:  # a worker that cannot import it says why
-            raise ClusterError(f"sending {path} to the workers failed: {type(exc).__name__}: {exc}") from None
-    return [replace(c, strategy_source=f"{Path(c.strategy_source.rpartition(':')[0]).stem}:"
-                                       f"{c.strategy_source.rpartition(':')[2]}") if c.strategy_source in files else c
+    each worker's folder, on its sys.path, imported there). Each goes under a name of its own,
+    `vil_strategy_<stem>_<digest>`, so a file called random.py or test.py cannot meet a module of that
+    name on the worker; the cells then name each by that module, so a worker never needs the file
+    at the client's path."""
+    files = {c.strategy_source for c in cells if c.strategy_source.partition(":")[0].endswith(".py")
+             and ".py:" in c.strategy_source}
+    modules: dict[str, str] = {}
+    with tempfile.TemporaryDirectory(prefix="vil-ship-") as tmp:
+        for source in sorted(files):
+            path, _, function = source.rpartition(":")
+            text = Path(path).read_bytes()
+            module = f"vil_strategy_{Path(path).stem}_{hashlib.sha256(text).hexdigest()[:10]}"
+            copy = Path(tmp) / f"{module}.py"
+            copy.write_bytes(text)
+            try:
+                client.upload_file(str(copy))
+            except Exception as exc:  # a worker that cannot import it says why
+                raise ClusterError(f"sending {path} to the workers failed: {type(exc).__name__}: "
+                                   f"{str(exc).splitlines()[0] if str(exc) else ''}") from None
+            modules[source] = f"{module}:{function}"
+    return [replace(c, strategy_source=modules[c.strategy_source]) if c.strategy_source in modules else c
             for c in cells]
 
 

@@ -87,17 +87,20 @@ def test_a_sweep_of_a_strategy_file_on_a_local_cluster_and_on_separate_workers(t
         remote = vil(tmp_path, "sweep", "spec/sweep.toml", "--out", "remote", "--scheduler", address, "--no-report")
     assert remote.returncode == 0, remote.stderr + remote.stdout
     pd.testing.assert_frame_equal(_sweep_rows(tmp_path / "local"), _sweep_rows(tmp_path / "remote"))
-    assert list((tmp_path / "dask").glob("worker*/**/mine.py"))  # what Dask shipped to the workers
+    assert list((tmp_path / "dask").glob("worker*/**/vil_strategy_mine_*.py"))  # what Dask shipped to the workers
 
 
 def test_a_strategy_from_an_installed_packages_entry_point(tmp_path: Path) -> None:
     package = tmp_path / "src"
     (package / "slackpkg").mkdir(parents=True)
     shutil.copy(EXAMPLE, package / "slackpkg" / "__init__.py")
+    (package / "slackpkg" / "stranger.py").write_text(
+        "def plan(inp, weights):\n    return {a: [9999] for a in inp.apads}\n")
     (package / "pyproject.toml").write_text(
         '[build-system]\nrequires = ["setuptools"]\nbuild-backend = "setuptools.build_meta"\n'
         '[project]\nname = "slackpkg"\nversion = "0.1"\n'
         '[project.entry-points."vil.strategies"]\nslack = "slackpkg:slack_first"\n'
+        'stranger = "slackpkg.stranger:plan"\n'
         '[tool.setuptools]\npackages = ["slackpkg"]\n')
     site = tmp_path / "site"
     pip = subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--target", str(site),
@@ -108,6 +111,8 @@ def test_a_strategy_from_an_installed_packages_entry_point(tmp_path: Path) -> No
     assert done.returncode == 0, done.stderr
     result = json.loads((tmp_path / "runs" / "pool12-slack-seed1-run1" / "result.json").read_text())
     assert result["strategy"] == "slack"
+    bad = vil(tmp_path, "run", "pool12", "--strategy", "stranger", *SHORT, env=env)  # planned before the start
+    assert bad.returncode == 2 and "planned aMussel 9999, which is not a candidate" in bad.stderr, bad.stderr
 
 
 BAD = {
@@ -118,6 +123,7 @@ BAD = {
     "raises_at_once.py": ("def slack_first(inp, weights):\n    raise RuntimeError('boom')\n",
                           "mine.py:slack_first", "raised RuntimeError: boom"),
     "import_fails.py": ("import no_such_module_here\n", "mine.py:slack_first", "importing it failed"),
+    "module_named_like_the_library.py": ("", "heapq.py:heappush", "no such strategy file"),  # not the stdlib's
 }
 
 
@@ -151,6 +157,10 @@ def test_a_strategy_that_fails_mid_mission_is_an_event_and_the_mission_goes_on(t
     failed = [e for e in events(folder) if e["event"] == "strategy_failed"]
     assert failed and all("fewer than twelve candidates" in str(e["why"]) and e["instead"] == "cautious"
                           for e in failed)
+    assert [e["failures"] for e in failed] == [1, 10, 100, 1000][:len(failed)]  # the log is bounded
+    result = json.loads((folder / "result.json").read_text())
+    assert result["happened"]["strategy_failures"] >= len(failed)
+    assert "planning step the strategy failed" in " ".join(done.stdout.split())
     assert any(e["event"] == "docked" for e in events(folder))  # the mission went on: aMussels were collected
     assert json.loads((folder / "result.json").read_text())["cycles"] >= 1
 

@@ -193,3 +193,16 @@ def test_a_token_file_without_web_is_one_line(tmp_path: Path, capsys: pytest.Cap
     (tmp_path / "token").write_text("s3cret\n")
     assert main(["gcs", "--sitl", "--web-token-file", str(tmp_path / "token")]) == 2
     assert capsys.readouterr() == ("", "vil gcs: --web-token-file needs --web (the token guards the browser console)\n")
+
+
+def test_a_request_from_another_origin_is_refused_even_with_the_cookie() -> None:
+    """A page of another port on the same host gets the cookie sent along (SameSite is per site):
+    its websocket must still be refused. Requests without an Origin (not a browser page's) pass."""
+    from gcs.console.web import same_origin
+
+    assert same_origin(None, "127.0.0.1:8000")
+    assert same_origin("http://127.0.0.1:8000", "127.0.0.1:8000")
+    assert same_origin("http://LOCALHOST:8000", "localhost:8000")
+    assert not same_origin("http://127.0.0.1:9999", "127.0.0.1:8000")
+    assert not same_origin("https://evil.example", "127.0.0.1:8000")
+    assert not same_origin("null", "127.0.0.1:8000")

@@ -32,10 +32,17 @@ from gcs.mission.strategies.base import (
     strategy,
     traits,
 )
-from gcs.mission.strategies.plugins import ENTRY_POINT_GROUP, load_strategy, source_of, strategy_names
+from gcs.mission.strategies.plugins import (
+    ENTRY_POINT_GROUP,
+    fingerprint,
+    is_plugin,
+    load_strategy,
+    source_of,
+    strategy_names,
+)
 
 __all__ = [
     "COLLECT", "ENTRY_POINT_GROUP", "REDEPLOY", "STRATEGIES", "CollectStrategy", "CostWeights", "Outlook", "Plan",
-    "PlanInput", "RedeployStrategy", "Strategy", "StrategyError", "Traits", "check_plan", "load_strategy", "plan",
-    "route_length_m", "source_of", "strategy", "strategy_names", "traits",
+    "PlanInput", "RedeployStrategy", "Strategy", "StrategyError", "Traits", "check_plan", "fingerprint", "is_plugin",
+    "load_strategy", "plan", "route_length_m", "source_of", "strategy", "strategy_names", "traits",
 ]

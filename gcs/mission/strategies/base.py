@@ -131,12 +131,14 @@ class Traits:
 
 
 TRAITS: dict[str, Traits] = {}
+SHIPPED: set[str] = set()  # registered by `strategy` (the package's own); the rest came from outside (plugins)
 
 
 def strategy(name: str, traits: Traits = Traits()) -> Callable[[Strategy], Strategy]:
     def register(fn: Strategy) -> Strategy:
         STRATEGIES[name] = fn
         TRAITS[name] = traits
+        SHIPPED.add(name)
         return fn
 
     return register
@@ -151,15 +153,24 @@ class StrategyError(ValueError):
 
 
 def plan(name: str, inp: PlanInput, weights: CostWeights = CostWeights()) -> Plan:
-    """Strategy `name`'s plan, checked (`check_plan`); `StrategyError` if it raised or planned wrong."""
+    """Strategy `name`'s plan, checked (`check_plan`); `StrategyError` if it planned wrong, or if one
+    from outside the package raised (a shipped one's exception is a bug of ours: it propagates)."""
     fn = STRATEGIES.get(name)
     if fn is None:
         raise StrategyError(f"unknown strategy {name!r} (known: {', '.join(STRATEGIES)})")
+    if name in SHIPPED:
+        return check_plan(name, fn(inp, weights), inp)
     try:
         made = fn(inp, weights)
-    except Exception as exc:  # a strategy's bug is the strategy's: the loop says so and goes on
-        raise StrategyError(f"strategy {name} raised {type(exc).__name__}: {exc}") from exc
+    except Exception as exc:  # a user's strategy's bug is the strategy's: the loop says so and goes on
+        raise StrategyError(f"strategy {name} raised {first_line(exc)}") from exc
     return check_plan(name, made, inp)
+
+
+def first_line(exc: BaseException) -> str:
+    """`Type: message` on one line (a message of several lines: its first)."""
+    text = str(exc).strip()
+    return f"{type(exc).__name__}: {text.splitlines()[0]}" if text else type(exc).__name__
 
 
 def check_plan(name: str, plan: object, inp: PlanInput) -> Plan:

@@ -28,7 +28,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from gcs.mission.strategies.base import STRATEGIES, TRAITS, Strategy, StrategyError, Traits
+from gcs.mission.strategies.base import STRATEGIES, TRAITS, Strategy, StrategyError, Traits, first_line
 
 ENTRY_POINT_GROUP = "vil.strategies"
 SOURCES: dict[str, str] = {}  # a loaded strategy's name -> the spec that loads it again (absolute for files)
@@ -57,6 +57,23 @@ def load_strategy(spec: str, base: Path | None = None) -> str:
     if fn is None:
         raise StrategyError(f"{spec}: no function {function!r} in {where}")
     return _register(function, fn, source, spec)
+
+
+def is_plugin(name: str) -> bool:
+    """Whether `name` was loaded from outside the package (a file, a module, an entry point)."""
+    return name in SOURCES
+
+
+def fingerprint(name: str) -> str:
+    """A digest of a loaded strategy's source file ("" for a shipped one, or one without a file): a
+    sweep's cell key includes it, so an edited strategy file makes new cells."""
+    if not is_plugin(name):
+        return ""
+    try:
+        path = inspect.getsourcefile(STRATEGIES[name])
+        return hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16] if path else ""
+    except (OSError, TypeError):
+        return ""
 
 
 def source_of(name: str) -> str:
@@ -92,13 +109,10 @@ def _register(name: str, fn: Any, source: str, spec: str) -> str:
 
 
 def _file_module(path: Path) -> ModuleType:
-    """The module of a strategy file, loaded once per path. A path that is not there is looked for as
-    a module of its stem on sys.path: how a Dask worker finds a file the sweep uploaded to it."""
+    """The module of a strategy file, loaded once per path (a Dask worker elsewhere gets the file as a
+    module instead: `gcs.sweep.cluster.ship_strategies`)."""
     if not path.is_file():
-        try:
-            return importlib.import_module(path.stem)
-        except ImportError:
-            raise StrategyError(f"{path}: no such strategy file") from None
+        raise StrategyError(f"{path}: no such strategy file")
     name = f"vil_strategy_{path.stem}_{hashlib.sha1(str(path).encode()).hexdigest()[:8]}"
     if name in sys.modules:
         return sys.modules[name]
@@ -111,7 +125,7 @@ def _file_module(path: Path) -> ModuleType:
         found.loader.exec_module(module)
     except Exception as exc:  # the user's file: whatever it raises is one line about it
         del sys.modules[name]
-        raise StrategyError(f"{path}: importing it failed: {type(exc).__name__}: {exc}") from None
+        raise StrategyError(f"{path}: importing it failed: {first_line(exc)}") from None
     return module
 
 
@@ -119,9 +133,9 @@ def _import(module: str, spec: str) -> ModuleType:
     try:
         return importlib.import_module(module)
     except ImportError as exc:
-        raise StrategyError(f"{spec}: cannot import {module}: {exc}") from None
+        raise StrategyError(f"{spec}: cannot import {module}: {first_line(exc)}") from None
     except Exception as exc:  # the user's module raised while importing
-        raise StrategyError(f"{spec}: importing {module} failed: {type(exc).__name__}: {exc}") from None
+        raise StrategyError(f"{spec}: importing {module} failed: {first_line(exc)}") from None
 
 
 def _from_entry_point(name: str) -> str:
@@ -136,5 +150,5 @@ def _from_entry_point(name: str) -> str:
     try:
         fn: Callable[..., object] = point.load()
     except Exception as exc:  # an installed package that fails to import
-        raise StrategyError(f"{name}: loading entry point {point.value} failed: {type(exc).__name__}: {exc}") from None
+        raise StrategyError(f"{name}: loading entry point {point.value} failed: {first_line(exc)}") from None
     return _register(name, fn, name, f"{name} ({point.value})")
