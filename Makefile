@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test lint typecheck bench clean
+.PHONY: run test test-long lint typecheck bench clean
 
 $(STAMP): pyproject.toml requirements.lock
 	$(PYTHON) -m venv $(VENV)
@@ -26,7 +26,11 @@ test: $(STAMP)
 	  echo "make test: Chromium is not installed, so the browser tests are skipped; install it with: apt-get install chromium"
 # Two workers, a test file each at a time (module fixtures stay shared): many tests wait on real
 # processes and sockets in real time, and overlap well on 2 cores.
-	$(BIN)/pytest -q -n 2 --dist loadfile
+# The long variants (-m long) are left to `make test-long`: their short variants run here.
+	$(BIN)/pytest -q -n 2 --dist loadfile -m "not long"
+
+test-long: $(STAMP)
+	$(BIN)/pytest -q -n 2 --dist loadfile -m long
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
