@@ -14,7 +14,7 @@ of the primitive (the core's wiring): it logs every slot that changed and report
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import replace
 from typing import Any
 
@@ -37,6 +37,7 @@ MAX_LON_E7 = 180 * 10**7
 KNOWN_STATES = np.array([int(s) for s in MusselState])
 _STATES = frozenset(KNOWN_STATES.tolist())
 STATUS = "AMUSSEL_STATUS"
+BatteryListener = Callable[[Iterable[tuple[int, float]]], None]  # (aMussel id, battery 0..1) as heard
 
 
 class MusselFixTable(Mapping[int, MusselFix]):
@@ -158,23 +159,25 @@ class Docking:
     """The vehicle's docking part: feeds the aMussel table, runs Dock and Undock, reports the latches.
 
     `mussels` is the vehicle's table (its physics reads it too); `geofence` (None: none) is the water
-    an Undock must be over.
+    an Undock must be over; `batteries` (if given) hears each status's (aMussel id, battery).
     """
 
     def __init__(
         self, host: PartHost, apad: ApadState, commands: CommandRegistry, mussels: MusselFixTable,
-        geofence: Geofence | None,
+        geofence: Geofence | None, batteries: BatteryListener | None = None,
     ) -> None:
         self._host = host
         self._apad = apad
         self._geofence = geofence
+        self._batteries = batteries
         self.mussels = mussels
         host.on(mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS, self._on_amussel_status)
         commands.register(MAV_CMD_APAD_DOCK, self._cmd_dock, stateful=True)
         commands.register(MAV_CMD_APAD_UNDOCK, self._cmd_undock, stateful=True)
 
     def _on_amussel_status(self, msg: Any) -> None:
-        self.mussels.update(msg.mussel_id, msg.lat, msg.lon, msg.state)
+        if self.mussels.update(msg.mussel_id, msg.lat, msg.lon, msg.state) and self._batteries is not None:
+            self._batteries([(msg.mussel_id, msg.battery)])
 
     def _slot_and_mussel(self, what: str, cmd: Command, lowest_id: int) -> tuple[int, int] | Reply:
         """param1 a slot 1..N_SLOTS, param2 an aMussel id (from `lowest_id`); a refusal if either is none."""

@@ -39,6 +39,8 @@ from apad_sitl import vehicle as veh
 from apad_sitl.commands import CommandTable
 from apad_sitl.dege7 import DegE7
 from apad_sitl.docking import CheckedStatuses, Docking, MusselFixTable, checked_statuses
+from apad_sitl.energy import EnergyMeter
+from apad_sitl.energy_counters import EnergyCounters
 from apad_sitl.geofence import Geofence
 from apad_sitl.host import MessageHandler, invalid_reason, unsupported_reason
 from apad_sitl.logs import VehicleLog
@@ -132,7 +134,8 @@ class SitlVehicle:
         self.streams = Streams(self, apad, self.commands, self.frame, system_id, rates_hz, target_e7)
         self.modes = Modes(self, apad, self.commands)
         self.navigation = Navigation(self, apad, self.commands, self.frame, self.geofence, target_e7)
-        self.docking = Docking(self, apad, self.commands, self.mussels, self.geofence)
+        self.energy = EnergyMeter(apad)
+        self.docking = Docking(self, apad, self.commands, self.mussels, self.geofence, self.energy.heard)
         self.param_server = ParamServer(self, apad)
         self.mission_protocol = MissionProtocol(self)
         self._wire()
@@ -256,6 +259,15 @@ class SitlVehicle:
         self.apad.speed_override_mps = value
 
     @property
+    def energy_counters(self) -> EnergyCounters:
+        """Energy passed to aMussels and taken at home (a checkpoint restores it in place)."""
+        return self.apad.energy
+
+    @energy_counters.setter
+    def energy_counters(self, value: EnergyCounters) -> None:
+        self.apad.energy = value
+
+    @property
     def position_deg(self) -> tuple[float, float]:
         """(lat_deg, lon_deg) of the aPad now."""
         lat_e7, lon_e7 = self.streams.position_e7.of(self.state.x_m, self.state.y_m)
@@ -325,6 +337,9 @@ class SitlVehicle:
             split = _STATUS_DECODE.decode(datagrams, hot.AMUSSEL_STATUS, self.codec.stats, keep_raw=keep_raw)
             if len(split.hot):
                 self.mussels.take(_checked(split))
+                if self.energy.listening:  # an aMussel latched here: its gain is drawn from the battery
+                    f = split.hot.fields
+                    self.energy.heard(zip(f["mussel_id"].tolist(), f["battery"].tolist(), strict=True))
                 if self.log is not None and split.hot.raw is not None:
                     self.log.messages(self.now_us, split.hot.raw)
         except Exception as exc:  # the batch path promises not to raise; a promise is not a proof
@@ -363,6 +378,7 @@ class SitlVehicle:
         p = apad.params
         setpoint = prim.velocity_setpoint(apad.primitive, apad.state, p) if apad.armed else (0.0, 0.0)
         apad.state = state = veh.step(apad.state, setpoint, p, self.current_mps, dt_s)
+        self.energy.step(dt_s)
         apad.set_primitive(prim.step(apad.primitive, state.x_m, state.y_m, self.mussels, p, dt_s))
 
     # ------------------------------------------------------------------ what the parts share

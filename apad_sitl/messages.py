@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from typing import Any, cast
 
+from apad_sitl.energy_counters import EnergyCounters
 from apad_sitl.params import PARAMS, ApadParams
 from apad_sitl.primitives import PrimitiveState, SlotState
 from apad_sitl.vehicle import BATTERY_EMPTY_V, VehicleState, wrap_pi
@@ -90,12 +91,14 @@ def sys_status(v: VehicleState) -> mavlink.MAVLink_message:
     )
 
 
-def battery_status(v: VehicleState) -> mavlink.MAVLink_message:
+def battery_status(v: VehicleState, energy: EnergyCounters) -> mavlink.MAVLink_message:
     # Cell voltages unknown: the pack voltage goes in cell 0, the rest UINT16_MAX (MAVLink's rule).
+    # charge_state: CHARGING at its home charger (energy passed to aMussels: the event log, result.json).
     voltages = [round(v.battery_v * 1000.0)] + [UINT16_MAX] * 9
+    state = mavlink.MAV_BATTERY_CHARGE_STATE_CHARGING if energy.charging else mavlink.MAV_BATTERY_CHARGE_STATE_OK
     return mavlink.MAVLink_battery_status_message(
         0, mavlink.MAV_BATTERY_FUNCTION_ALL, mavlink.MAV_BATTERY_TYPE_LIPO, INT16_MAX, voltages,
-        -1, -1, -1, _battery_pct(v),
+        -1, -1, -1, _battery_pct(v), 0, state,
     )
 
 

@@ -29,6 +29,13 @@ class ApadParams:
     drag_per_s: float = 0.5  # 1/s, linear drag: thrust to hold a water speed v is drag * v
     batt_drain_idle_vph: float = 0.5  # V/h, hotel load (computer, Kinect, radios)
     batt_drain_thrust_vph: float = 8.0  # V/h per (m/s^2)^2 of thrust (specific force)
+    # The energy hub (apad_sitl/energy.py, docs/long_term.md): battery energy over 10.5..16 V, what an
+    # aMussel's battery holds over its 0..1, the inductive link's efficiency, the home charger.
+    batt_capacity_wh: float = 400.0
+    mussel_battery_wh: float = 7.4
+    charge_efficiency: float = 0.6
+    home_charge_w: float = 150.0
+    home_radius_m: float = 2.0
     # 1: hold position when the GCS heartbeat is lost (on by default: a field aPad must not sail on
     # blind; lockstep runs deliver every heartbeat, so they are unaffected)
     fs_gcs_enable: int = 1
@@ -65,6 +72,11 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec("BATT_DRAIN_IDLE", "batt_drain_idle_vph", 0.0, 100.0, False, "Battery drain of the hotel load [V/h]"),
     ParamSpec("BATT_DRAIN_THR", "batt_drain_thrust_vph", 0.0, 1000.0, False,
               "Battery drain per squared thrust [V/h per (m/s^2)^2]"),
+    ParamSpec("BATT_CAPACITY", "batt_capacity_wh", 1.0, 100_000.0, False, "Battery energy, 10.5 to 16 V [Wh]"),
+    ParamSpec("MSL_BATT_WH", "mussel_battery_wh", 0.1, 1000.0, False, "An aMussel battery's energy, 0 to 1 [Wh]"),
+    ParamSpec("CHG_EFF", "charge_efficiency", 0.05, 1.0, False, "Inductive charging efficiency, aPad to aMussel"),
+    ParamSpec("HOME_CHG_W", "home_charge_w", 0.0, 10_000.0, False, "Home charger power; 0: none [W]"),
+    ParamSpec("HOME_RADIUS", "home_radius_m", 0.1, 50.0, False, "Distance from home the charger reaches [m]"),
     ParamSpec("FS_GCS_ENABLE", "fs_gcs_enable", 0, 1, True, "1: hold position on GCS heartbeat loss"),
     ParamSpec("FS_GCS_TIMEOUT", "fs_gcs_timeout_s", 0.5, 120.0, False, "GCS heartbeat loss timeout [s]"),
     ParamSpec("SYSID_THISMAV", "sysid_thismav", 1, 255, True, "MAVLink system id (takes effect at restart)"),

@@ -6,13 +6,15 @@ vehicle's core registered for them, in the order registered (the "primitive" eve
 bookkeeping, the on-change telemetry: their order is what the .tlogs and event logs record). A
 part that changes the mode or the primitive calls these and knows nothing of who listens.
 Assigning a field changes it silently: the physics steps `state`, PARAM_SET swaps `params`,
-DO_CHANGE_SPEED sets `speed_override_mps`, and a checkpoint's restore puts mode and arming back.
+DO_CHANGE_SPEED sets `speed_override_mps`, the energy part counts in `energy`, and a checkpoint's
+restore puts mode and arming back.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 
+from apad_sitl.energy_counters import EnergyCounters
 from apad_sitl.params import ApadParams
 from apad_sitl.primitives import PrimitiveState
 from apad_sitl.vehicle import VehicleState
@@ -32,6 +34,7 @@ class ApadState:
         self.mode: int = RoverMode.HOLD
         self.armed = True  # boots armed so a mission script needs no arming step
         self.speed_override_mps = 0.0  # DO_CHANGE_SPEED for later Go Tos; 0: SPEED_MAX
+        self.energy = EnergyCounters()  # energy passed to aMussels and taken at home (apad_sitl.energy)
         self._primitive = PrimitiveState()
         self._primitive_listeners: list[PrimitiveListener] = []
         self._mode_listeners: list[ModeListener] = []

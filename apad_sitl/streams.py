@@ -87,7 +87,7 @@ class Streams:
             mavlink.MAVLINK_MSG_ID_HEARTBEAT: lambda now: self.send_heartbeat(),
             mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: self._send_position,
             mavlink.MAVLINK_MSG_ID_SYS_STATUS: lambda now: send(msgs.sys_status(apad.state)),
-            mavlink.MAVLINK_MSG_ID_BATTERY_STATUS: lambda now: send(msgs.battery_status(apad.state)),
+            mavlink.MAVLINK_MSG_ID_BATTERY_STATUS: lambda now: send(msgs.battery_status(apad.state, apad.energy)),
             mavlink.MAVLINK_MSG_ID_PRIMITIVE_STATUS: self._send_primitive_status,
             mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS: self._send_all_slots,
             mavlink.MAVLINK_MSG_ID_ATTITUDE: lambda now: send(msgs.attitude(now, apad.state)),

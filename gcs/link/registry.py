@@ -15,6 +15,7 @@ from gcs.link.telemetry import (
     DEG_E7,
     GCS_SYSTEM_ID,
     Battery,
+    Charging,
     GoToSent,
     Heartbeat,
     Home,
@@ -68,6 +69,7 @@ class VehicleView:
     heading_deg: float = 0.0
     battery_v: float | None = None
     battery_pct: int = -1
+    charging: bool = False  # at its home charger (BATTERY_STATUS.charge_state)
     home: tuple[float, float] | None = None
     primitive: PrimitiveView = field(default_factory=PrimitiveView)
     slots: dict[int, SlotView] = field(default_factory=lambda: {s: SlotView(s) for s in range(1, N_SLOTS + 1)})
@@ -161,6 +163,8 @@ class VehicleRegistry:
                 if record.voltage_v is not None:
                     view.battery_v = record.voltage_v
                 view.battery_pct = record.remaining_pct
+            case Charging():
+                view.charging = record.charging
             case Home():
                 view.home = (record.lat_deg, record.lon_deg)
             case ParamValue():

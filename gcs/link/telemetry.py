@@ -93,6 +93,13 @@ class Battery:
 
 
 @dataclass(frozen=True, slots=True)
+class Charging:
+    """BATTERY_STATUS.charge_state: whether the aPad charges (at its home charger)."""
+
+    charging: bool
+
+
+@dataclass(frozen=True, slots=True)
 class Home:
     lat_deg: float
     lon_deg: float
@@ -146,7 +153,7 @@ class GoToSent:
     lon_e7: int
 
 
-Record = (Heartbeat | Position | PrimitiveView | SlotView | Battery | Home | ParamValue | StatusText
+Record = (Heartbeat | Position | PrimitiveView | SlotView | Battery | Charging | Home | ParamValue | StatusText
           | CommandAck | MusselView | GoToSent)
 
 
@@ -211,6 +218,12 @@ def _sys_status(m: Any) -> Battery | Rejected:
     return Battery(volts, m.battery_remaining)
 
 
+def _battery_status(m: Any) -> Charging | Rejected:
+    if not 0 <= m.charge_state <= mavlink.MAV_BATTERY_CHARGE_STATE_CHARGING:
+        return Rejected("BATTERY_STATUS.charge_state")
+    return Charging(m.charge_state == mavlink.MAV_BATTERY_CHARGE_STATE_CHARGING)
+
+
 def _home(m: Any) -> Home | Rejected:
     if not lat_lon_ok(m.latitude, m.longitude):
         return Rejected("HOME_POSITION.lat_lon")
@@ -269,6 +282,7 @@ _READERS = {
     mavlink.MAVLINK_MSG_ID_PRIMITIVE_STATUS: _primitive,
     mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS: _slot,
     mavlink.MAVLINK_MSG_ID_SYS_STATUS: _sys_status,
+    mavlink.MAVLINK_MSG_ID_BATTERY_STATUS: _battery_status,
     mavlink.MAVLINK_MSG_ID_HOME_POSITION: _home,
     mavlink.MAVLINK_MSG_ID_PARAM_VALUE: _param_value,
     mavlink.MAVLINK_MSG_ID_STATUSTEXT: _statustext,

@@ -8,6 +8,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
 
+from gcs.mission.energy_budget import EnergyBudget
 from gcs.mission.scenario import MissionConfig
 from gcs.records.events import EventLog
 from missiontime import Clock
@@ -21,6 +22,7 @@ class Phase(StrEnum):
     CHARGING_WAIT = "charging wait"
     PLAN_REDEPLOY = "plan redeployment"
     REDEPLOY = "redeploy"
+    HOME_CHARGE = "home charge"  # gone home to its charger: the next trip would not be covered
     ENDED = "ended"
 
 
@@ -65,6 +67,7 @@ class LoopStatus:
     # Mission microseconds the aPad spent travelling, docking, holding (gcs.mission.time_accounting)
     apad_time_us: dict[str, int] = field(default_factory=dict)
     strategy_failures: int = 0  # planning steps the strategy failed (cautious planned them instead)
+    home_charges: int = 0  # times the aPad went home and charged (gcs.mission.home_charge)
 
 
 @dataclass(frozen=True)
@@ -89,6 +92,9 @@ class LoopSettings:
     # Several aPads: a leg passing closer than this to another aPad (or its target) waits to set off.
     separation_m: float = 3.0
     separation_wait_s: float = 60.0
+    # The aPad's energy (None: trips are not checked, as before) and where its home charger is.
+    energy: EnergyBudget | None = None
+    home: tuple[float, float] | None = None  # (lat, lon)
 
 
 @dataclass(frozen=True)

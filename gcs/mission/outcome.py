@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from apad_sitl.energy_counters import EnergyCounters
 from gcs.mission.accounting import account
 from gcs.mission.control import Phase
 from gcs.mission.loop import EnergySharingLoop
@@ -158,10 +159,18 @@ def apad_rows(world: World, outcome: Outcome) -> list[dict[str, Any]]:
             "idle_share": round(spent.get(Phase.IDLE_WAIT, 0.0) / duration_s, 4),
             "phase_s": {str(p): round(t, 1) for p, t in spent.items()},
             "end_reason": str(loop.status.end_reason),
+            "home_charges": loop.status.home_charges,
+            **(_energy(vehicle.energy_counters) if vehicle is not None else {}),
             **({"lost_at_s": round(outcome.shares.lost_since_us[sysid] / 1e6, 2)}
                if outcome.shares is not None and sysid in outcome.shares.lost_since_us else {}),
         })
     return rows
+
+
+def _energy(counters: EnergyCounters) -> dict[str, float]:
+    """An embedded SITL aPad's energy, Wh (a real aPad's is on the aPad)."""
+    return {"passed_wh": round(counters.passed_wh, 2), "drawn_wh": round(counters.drawn_wh, 2),
+            "home_wh": round(counters.home_wh, 2)}
 
 
 def write_endpoints(world: World, folder: RunFolder) -> None:

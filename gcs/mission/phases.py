@@ -20,6 +20,7 @@ from gcs.mission.accounting import SURFACE_DEPTH_M
 from gcs.mission.actions import ApadActions
 from gcs.mission.control import LoopControl, LoopLog, LoopSettings, LoopStatus, Phase
 from gcs.mission.fleet_knowledge import FleetKnowledge
+from gcs.mission.home_charge import needs_home
 from gcs.mission.strategies import CollectStrategy, CostWeights, PlanInput, StrategyError, plan
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
@@ -56,6 +57,8 @@ def idle_wait(crew: Crew) -> None:
     act.command(act.api.hold)
 
     def pool_full() -> bool:
+        if needs_home(knows, []):
+            return True  # the battery runs low while it waits: the turn takes it home first
         if crew.status.strategy == CollectStrategy.NONE or knows.too_late_to_call_up():
             return False
         if knows.orphans() and knows.free_slots() and act.link_up():

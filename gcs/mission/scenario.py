@@ -61,6 +61,8 @@ class ApadConfig:
     dock_time_s: float
     undock_time_s: float
     battery_end_v: float  # the mission ends when the aPad battery falls to this
+    battery_wh: float = 400.0  # its battery's energy over 10.5..16 V (apad_sitl.energy)
+    home_charge_w: float = 150.0  # its home charger; 0: none
 
 
 @dataclass(frozen=True)
@@ -257,6 +259,10 @@ def _apad(a: Fields, default_id: int) -> ApadConfig:
         undock_time_s=a.number("undock_time_s", 5.0, lo=0.0, hi=600.0),
         battery_end_v=a.number("battery_end_v", 11.0, lo=10.5, hi=16.0,
                                about="the mission ends when the aPad battery falls to this"),
+        battery_wh=a.number("battery_wh", 400.0, lo=1.0, hi=100_000.0,
+                            about="the aPad battery's energy between 10.5 and 16 V, Wh (docs/long_term.md)"),
+        home_charge_w=a.number("home_charge_w", 150.0, lo=0.0, hi=10_000.0,
+                               about="the home charger's power, W; 0: no charger"),
     )
     a.done()
     return apad

@@ -144,6 +144,7 @@ def apad_params(scenario: Scenario, apad: ApadConfig | None = None) -> ApadParam
     return replace(
         ApadParams(), speed_max_mps=a.speed_mps, wp_radius_m=a.victory_radius_m, dock_reach_m=a.dock_reach_m,
         dock_time_s=a.dock_time_s, undock_time_s=a.undock_time_s, sysid_thismav=a.system_id,
+        batt_capacity_wh=a.battery_wh, home_charge_w=a.home_charge_w,
     )
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from gcs.mission.control import Phase
+from gcs.mission.home_charge import go_home_and_charge, needs_home, within_energy
 from gcs.mission.phases import (
     Crew,
     charge_and_redeploy,
@@ -30,9 +31,14 @@ LOOK_S = 5.0  # the rolling wait plans again this often for a free slot
 
 
 def rounds(crew: Crew) -> None:
-    """Idle wait, plan and collect; then, with anything on board, charge it all and take it all home."""
+    """Idle wait, plan and collect; then, with anything on board, charge it all and take it all home.
+    Before each, with nothing on board: home to charge if the battery would not cover the trip."""
+    if recharged(crew):
+        return
     idle_wait(crew)
-    route = plan_collection(crew)
+    if recharged(crew):
+        return
+    route = within_energy(crew, plan_collection(crew))  # none now if it went home: planned again, charged
     if route:
         collect(crew, route)
     elif not crew.knows.docked():  # the strategy takes none of the pool yet: look again later
@@ -65,9 +71,17 @@ def rolling(crew: Crew) -> None:
         redeploy(crew, plan_redeployment(crew, only=done))
         crew.status.cycles += 1
     if knows.free_slots() and not knows.too_late_to_call_up():
-        route = plan_collection(crew)
+        route = within_energy(crew, plan_collection(crew))
         if route:
             collect(crew, route)
+
+
+def recharged(crew: Crew) -> bool:
+    """Home to charge, if the battery would not cover the way home and its reserve (waiting)."""
+    if not needs_home(crew.knows, []):
+        return False
+    go_home_and_charge(crew, [])
+    return True
 
 
 def turn_for(strategy: str) -> Turn:

@@ -19,6 +19,7 @@ from gcs.api import ApadApi, Location
 from gcs.link.faultproxy import FaultProxy, LinkFaults
 from gcs.link.router import Link
 from gcs.mission.control import LoopControl, LoopSettings, LoopStatus
+from gcs.mission.energy_budget import EnergyBudget
 from gcs.mission.loop import EnergySharingLoop
 from gcs.mission.real_fleet import RealFleet
 from gcs.mission.scenario import ApadConfig, Scenario
@@ -77,7 +78,7 @@ MISSION_TELEMETRY_HZ = {
     mavlink.MAVLINK_MSG_ID_PRIMITIVE_STATUS: 1.0,
     mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS: 0.2,
     mavlink.MAVLINK_MSG_ID_SYS_STATUS: 0.2,
-    mavlink.MAVLINK_MSG_ID_BATTERY_STATUS: 0.0,
+    mavlink.MAVLINK_MSG_ID_BATTERY_STATUS: 0.2,  # charge_state: whether it charges at home
 }
 
 
@@ -134,6 +135,8 @@ class World:
             mussel_surfacing_s=s.fleet.surfacing_time_s,
             mussel_discharge=s.fleet.discharge,
             mussel_charge=s.fleet.charge,
+            energy=EnergyBudget.of(apad_params(s, a), a.speed_mps),
+            home=(a.home_lat_deg, a.home_lon_deg),
         )
         clock = clock or self.clock
         api = self.api if clock is self.clock else self.api.on_clock(clock)

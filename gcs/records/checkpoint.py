@@ -33,6 +33,7 @@ run's folder; a missing, short or garbled side file, or one of an older version,
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import os
 import pickle
@@ -45,6 +46,7 @@ from typing import IO, TYPE_CHECKING, Any
 
 import numpy as np
 
+from apad_sitl.energy_counters import EnergyCounters
 from apad_sitl.primitives import PrimitiveState
 from apad_sitl.vehicle import VehicleState
 from gcs.link.registry import VehicleRegistry
@@ -59,7 +61,7 @@ if TYPE_CHECKING:
     from gcs.mission.world import World
 
 CHECKPOINT_PERIOD_S = 10.0  # mission time between checkpoints
-FORMAT_VERSION = 4
+FORMAT_VERSION = 5
 RESTORE_SLACK_US = 30_000_000  # a wall clock started at the checkpoint's time runs on while the world is built
 STEPS_SUFFIX = ".steps"  # side files beside the checkpoint
 TRACES_SUFFIX = ".traces"
@@ -78,6 +80,7 @@ class VehicleSnapshot:
     mode: int
     armed: bool
     speed_override_mps: float
+    energy: EnergyCounters
 
 
 @dataclass(frozen=True)
@@ -147,7 +150,8 @@ def capture(
     world: World, statuses: Mapping[int, LoopStatus], shares: FleetShares | None = None,
     retired: frozenset[int] = frozenset(), setup: str = "",
 ) -> Checkpoint:
-    vehicles = {sysid: VehicleSnapshot(v.state, v.primitive, v.mode, v.armed, v.speed_override_mps)
+    vehicles = {sysid: VehicleSnapshot(v.state, v.primitive, v.mode, v.armed, v.speed_override_mps,
+                                       copy.copy(v.energy_counters))
                 for sysid, v in world.vehicles.items()}
     fleet = world.fleet
     # The registry, the statuses and the shares go in live, not copied: `save` pickles a capture at once.
@@ -384,4 +388,5 @@ def restore(world: World, ckpt: Checkpoint) -> None:
             continue  # a real aPad now where the checkpoint had a SITL one: it keeps its own state
         v.state, v.mode, v.armed = snap.state, snap.mode, snap.armed
         v.speed_override_mps = snap.speed_override_mps
+        v.energy_counters = copy.copy(snap.energy)
         v.set_primitive(snap.primitive)

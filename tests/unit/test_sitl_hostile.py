@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 
 from apad_sitl import param_server
 from apad_sitl.endpoint import SitlVehicle
-from apad_sitl.params import ApadParams
+from apad_sitl.params import PARAMS, ApadParams
 from apad_sitl.primitives import Refusal
 from apad_sitl.vocabulary import Latch, RoverMode
 from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, Codec, mavlink, memory_pair
@@ -281,7 +281,7 @@ def _field(name: bytes) -> str:
 
 @pytest.mark.parametrize(("name", "index", "field"), [
     (b"", 32767, "param_index"),
-    (b"SPEED_MAX", 15, "param_index"),  # the index wins over the name (MAVLink's rule)
+    (b"SPEED_MAX", len(PARAMS), "param_index"),  # one past the last: the index wins over the name (MAVLink's rule)
     (b"NOPE", -1, "param_id"),
     (b"\xff", -32768, "param_id"),
 ])

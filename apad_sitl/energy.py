@@ -1,0 +1,92 @@
+"""The aPad as the swarm's energy hub: what charging aMussels draws from its battery, and the home
+charging station ("it can return to a home position and be charged while deployed thanks to a
+waterproof charging jack on its hull", the paper, section II).
+
+The model (assumptions; the numbers are `ApadParams`, docs/long_term.md says why each):
+
+- The battery holds `batt_capacity_wh` between 10.5 V and 16.0 V, linear in voltage, as the drain
+  model of `vehicle.py` already treats it (its 0.5 V/h hotel load is then 36 W at 400 Wh: an
+  on-board PC, a Kinect, a router).
+- An aMussel's battery holds `mussel_battery_wh` over its normalised range 0..1. What a docked
+  aMussel gains is drawn from the aPad through the inductive link at `charge_efficiency`. The aPad
+  learns the gain from the aMussel's own reports (AMUSSEL_STATUS.battery) while it is latched in one
+  of its slots, so the energy passed is the aMussel model's, whatever its time scale (theta).
+- At home (within `home_radius_m` of its home, slower than HOME_STILL_MPS) the jack charges the
+  battery at `home_charge_w` until full; BATTERY_STATUS says CHARGING meanwhile.
+
+Pure bookkeeping over the aPad's state: the core feeds it the statuses it hears and calls `step`
+with each physics step's `dt_s`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import replace
+
+from apad_sitl.energy_counters import EnergyCounters
+from apad_sitl.state import ApadState
+from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V
+from apad_sitl.vocabulary import Latch
+
+HOME_STILL_MPS = 0.05  # slower than this over ground: the hull can be plugged in
+VOLT_RANGE = BATTERY_FULL_V - BATTERY_EMPTY_V
+
+
+class EnergyMeter:
+    """The aPad's energy part: aMussels' gains drawn from its battery, and home charging."""
+
+    def __init__(self, apad: ApadState) -> None:
+        self.apad = apad
+        self._last: dict[int, float] = {}  # latched aMussel -> its battery when last heard
+
+    @property
+    def counters(self) -> EnergyCounters:
+        return self.apad.energy
+
+    @property
+    def listening(self) -> bool:
+        """Whether an aMussel is latched here (a batch of statuses is only read for it then)."""
+        return bool(self._latched() or self._last)
+
+    def heard(self, reports: Iterable[tuple[int, float]]) -> None:
+        """(aMussel id, battery 0..1) as heard: a rise of one latched here is drawn from the battery."""
+        latched = self._latched()
+        for mussel_id in [m for m in self._last if m not in latched]:
+            del self._last[mussel_id]  # released: its next docking starts afresh
+        if not latched:
+            return
+        p = self.apad.params
+        drawn = 0.0
+        for mussel_id, battery in reports:
+            if mussel_id not in latched or not math.isfinite(battery):
+                continue
+            before = self._last.get(mussel_id)
+            self._last[mussel_id] = battery
+            if before is not None and battery > before:
+                gained_wh = (battery - before) * p.mussel_battery_wh
+                self.apad.energy.passed_wh += gained_wh
+                drawn += gained_wh / p.charge_efficiency
+        if drawn:
+            self.apad.energy.drawn_wh += drawn
+            self._set_volts(self.apad.state.battery_v - drawn / p.batt_capacity_wh * VOLT_RANGE)
+
+    def step(self, dt_s: float) -> None:
+        """Home charging over the last `dt_s` seconds."""
+        state, p = self.apad.state, self.apad.params
+        home = math.hypot(state.x_m, state.y_m) <= p.home_radius_m and state.ground_speed_mps < HOME_STILL_MPS
+        charging = home and p.home_charge_w > 0.0 and state.battery_v < BATTERY_FULL_V
+        if charging and not self.apad.energy.charging:
+            self.apad.energy.home_charges += 1
+        self.apad.energy.charging = charging
+        if charging:
+            wh = min(p.home_charge_w * dt_s / 3600.0, (BATTERY_FULL_V - state.battery_v) / VOLT_RANGE
+                     * p.batt_capacity_wh)
+            self.apad.energy.home_wh += wh
+            self._set_volts(state.battery_v + wh / p.batt_capacity_wh * VOLT_RANGE)
+
+    def _latched(self) -> set[int]:
+        return {s.mussel_id for s in self.apad.primitive.slots if s.mussel_id and s.latch == Latch.LATCHED}
+
+    def _set_volts(self, volts: float) -> None:
+        self.apad.state = replace(self.apad.state, battery_v=min(BATTERY_FULL_V, max(BATTERY_EMPTY_V, volts)))
