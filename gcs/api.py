@@ -27,6 +27,7 @@ from gcs.link.router import Link
 from gcs.link.telemetry import DEG_E7, Location, MusselView, SlotView
 from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
 from missiontime import Clock, seconds_to_us
+from mussel_sim.behaviour import sleep_order_problem
 from mussel_sim.geo import LocalFrame
 from mussel_sim.vocabulary import MusselCommand
 
@@ -144,6 +145,16 @@ class ApadApi:
         """Relay an instruction (surface / sink) to an aMussel through an aPad."""
         target = self.apad(apad_id).system_id
         self.link.send(mavlink.MAVLink_amussel_command_message(target, mussel_id, int(command)))
+
+    def sleep_order(self, mussel_id: int, interval_s: float, awake_s: float, apad_id: int | None = None) -> None:
+        """Relay a sleep order through an aPad: wake every `interval_s`, awake for `awake_s` (the
+        aMussel's own seconds; interval 0: always on). ValueError for values no aMussel takes
+        (`mussel_sim.behaviour.sleep_order_problem`), unsent; like `command_mussel`, no acknowledgement."""
+        problem = sleep_order_problem(interval_s, awake_s)
+        if problem is not None:
+            raise ValueError(f"sleep order for aMussel {mussel_id}: bad {problem} ({interval_s=}, {awake_s=})")
+        target = self.apad(apad_id).system_id
+        self.link.send(mavlink.MAVLink_amussel_sleep_order_message(target, mussel_id, interval_s, awake_s))
 
     # --- primitives -------------------------------------------------------------------------
 

@@ -6415,6 +6415,7 @@ MAVLINK_MSG_ID_AMUSSEL_SENSORS = 54001
 MAVLINK_MSG_ID_DOCK_SLOT_STATUS = 54002
 MAVLINK_MSG_ID_PRIMITIVE_STATUS = 54003
 MAVLINK_MSG_ID_AMUSSEL_COMMAND = 54004
+MAVLINK_MSG_ID_AMUSSEL_SLEEP_ORDER = 54005
 MAVLINK_MSG_ID_SYS_STATUS = 1
 MAVLINK_MSG_ID_SYSTEM_TIME = 2
 MAVLINK_MSG_ID_PING = 4
@@ -6843,6 +6844,50 @@ class MAVLink_amussel_command_message(MAVLink_message):
 # Define name on the class for backwards compatibility (it is now msgname).
 # Done with setattr to hide the class variable from mypy.
 setattr(MAVLink_amussel_command_message, "name", mavlink_msg_deprecated_name_property())
+
+
+class MAVLink_amussel_sleep_order_message(MAVLink_message):
+    """
+    Put one aMussel on a sleep schedule: asleep on the seabed, waking
+    every interval for the awake time to sample (and to hear a call-
+    up). Times are the aMussel's own (simulated aMussels: mission time
+    x theta). Relayed by an aPad like AMUSSEL_COMMAND.
+    """
+
+    id = MAVLINK_MSG_ID_AMUSSEL_SLEEP_ORDER
+    msgname = "AMUSSEL_SLEEP_ORDER"
+    fieldnames = ["target_system", "mussel_id", "interval", "awake"]
+    ordered_fieldnames = ["interval", "awake", "mussel_id", "target_system"]
+    fieldtypes = ["uint8_t", "uint16_t", "float", "float"]
+    fielddisplays_by_name: Dict[str, str] = {}
+    fieldenums_by_name: Dict[str, str] = {}
+    fieldunits_by_name: Dict[str, str] = {"interval": "s", "awake": "s"}
+    native_format = bytearray(b"<ffHB")
+    orders = [3, 2, 0, 1]
+    lengths = [1, 1, 1, 1]
+    array_lengths = [0, 0, 0, 0]
+    crc_extra = 55
+    unpacker = struct.Struct("<ffHB")
+    instance_field = None
+    instance_offset = -1
+
+    def __init__(self, target_system: int, mussel_id: int, interval: float, awake: float):
+        MAVLink_message.__init__(self, MAVLink_amussel_sleep_order_message.id, MAVLink_amussel_sleep_order_message.msgname)
+        self._fieldnames = MAVLink_amussel_sleep_order_message.fieldnames
+        self._instance_field = MAVLink_amussel_sleep_order_message.instance_field
+        self._instance_offset = MAVLink_amussel_sleep_order_message.instance_offset
+        self.target_system = target_system
+        self.mussel_id = mussel_id
+        self.interval = interval
+        self.awake = awake
+
+    def pack(self, mav: "MAVLink", force_mavlink1: bool = False) -> bytes:
+        return self._pack(mav, self.crc_extra, self.unpacker.pack(self.interval, self.awake, self.mussel_id, self.target_system), force_mavlink1=force_mavlink1)
+
+
+# Define name on the class for backwards compatibility (it is now msgname).
+# Done with setattr to hide the class variable from mypy.
+setattr(MAVLink_amussel_sleep_order_message, "name", mavlink_msg_deprecated_name_property())
 
 
 class MAVLink_sys_status_message(MAVLink_message):
@@ -16923,6 +16968,7 @@ mavlink_map: Dict[int, Type[MAVLink_message]] = {
     MAVLINK_MSG_ID_DOCK_SLOT_STATUS: MAVLink_dock_slot_status_message,
     MAVLINK_MSG_ID_PRIMITIVE_STATUS: MAVLink_primitive_status_message,
     MAVLINK_MSG_ID_AMUSSEL_COMMAND: MAVLink_amussel_command_message,
+    MAVLINK_MSG_ID_AMUSSEL_SLEEP_ORDER: MAVLink_amussel_sleep_order_message,
     MAVLINK_MSG_ID_SYS_STATUS: MAVLink_sys_status_message,
     MAVLINK_MSG_ID_SYSTEM_TIME: MAVLink_system_time_message,
     MAVLINK_MSG_ID_PING: MAVLink_ping_message,
@@ -17674,6 +17720,38 @@ class MAVLink(object):
 
         """
         self.send(self.amussel_command_encode(target_system, mussel_id, command), force_mavlink1=force_mavlink1)
+
+    def amussel_sleep_order_encode(self, target_system: int, mussel_id: int, interval: float, awake: float) -> MAVLink_amussel_sleep_order_message:
+        """
+        Put one aMussel on a sleep schedule: asleep on the seabed, waking
+        every interval for the awake time to sample (and to hear a
+        call-up). Times are the aMussel's own (simulated aMussels:
+        mission time x theta). Relayed by an aPad like
+        AMUSSEL_COMMAND.
+
+        target_system             : System ID of the aPad relaying the order (0: any). (type:uint8_t)
+        mussel_id                 : aMussel ID. (type:uint16_t)
+        interval                  : Time from one wake to the next; 0: always on (no sleep). [s] (type:float)
+        awake                     : Time awake at each wake, at most the interval (ignored when the interval is 0). [s] (type:float)
+
+        """
+        return MAVLink_amussel_sleep_order_message(target_system, mussel_id, interval, awake)
+
+    def amussel_sleep_order_send(self, target_system: int, mussel_id: int, interval: float, awake: float, force_mavlink1: bool = False) -> None:
+        """
+        Put one aMussel on a sleep schedule: asleep on the seabed, waking
+        every interval for the awake time to sample (and to hear a
+        call-up). Times are the aMussel's own (simulated aMussels:
+        mission time x theta). Relayed by an aPad like
+        AMUSSEL_COMMAND.
+
+        target_system             : System ID of the aPad relaying the order (0: any). (type:uint8_t)
+        mussel_id                 : aMussel ID. (type:uint16_t)
+        interval                  : Time from one wake to the next; 0: always on (no sleep). [s] (type:float)
+        awake                     : Time awake at each wake, at most the interval (ignored when the interval is 0). [s] (type:float)
+
+        """
+        self.send(self.amussel_sleep_order_encode(target_system, mussel_id, interval, awake), force_mavlink1=force_mavlink1)
 
     def sys_status_encode(self, onboard_control_sensors_present: int, onboard_control_sensors_enabled: int, onboard_control_sensors_health: int, load: int, voltage_battery: int, current_battery: int, battery_remaining: int, drop_rate_comm: int, errors_comm: int, errors_count1: int, errors_count2: int, errors_count3: int, errors_count4: int, onboard_control_sensors_present_extended: int = 0, onboard_control_sensors_enabled_extended: int = 0, onboard_control_sensors_health_extended: int = 0) -> MAVLink_sys_status_message:
         """

@@ -12,6 +12,13 @@ from mussel_sim.battery import (
     step_battery,
     to_millivolts,
 )
+from mussel_sim.behaviour import (
+    BEHAVIOURS,
+    BehaviourProfile,
+    ProfileTable,
+    duty_cycle_rate_per_min,
+    sleep_order_problem,
+)
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner, MusselIdCollision
 from mussel_sim.drift import GriddedCurrent, NoCurrent, UniformCurrent, random_drift_m
 from mussel_sim.fleet import step
@@ -35,14 +42,17 @@ from mussel_sim.startconfig import (
     save_start_config,
     start_config_from_positions,
 )
+from mussel_sim.wake import next_wake_s
 
 __all__ = [
+    "BEHAVIOURS",
     "CHARGE_PROFILES",
     "DISCHARGE_PROFILES",
     "FLEET_COMPONENT_ID",
     "FLEET_SYSTEM_ID",
     "AnoxicPatch",
     "Area",
+    "BehaviourProfile",
     "ChargeProfile",
     "CommsConfig",
     "DischargeProfile",
@@ -55,6 +65,7 @@ __all__ = [
     "LocalFrame",
     "MusselIdCollision",
     "NoCurrent",
+    "ProfileTable",
     "Recorder",
     "SensorReadings",
     "StartConfig",
@@ -63,14 +74,17 @@ __all__ = [
     "UptimeSummary",
     "area_from_geojson",
     "distance_m",
+    "duty_cycle_rate_per_min",
     "generate_start_config",
     "initial_state",
     "load_area",
     "load_start_config",
+    "next_wake_s",
     "place_uniform",
     "planar_distance_m",
     "random_drift_m",
     "save_start_config",
+    "sleep_order_problem",
     "start_config_from_positions",
     "start_config_of",
     "state_from_arrays",

@@ -10,6 +10,8 @@ way the paper's surface-station node did. It listens to:
   longer holds an aMussel we docked there (OPEN, RELEASING, another id) releases it, the falling
   edge of its charging on which the paper's aMussel sinks;
 - AMUSSEL_COMMAND: SURFACE / SINK for one of our ids;
+- AMUSSEL_SLEEP_ORDER: a wake schedule (interval, awake; interval 0: always on) for one of our ids,
+  from the same senders, relayed by the same aPads, as AMUSSEL_COMMAND (`mussel_sim.behaviour`);
 - AMUSSEL_STATUS with simulated == 0: a real aMussel. Mixing is allowed, sharing an id is not:
   the status is refused, counted and warned about (`MusselIdCollision` says why).
 
@@ -20,6 +22,10 @@ is caught in `feed`, counted ("handler_error:NAME") and the runner goes on.
 
 Incoming events are queued and become the inputs of the next step, so the model stays pure and a
 run in lockstep is deterministic. Refused surface commands are reported as STATUSTEXT warnings.
+
+A sleeping aMussel (ACTIVE on a wake schedule) speaks only when awake: its AMUSSEL_STATUS and
+AMUSSEL_SENSORS go out at the first publish after a wake (`fleet_sleep.publish_rows`); every other
+aMussel's go out at every publish, as before.
 """
 
 from __future__ import annotations
@@ -30,12 +36,15 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mavlink_dialect import Codec, hot, mavlink
 from mavlink_dialect.transport import Transport
 from missiontime import US_PER_S, Scheduler, Task
 from mussel_sim.battery import to_millivolts
+from mussel_sim.behaviour import sleep_order_problem
 from mussel_sim.fleet import apply_latches, step
+from mussel_sim.fleet_sleep import publish_rows
 from mussel_sim.fleet_state import FleetInputs, FleetParams, FleetState, StepEvents
 from mussel_sim.geo import LocalFrame
 from mussel_sim.recorder import Recorder
@@ -138,6 +147,8 @@ class FleetRunner:
         self._sink: list[int] = []
         self._dock: dict[int, tuple[int, int]] = {}
         self._release: list[int] = []
+        self._sleep: list[tuple[int, float, float]] = []
+        self._published_us: dict[int, int] = {}  # message id -> mission time of its last publish
 
     # --- periodic tasks ----------------------------------------------------------------------------
 
@@ -186,28 +197,40 @@ class FleetRunner:
             self.on_events(events)
 
     def publish_status_task(self, now_us: int) -> None:
-        s = self.state
-        lat, lon = self.frame.to_geodetic(s.x_m, s.y_m)
+        s, rows = self.state, self._speaking(hot.AMUSSEL_STATUS, now_us)
+        ids, x, y, depth, u, state = s.ids, s.x_m, s.y_m, s.depth_m, s.battery_frac, s.state
+        if rows is not None:  # some are asleep: the others only
+            ids, x, y, depth, u, state = ids[rows], x[rows], y[rows], depth[rows], u[rows], state[rows]
+        lat, lon = self.frame.to_geodetic(x, y)
         self._send_batch(hot.AMUSSEL_STATUS, {
-            "time_us": now_us, "mussel_id": s.ids, "lat": np.round(lat * DEG_E7).astype(np.int64),
-            "lon": np.round(lon * DEG_E7).astype(np.int64), "depth": s.depth_m, "battery": s.battery_frac,
-            "battery_voltage": np.round(to_millivolts(s.battery_frac)).astype(np.int64), "state": s.state,
+            "time_us": now_us, "mussel_id": ids, "lat": np.round(lat * DEG_E7).astype(np.int64),
+            "lon": np.round(lon * DEG_E7).astype(np.int64), "depth": depth, "battery": u,
+            "battery_voltage": np.round(to_millivolts(u)).astype(np.int64), "state": state,
             "simulated": 1,
         })
 
     publish_task = publish_status_task
 
     def publish_sensors_task(self, now_us: int) -> None:
-        s = self.state
-        r = self.sensors.sample(s.x_m, s.y_m, s.depth_m, now_us / US_PER_S)
+        s, rows = self.state, self._speaking(hot.AMUSSEL_SENSORS, now_us)
+        ids, x, y, depth = s.ids, s.x_m, s.y_m, s.depth_m
+        if rows is not None:
+            ids, x, y, depth = ids[rows], x[rows], y[rows], depth[rows]
+        r = self.sensors.sample(x, y, depth, now_us / US_PER_S)
         self._send_batch(hot.AMUSSEL_SENSORS, {
-            "time_us": now_us, "mussel_id": s.ids, "dissolved_oxygen": r.dissolved_oxygen_mg_l,
+            "time_us": now_us, "mussel_id": ids, "dissolved_oxygen": r.dissolved_oxygen_mg_l,
             "temperature": r.temperature_degc, "pressure": r.pressure_hpa, "turbidity": r.turbidity_ntu,
         })
 
+    def _speaking(self, spec: hot.HotSpec, now_us: int) -> NDArray[np.intp] | None:
+        """The rows of the state that publish `spec` now (None: all): a sleeping aMussel only after a wake."""
+        rows = publish_rows(self.state, self.params.theta, self._published_us.get(spec.msg_id), now_us)
+        self._published_us[spec.msg_id] = now_us
+        return rows
+
     def _send_batch(self, spec: hot.HotSpec, columns: dict[str, Any]) -> None:
         """One message per aMussel, packed as a batch: byte for byte what one-by-one encoding makes."""
-        if not self.state.n:
+        if not np.size(columns["mussel_id"]):
             return
         frames = hot.encode_batch(self.codec, spec, columns)
         if self.local_batch is not None:
@@ -244,6 +267,9 @@ class FleetRunner:
             self._slot_status(src, msg.slot, msg.mussel_id, msg.latch)
         elif isinstance(msg, mavlink.MAVLink_amussel_command_message):
             (self._surface if msg.command == MusselCommand.SURFACE else self._sink).append(msg.mussel_id)
+        elif isinstance(msg, mavlink.MAVLink_amussel_sleep_order_message):
+            # float32 as on the wire, also for an order handed over in-process (not parsed back)
+            self._sleep.append((msg.mussel_id, float(np.float32(msg.interval)), float(np.float32(msg.awake))))
         elif isinstance(msg, mavlink.MAVLink_amussel_status_message) and msg.simulated == 0:
             mussel_id = msg.mussel_id
             if mussel_id in self._ids:  # refused: neither may stand for the other
@@ -265,14 +291,17 @@ class FleetRunner:
             if not 1 <= m.slot <= N_SLOTS:
                 return "slot"
             return None if m.latch in LATCHES else "latch"
-        if isinstance(msg, mavlink.MAVLink_amussel_command_message):
+        if isinstance(msg, mavlink.MAVLink_amussel_command_message | mavlink.MAVLink_amussel_sleep_order_message):
             if self.config.commanders is not None and src not in self.config.commanders:
                 return "source"
             if apads is not None and m.target_system not in apads:
                 return "target"  # relayed through an aPad, or not at all
-            if m.command not in COMMANDS:
+            if isinstance(msg, mavlink.MAVLink_amussel_command_message) and m.command not in COMMANDS:
                 return "command"
-            return None if m.mussel_id in self._ids else "mussel_id"
+            if m.mussel_id not in self._ids:
+                return "mussel_id"
+            return sleep_order_problem(m.interval, m.awake) if isinstance(
+                msg, mavlink.MAVLink_amussel_sleep_order_message) else None
         if isinstance(msg, mavlink.MAVLink_amussel_status_message) and msg.simulated == 0:
             return None if 1 <= m.mussel_id <= MAX_MUSSEL_ID else "mussel_id"
         return None
@@ -323,8 +352,9 @@ class FleetRunner:
             sink=self._sink,
             dock=[(m, a, s) for m, (a, s) in self._dock.items()],
             release=self._release,
+            sleep=self._sleep,
         )
-        self._surface, self._sink, self._dock, self._release = [], [], {}, []
+        self._surface, self._sink, self._dock, self._release, self._sleep = [], [], {}, [], []
         return inputs
 
     def _report(self, events: StepEvents) -> None:

@@ -13,10 +13,16 @@ Life cycle (`MusselState`, uint8 per agent):
     any --dock event (latched in slot s of aPad a)--> DOCKED --release event--> SINKING
     any but DOCKED --battery reaches 0--> DEPLETED (cannot surface; docking it anyway charges it)
 
-Within one step, in this order: release events, dock events, sink commands, surface commands
-(the range check uses positions at the start of the step and the aPad positions in the
-inputs), then SURFACING/SINKING timers, battery (DOCKED charges, every other state discharges:
-buoyancy motors and electronics stay on), depletion, positions (docked agents follow their aPad,
+Each agent follows its behaviour profile (`mussel_sim.behaviour`, `FleetState.profile`): its
+discharge while deployed, its charge while docked, and for a sleeping one a wake schedule
+(`mussel_sim.wake`). A sleeping agent stays ACTIVE on the seabed; a SURFACE command that finds it
+asleep is held until its next wake (`mussel_sim.fleet_sleep`, which also counts its samples).
+
+Within one step, in this order: sleep orders, release events, dock events, sink commands, surface
+commands (held ones whose wake has come among them; the range check uses positions at the start of
+the step and the aPad positions in the inputs), then SURFACING/SINKING timers, battery (DOCKED
+charges, every other state discharges at its profile's rate: buoyancy motors and electronics stay
+on), depletion, samples, positions (docked agents follow their aPad,
 the rest move with current and random drift) and depths; a DEPLETED agent stays at the depth where
 its battery gave out (at the surface if it was floating). Uptime is the recorder's business
 (`mussel_sim.recorder`): an agent counts as active in step k by its state at the end of step k.
@@ -32,7 +38,9 @@ from numpy.typing import NDArray
 
 from missiontime import US_PER_S
 from mussel_sim.battery import step_battery
+from mussel_sim.behaviour import step_battery_profiles
 from mussel_sim.drift import NoCurrent, random_drift_m
+from mussel_sim.fleet_sleep import Sleepers, apply_orders
 from mussel_sim.fleet_state import (
     ACTIVE,
     DEPLETED,
@@ -63,10 +71,11 @@ class _Applied:
     refused_depleted: NDArray[np.intp]
     ignored: NDArray[np.intp]
     unknown: NDArray[np.int64]
+    held: NDArray[np.intp]  # surface commands held for the agent's wake
 
 
 _NONE = np.zeros(0, np.intp)
-_NOTHING = _Applied(_NONE, _NONE, _NONE, _NONE, _NONE, _NONE, _NONE, EMPTY_IDS)
+_NOTHING = _Applied(_NONE, _NONE, _NONE, _NONE, _NONE, _NONE, _NONE, EMPTY_IDS, _NONE)
 
 
 def _apply_commands(
@@ -77,9 +86,12 @@ def _apply_commands(
     timer: NDArray[np.float64],
     dock_apad: NDArray[np.uint8],
     dock_slot: NDArray[np.uint8],
+    sleepers: Sleepers | None = None,
+    unknown_orders: NDArray[np.int64] = EMPTY_IDS,
 ) -> _Applied:
-    """Apply release, dock, sink, surface in that order, in place on the step's working arrays."""
-    unknown: list[NDArray[np.int64]] = []
+    """Apply release, dock, sink, surface in that order, in place on the step's working arrays
+    (and on `sleepers`' held call-ups: held, taken at a wake, cancelled)."""
+    unknown: list[NDArray[np.int64]] = [unknown_orders] if unknown_orders.size else []
 
     def known(ids: NDArray[np.int64]) -> tuple[NDArray[np.intp], NDArray[np.bool_]]:
         idx, ok = state.index_of(ids)
@@ -108,6 +120,11 @@ def _apply_commands(
     timer[sink[can_sink]] = params.sinking_time_s
 
     asked, _ = known(inputs.surface_ids)
+    held = _NONE
+    if sleepers is not None:
+        sleepers.clear(np.concatenate([dock, sink]))  # docked: no call-up to wait for; sink: called off
+        asked, held = sleepers.hold_asleep(asked, st)
+        asked = np.unique(np.concatenate([asked, sleepers.awoken(st, inputs.wake_ids)]))
     depleted = st[asked] == DEPLETED  # below 3600 mV it may no longer be able to surface
     can_surface = st[asked] == ACTIVE
     ignored = np.concatenate([sink[~can_sink], asked[~can_surface & ~depleted]])
@@ -130,6 +147,7 @@ def _apply_commands(
         refused_depleted=asked[depleted],
         ignored=ignored,
         unknown=np.unique(np.concatenate(unknown)) if unknown else EMPTY_IDS,
+        held=held,
     )
 
 
@@ -146,11 +164,18 @@ def step(
     timer = state.timer_s.copy()
     dock_apad = state.dock_apad.copy()
     dock_slot = state.dock_slot.copy()
+    time_us = state.time_us + round(dt_s * US_PER_S)
 
-    # --- commands and dock events ------------------------------------------------------------
-    has_commands = inputs.release_ids.size + inputs.dock_ids.size + inputs.sink_ids.size + inputs.surface_ids.size
+    # --- sleep orders, commands and dock events ------------------------------------------------
+    table, profile, next_wake, unknown_orders = state.profiles, state.profile, state.next_wake_sim_s, EMPTY_IDS
+    if inputs.sleep_ids.size:
+        table, profile, next_wake, unknown_orders = apply_orders(state, inputs, table, profile, params.theta)
+    sleepers = Sleepers.of(state, table, profile, next_wake, params.theta, time_us)
+    has_commands = (inputs.release_ids.size + inputs.dock_ids.size + inputs.sink_ids.size + inputs.surface_ids.size
+                    + unknown_orders.size + inputs.wake_ids.size + (sleepers is not None and sleepers.any_held))
     applied = (
-        _apply_commands(state, inputs, params, st, timer, dock_apad, dock_slot) if has_commands else _NOTHING
+        _apply_commands(state, inputs, params, st, timer, dock_apad, dock_slot, sleepers, unknown_orders)
+        if has_commands else _NOTHING
     )
 
     # --- SURFACING / SINKING timers (a command given now has already run for this step) ----
@@ -168,12 +193,23 @@ def step(
 
     # --- battery and depletion ---------------------------------------------------------------
     docked_mask = st == DOCKED
-    u = step_battery(state.battery_frac, docked_mask, params.discharge, params.charge, params.theta, dt_s)
+    if sleepers is None:  # everyone on the first profile, always on: eqs. (1)-(2) as the paper has them
+        first = table.profiles[0]
+        u = step_battery(state.battery_frac, docked_mask, first.discharge, first.charge, params.theta, dt_s)
+    else:
+        u = step_battery_profiles(state.battery_frac, docked_mask, table, profile, params.theta, dt_s)
     empty = u <= 0.0
     newly_depleted = np.flatnonzero(empty & ~docked_mask & (st != DEPLETED)) if empty.any() else _NONE
     if newly_depleted.size:
         st[newly_depleted] = DEPLETED
         timer[newly_depleted] = 0.0
+
+    # --- sleeping agents: call-ups held, samples -------------------------------------------------
+    taken, due, held = state.samples_taken, state.samples_due, state.surface_held
+    if sleepers is not None:
+        sleepers.clear(newly_depleted)
+        taken, due = sleepers.samples(st, taken, due)
+        held, next_wake = sleepers.held, sleepers.next_wake
 
     # --- positions ---------------------------------------------------------------------------
     x = state.x_m.copy()
@@ -216,8 +252,8 @@ def step(
         )
         depth[trans] = params.seabed_depth_m * np.clip(frac_down, 0.0, 1.0)
 
-    for fresh in (x, y, depth, u, st, timer, dock_apad, dock_slot):
-        fresh.flags.writeable = False  # ours alone: FleetState keeps them as they are, no view needed
+    for fresh in (x, y, depth, u, st, timer, dock_apad, dock_slot, profile, held, next_wake, taken, due):
+        fresh.flags.writeable = False  # ours alone (or the last state's, read-only): kept as they are
     new_state = FleetState(
         ids=ids,
         x_m=x,
@@ -228,7 +264,13 @@ def step(
         timer_s=timer,
         dock_apad=dock_apad,
         dock_slot=dock_slot,
-        time_us=state.time_us + round(dt_s * US_PER_S),
+        profile=profile,
+        surface_held=held,
+        next_wake_sim_s=next_wake,
+        samples_taken=taken,
+        samples_due=due,
+        profiles=table,
+        time_us=time_us,
         step_index=state.step_index + 1,
     )
     if not (applied is _NOTHING and trans_at_start == 0 and newly_depleted.size == 0 and ids.dtype == _NO_IDS.dtype):
@@ -244,6 +286,7 @@ def step(
             floating_ids=ids[floating],
             resumed_ids=ids[resumed],
             depleted_ids=ids[newly_depleted],
+            surface_held_ids=ids[applied.held],
         )
     else:  # most steps: nothing happened (the same empty arrays, without eleven indexings)
         events = _NO_EVENTS

@@ -5,6 +5,10 @@ property, frozen and read-only (the model never mutates what it is given).
 world asked of the fleet since the last step (dock, release, surface, sink, aPad positions);
 `StepEvents` what the step did that the world must hear about. `mussel_sim.fleet.step` moves one
 to the next.
+
+Each aMussel follows a behaviour profile (`mussel_sim.behaviour`): `FleetState.profile` indexes the
+state's `ProfileTable`, which the scenario's profiles start (`FleetParams.profile_table`) and sleep
+orders extend.
 """
 
 from __future__ import annotations
@@ -24,10 +28,18 @@ from mussel_sim.battery import (
     charge_profile,
     discharge_profile,
 )
+from mussel_sim.behaviour import (
+    BEHAVIOURS,
+    DEFAULT_BEHAVIOUR,
+    SLEEP_CHARGE,
+    ProfileTable,
+    shipped_table,
+)
 from mussel_sim.drift import NO_CURRENT, PAPER_DRIFT_HALF_WIDTH_M, CurrentField
 from mussel_sim.geo import LocalFrame
 from mussel_sim.startconfig import StartConfig, start_config_from_positions
 from mussel_sim.vocabulary import MusselState
+from mussel_sim.wake import next_wake_sim_s
 
 ACTIVE = np.uint8(MusselState.ACTIVE)
 SURFACING = np.uint8(MusselState.SURFACING)
@@ -65,8 +77,12 @@ class FleetParams:
     drift_half_width_m: float = PAPER_DRIFT_HALF_WIDTH_M  # per axis per step; 0 disables drift
     seabed_depth_m: float = 3.0  # depth of an ACTIVE aMussel
     current: CurrentField = NO_CURRENT
+    profile: str = DEFAULT_BEHAVIOUR  # every aMussel's behaviour profile (mussel_sim.behaviour.BEHAVIOURS) ...
+    profile_ids: tuple[tuple[str, tuple[int, ...]], ...] = ()  # ... but these: (profile name, aMussel ids)
+    sleep_charge_profile: str = SLEEP_CHARGE  # hourly_wake's charge, a name in battery.CHARGE_PROFILES
     _discharge: DischargeProfile = field(init=False, repr=False, compare=False)
     _charge: ChargeProfile = field(init=False, repr=False, compare=False)
+    _profiles: ProfileTable = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if self.theta <= 0:
@@ -75,6 +91,35 @@ class FleetParams:
             raise ValueError("surfacing/sinking times must be >= 0")
         object.__setattr__(self, "_discharge", discharge_profile(self.discharge_profile))
         object.__setattr__(self, "_charge", charge_profile(self.charge_profile))
+        object.__setattr__(self, "_profiles", shipped_table(self.discharge_profile, self.charge_profile,
+                                                            self.sleep_charge_profile))
+        seen: dict[int, str] = {}
+        for name in (self.profile, *(name for name, _ in self.profile_ids)):
+            if name not in BEHAVIOURS:
+                raise ValueError(f"unknown behaviour profile {name!r}; known: {', '.join(BEHAVIOURS)}")
+        for name, ids in self.profile_ids:
+            for i in ids:
+                if seen.setdefault(i, name) != name:
+                    raise ValueError(f"aMussel {i} is given two behaviour profiles, {seen[i]} and {name}")
+
+    @property
+    def profile_table(self) -> ProfileTable:
+        """The shipped profiles with this scenario's battery models: a start state's table."""
+        return self._profiles
+
+    def start_profiles(self, ids: NDArray[np.int64]) -> NDArray[np.uint16]:
+        """Each aMussel's index in `profile_table` `(n,)`: `profile`, or its own from `profile_ids`
+        (ValueError for an id of `profile_ids` that `ids` does not hold)."""
+        table = self._profiles
+        out = np.full(ids.shape, table.index(self.profile), np.uint16)
+        for name, listed in self.profile_ids:
+            want = np.asarray(listed, np.int64)
+            k = np.searchsorted(ids, want)
+            known = (k < ids.size) & (ids[np.minimum(k, max(ids.size - 1, 0))] == want) if ids.size else want < 0
+            if not known.all():
+                raise ValueError(f"behaviour profile {name}: aMussel {int(want[~known][0])} is not in the fleet")
+            out[k] = table.index(name)
+        return out
 
     @property
     def discharge(self) -> DischargeProfile:
@@ -94,6 +139,13 @@ class FleetState:
     battery_frac: normalised voltage u.
     state: uint8 MusselState. timer_s: mission seconds left in SURFACING/SINKING, else 0.
     dock_apad: aPad system id holding the agent, 0 if none. dock_slot: its slot 1..4, 0 if none.
+    profile: uint16 index of each agent's behaviour profile in `profiles` (`mussel_sim.behaviour`).
+    surface_held: a SURFACE command that reached the agent asleep, held for its next wake.
+    next_wake_sim_s: simulated time [s] of the agent's first wake after `time_us` (`mussel_sim.wake`);
+    +inf for an agent that is always on.
+    samples_taken, samples_due: int64 wakes of its schedule since the start, ACTIVE on the seabed at
+    the time / all of them (0 for an always-on agent: it monitors all the time).
+    profiles: the behaviour profiles `profile` points at (the shipped ones first).
     time_us: mission time of this state. step_index: steps taken since the start state.
     """
 
@@ -106,6 +158,12 @@ class FleetState:
     timer_s: NDArray[np.float64]
     dock_apad: NDArray[np.uint8]
     dock_slot: NDArray[np.uint8]
+    profile: NDArray[np.uint16]
+    surface_held: NDArray[np.bool_]
+    next_wake_sim_s: NDArray[np.float64]
+    samples_taken: NDArray[np.int64]
+    samples_due: NDArray[np.int64]
+    profiles: ProfileTable
     time_us: int = 0
     step_index: int = 0
 
@@ -144,6 +202,7 @@ class FleetState:
         return (
             self.time_us == other.time_us
             and self.step_index == other.step_index
+            and self.profiles == other.profiles
             and all(_same_bits(getattr(self, a), getattr(other, a)) for a in _STATE_ARRAYS)
         )
 
@@ -152,7 +211,7 @@ def _same_bits(a: NDArray[np.generic], b: NDArray[np.generic]) -> bool:
     return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
 
 
-_STATE_ARRAYS = tuple(f.name for f in fields(FleetState) if f.name not in ("time_us", "step_index"))
+_STATE_ARRAYS = tuple(f.name for f in fields(FleetState) if f.name not in ("time_us", "step_index", "profiles"))
 
 
 def initial_state(config: StartConfig, frame: LocalFrame, params: FleetParams, time_us: int = 0) -> FleetState:
@@ -187,6 +246,7 @@ def state_from_arrays(
     if ((st == SURFACING) | (st == SINKING) | (st == DOCKED)).any():
         raise ValueError("a start state is ACTIVE, FLOATING or DEPLETED (no timers, no dock)")
     depth = np.where(st == FLOATING, 0.0, params.seabed_depth_m)
+    profile = params.start_profiles(ids_a)
     return FleetState(
         ids=ids_a.astype(np.uint32),
         x_m=np.asarray(x_m, float)[order].copy(),
@@ -197,6 +257,13 @@ def state_from_arrays(
         timer_s=np.zeros(n),
         dock_apad=np.zeros(n, np.uint8),
         dock_slot=np.zeros(n, np.uint8),
+        profile=profile,
+        surface_held=np.zeros(n, bool),
+        next_wake_sim_s=next_wake_sim_s(ids_a, params.profile_table.interval_s[profile],
+                                        params.theta * (time_us / US_PER_S)),
+        samples_taken=np.zeros(n, np.int64),
+        samples_due=np.zeros(n, np.int64),
+        profiles=params.profile_table,
         time_us=time_us,
     )
 
@@ -208,7 +275,9 @@ class FleetInputs:
     apad_ids `(m,)`: aPad system ids whose position is known; apad_x_m, apad_y_m `(m,)` in the
     scenario's LocalFrame. surface_ids, sink_ids `(k,)`: commanded aMussels. dock_ids,
     dock_apad, dock_slot `(k,)`: aMussel latched into slot of aPad. release_ids `(k,)`: aMussels
-    their slot no longer holds.
+    their slot no longer holds. sleep_ids, sleep_interval_s, sleep_awake_s `(k,)`: sleep orders
+    (validated: `behaviour.sleep_order_problem`; interval 0: always on). wake_ids `(k,)`: aMussels
+    woken now (the seam for the acoustic wake-up ping: a held call-up is taken at once).
     """
 
     apad_ids: NDArray[np.int64] = field(default_factory=lambda: EMPTY_IDS)
@@ -220,6 +289,10 @@ class FleetInputs:
     dock_apad: NDArray[np.int64] = field(default_factory=lambda: EMPTY_IDS)
     dock_slot: NDArray[np.int64] = field(default_factory=lambda: EMPTY_IDS)
     release_ids: NDArray[np.int64] = field(default_factory=lambda: EMPTY_IDS)
+    sleep_ids: NDArray[np.int64] = field(default_factory=lambda: EMPTY_IDS)
+    sleep_interval_s: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    sleep_awake_s: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    wake_ids: NDArray[np.int64] = field(default_factory=lambda: EMPTY_IDS)
 
     @classmethod
     def make(
@@ -229,18 +302,22 @@ class FleetInputs:
         sink: Iterable[int] = (),
         dock: Iterable[tuple[int, int, int]] = (),
         release: Iterable[int] = (),
+        sleep: Iterable[tuple[int, float, float]] = (),
+        wake: Iterable[int] = (),
     ) -> FleetInputs:
-        """Friendly constructor: apads {system_id: (x_m, y_m)}, dock [(mussel_id, apad_id, slot)].
+        """Friendly constructor: apads {system_id: (x_m, y_m)}, dock [(mussel_id, apad_id, slot)],
+        sleep [(mussel_id, interval_s, awake_s)].
 
         Most steps bring no command and the aPads' last positions as the same objects again (the comms
         runner keeps them until they move): that input is made once and given again (read-only)."""
-        quiet = not (surface or sink or dock or release) and all(isinstance(a, list) for a in (surface, sink, release))
+        quiet = not (surface or sink or dock or release or sleep or wake) and all(
+            isinstance(a, list) for a in (surface, sink, release))
         items = tuple((apads or {}).items())
         last = _LAST_QUIET
         if (quiet and last is not None and len(last[0]) == len(items)
                 and all(k == j and v is w for (k, v), (j, w) in zip(items, last[0], strict=True))):
             return last[1]
-        made = cls._make(dict(items), surface, sink, dock, release)
+        made = cls._make(dict(items), surface, sink, dock, release, sleep, wake)
         if quiet:
             for array in (made.apad_ids, made.apad_x_m, made.apad_y_m):
                 if array is not EMPTY_IDS:  # shared by everyone: left as it is
@@ -252,8 +329,10 @@ class FleetInputs:
     def _make(
         cls, apads: dict[int, tuple[float, float]], surface: Iterable[int], sink: Iterable[int],
         dock: Iterable[tuple[int, int, int]], release: Iterable[int],
+        sleep: Iterable[tuple[int, float, float]] = (), wake: Iterable[int] = (),
     ) -> FleetInputs:
         docks = list(dock)
+        orders = list(sleep)
         xy = np.asarray(list(apads.values()), float).reshape(-1, 2)
         return cls(
             apad_ids=_ids(list(apads)),
@@ -265,6 +344,10 @@ class FleetInputs:
             dock_apad=_ids([d[1] for d in docks]),
             dock_slot=_ids([d[2] for d in docks]),
             release_ids=_ids(list(release)),
+            sleep_ids=_ids([o[0] for o in orders]),
+            sleep_interval_s=np.asarray([o[1] for o in orders], np.float64),
+            sleep_awake_s=np.asarray([o[2] for o in orders], np.float64),
+            wake_ids=_ids(list(wake)),
         )
 
 
@@ -292,3 +375,8 @@ class StepEvents:
     floating_ids: NDArray[np.uint32]  # reached the surface this step
     resumed_ids: NDArray[np.uint32]  # reached the seabed this step, ACTIVE again
     depleted_ids: NDArray[np.uint32]  # battery reached 0 this step
+    surface_held_ids: NDArray[np.uint32] = field(default_factory=lambda: _NO_EVENT_IDS)  # asleep: for its wake
+
+
+_NO_EVENT_IDS: NDArray[np.uint32] = np.zeros(0, np.uint32)
+_NO_EVENT_IDS.flags.writeable = False

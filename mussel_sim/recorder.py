@@ -14,6 +14,13 @@ behaviour and becomes active" as it is released, so the 20 s it takes to reach t
 uptime there; the other reading (measuring only once on the seabed) is the option. Every step also
 goes into `times` (`StateTimes`): the time in each state, whatever counts as active.
 
+A sleeping aMussel (on a wake schedule, `mussel_sim.behaviour`) stays ACTIVE on the seabed between
+its wakes: it is doing its job, monitoring on its schedule, so the whole sleeping interval on the
+seabed counts as uptime; docked, floating and depleted do not, as for any aMussel. What its schedule
+achieved is counted apart as samples (`samples()`): one scheduled at each wake, taken if it was
+ACTIVE then (the fleet model counts them, `FleetState.samples_taken` / `samples_due`; an always-on
+aMussel, which monitors all the time, has none).
+
 For crash-safe checkpoints of long missions the recorder splits in two: `head()` is its fixed-size
 state (counters, stride), `rows_since(k)` the rows that grow with the mission (per-step active count
 and time, battery trace rows) added from step k on, so a checkpoint can append them to a file and
@@ -62,6 +69,8 @@ class RecorderHead:
     sinking_counts_active: bool
     times: StateTimes
     last_us: int  # mission time of the last state recorded (or the start)
+    samples_taken: NDArray[np.int64] | None = None  # (n,) as the last state recorded said; None: zeros
+    samples_due: NDArray[np.int64] | None = None
 
 
 @dataclass(frozen=True)
@@ -99,6 +108,8 @@ class Recorder:
         self._max_trace_bytes = int(max_trace_bytes)
         n = self.ids.size
         self.active_steps = np.zeros(n, np.int64)  # (n,) steps each agent ended active
+        self.samples_taken = np.zeros(n, np.int64)  # (n,) wakes ACTIVE on the seabed (the last state's count)
+        self.samples_due = np.zeros(n, np.int64)  # (n,) wakes of its schedule
         self.n_steps = 0
         self._active_count = np.zeros(1024, np.int32)  # (capacity,) grows by doubling
         self._time_us = np.zeros(1024, np.int64)
@@ -124,6 +135,7 @@ class Recorder:
         (state.ids must be this recorder's ids)."""
         self.times.add(state.state, state.time_us - self._last_us if dt_us is None else dt_us)
         self._last_us = state.time_us
+        self.samples_taken, self.samples_due = state.samples_taken, state.samples_due  # read-only: no copy
         active = self._counts[state.state]
         self.active_steps += active
         k = self.n_steps
@@ -151,7 +163,7 @@ class Recorder:
         """The fixed-size state (a copy): what `restore` needs besides the rows."""
         return RecorderHead(self.ids, self._trace_ids_arg, self._max_trace_bytes, self.active_steps.copy(),
                             self.n_steps, self.trace_stride, self.sinking_counts_active, self.times.copy(),
-                            self._last_us)
+                            self._last_us, self.samples_taken.copy(), self.samples_due.copy())
 
     def rows_since(self, k: int) -> RecorderRows:
         """The rows of steps k, k + 1, ... recorded so far (copies; trace rows only as kept now)."""
@@ -184,6 +196,12 @@ class Recorder:
         if steps.size and (steps[0] < 0 or steps[-1] >= n or (np.diff(steps) <= 0).any()):
             raise ValueError("trace rows are not in step order")
         rec.active_steps = np.array(head.active_steps, np.int64)
+        for name in ("samples_taken", "samples_due"):
+            counts = getattr(head, name)
+            if counts is not None:
+                if np.shape(counts) != rec.ids.shape:
+                    raise ValueError(f"recorder head's {name} does not fit its ids")
+                setattr(rec, name, np.array(counts, np.int64))
         rec.n_steps = n
         rec.trace_stride = int(head.trace_stride)
         capacity = max(1024, 1 << max(n - 1, 0).bit_length())
@@ -205,6 +223,11 @@ class Recorder:
         if self.n_steps == 0:
             return np.zeros(self.ids.size)
         return 100.0 * self.active_steps / self.n_steps
+
+    def samples(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """(samples taken, samples scheduled) per agent `(n,)`: the wakes of its schedule at which it
+        was ACTIVE on the seabed, and all of them (both 0 for an always-on agent)."""
+        return self.samples_taken.copy(), self.samples_due.copy()
 
     def active_count(self) -> NDArray[np.int32]:
         """Number of aMussels active (ACTIVE, or SINKING if it counts) at the end of each step `(n_steps,)`."""

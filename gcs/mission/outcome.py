@@ -58,10 +58,15 @@ def collect_result(world: World, outcome: Outcome, wall_s: float) -> RunResult:
         for t_s, mussel_id in loop.status.dockings:
             dockings.setdefault(mussel_id, []).append({"t_s": round(t_s, 2), "apad": sysid})
     state_s, first_depleted_s = mussel_times(rec)
+    taken, due = rec.samples()
+    fleet = world.fleet.state  # its ids are the recorder's: its behaviour profiles (at the end) go beside
+    names = [p.name for p in fleet.profiles.profiles]
     mussels = [
         MusselResult(int(i), round(start_battery[int(i)], 6), round(float(u), 4),
-                     sorted(dockings.get(int(i), []), key=lambda d: d["t_s"]), states, first)
-        for i, u, states, first in zip(rec.ids, uptime, state_s, first_depleted_s, strict=True)
+                     sorted(dockings.get(int(i), []), key=lambda d: d["t_s"]), states, first,
+                     profile=names[int(k)], samples_taken=int(a), samples_scheduled=int(b))
+        for i, u, states, first, k, a, b in zip(rec.ids, uptime, state_s, first_depleted_s, fleet.profile, taken, due,
+                                                 strict=True)
     ]
     apads = [row | apad_shares(apad_times.get(row["sysid"], {})) for row in apads]
     travelled = sum(v.state.distance_travelled_m for v in world.vehicles.values())

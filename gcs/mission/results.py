@@ -42,6 +42,11 @@ class MusselResult:
     dockings: list[dict[str, Any]] = field(default_factory=list)  # each {"t_s", "apad"} that docked it
     state_s: dict[str, float] = field(default_factory=dict)  # seconds in each state; they sum to the mission time
     first_depleted_s: float | None = None  # mission time it first depleted; None: never
+    # Its behaviour profile at the end (mussel_sim.behaviour; a sleep order's shows as "PROFILE+order:..."),
+    # and the wakes of its schedule: ACTIVE on the seabed at the time / all (0 and 0: always on).
+    profile: str = "always_on"
+    samples_taken: int = 0
+    samples_scheduled: int = 0
 
 
 @dataclass(frozen=True)

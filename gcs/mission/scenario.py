@@ -20,6 +20,7 @@ from gcs.mission.strategies import COLLECT, REDEPLOY, RedeployStrategy, Strategy
 from missiontime.durations import WEEK_S
 from missiontime.durations import parse_duration_s as parse_duration_s
 from mussel_sim.battery import CHARGE_PROFILES, DISCHARGE_PROFILES
+from mussel_sim.behaviour import BEHAVIOURS, DEFAULT_BEHAVIOUR, SLEEP_CHARGE
 
 MISSIONS_DIR = Path(__file__).resolve().parents[2] / "missions"
 MAX_DURATION_S = WEEK_S  # a week at sea; longer is a typo that would run for hours of CPU
@@ -48,6 +49,11 @@ class FleetConfig:
     # also simulated is refused at start, unless the real one is to replace the simulated one.
     real_ids: tuple[int, ...] = ()
     real_replaces_simulated: bool = False
+    # Behaviour profiles (mussel_sim.behaviour, docs/long_term.md): every aMussel's, and those of the
+    # aMussels listed under another profile in [fleet.profiles] (profile name, ids), in BEHAVIOURS order.
+    profile: str = DEFAULT_BEHAVIOUR
+    profiles: tuple[tuple[str, tuple[int, ...]], ...] = ()
+    sleep_charge: str = SLEEP_CHARGE  # hourly_wake's charge profile
 
 
 @dataclass(frozen=True)
@@ -216,8 +222,10 @@ def read_scenario(root: Fields, path: Path) -> Scenario:
                             "absent: the fleet is drawn from the seed"),
         battery_min=battery[0],
         battery_max=battery[1],
-        discharge=f.text("discharge", "active", tuple(DISCHARGE_PROFILES)),
-        charge=f.text("charge", "secondary", tuple(CHARGE_PROFILES)),
+        discharge=f.text("discharge", "active", tuple(DISCHARGE_PROFILES),
+                         about="the always_on profile's discharge model (active: eq. 1)"),
+        charge=f.text("charge", "secondary", tuple(CHARGE_PROFILES),
+                      about="the always_on profile's charge model (secondary: eq. 2)"),
         drift_cm=f.number("drift_cm", 0.5, lo=0.0, hi=100.0,
                           about="half-width of the per-step uniform random drift, per axis"),
         acoustic_range_m=f.number("acoustic_range_m", 100.0, lo=0.0, hi=100_000.0),
@@ -229,6 +237,12 @@ def read_scenario(root: Fields, path: Path) -> Scenario:
         real_ids=f.integers("real_ids", 1, 65535, about="real aMussels expected on the bridge (vil gcs --bridge)"),
         real_replaces_simulated=f.flag("real_replaces_simulated",
                                        about="a real id that is also simulated replaces the simulated one"),
+        profile=f.text("profile", DEFAULT_BEHAVIOUR, BEHAVIOURS,
+                       about="every aMussel's behaviour profile (Table I): always_on, the paper's (MU on all the "
+                             "time); hourly_wake, asleep on the seabed waking hourly for 10 s (docs/long_term.md)"),
+        profiles=_profiles(f),
+        sleep_charge=f.text("sleep_charge", SLEEP_CHARGE, tuple(CHARGE_PROFILES),
+                            about="the hourly_wake profile's charge model (primary_sleep: Table I, 398 min)"),
     )
     if not 0.0 <= fleet.battery_min <= fleet.battery_max <= 1.0:
         raise f.fail("start_battery", "expected 0 <= min <= max <= 1")
@@ -241,6 +255,21 @@ def read_scenario(root: Fields, path: Path) -> Scenario:
         raise root.fail("apad", f"system ids must differ, got {ids}")
     root.done()
     return Scenario(name, path.resolve(), seed, fleet, apads, mission, environment)
+
+
+def _profiles(f: Fields) -> tuple[tuple[str, tuple[int, ...]], ...]:
+    """[fleet.profiles]: a behaviour profile's name -> the aMussel ids that follow it instead of
+    fleet.profile; an id under two names is refused (ids outside the fleet: `check_inputs`)."""
+    p = f.sub("profiles", about="aMussels on another profile than fleet.profile: profile name = [ids]")
+    given = tuple((name, ids) for name in BEHAVIOURS
+                  if (ids := p.integers(name, 1, 65535, about=f"aMussel ids on the {name} profile")))
+    seen: dict[int, str] = {}
+    for name, ids in given:
+        for i in ids:
+            if seen.setdefault(i, name) != name:
+                raise p.fail(name, f"aMussel {i} is also under {seen[i]}")
+    p.done()
+    return given
 
 
 def _apad(a: Fields, default_id: int) -> ApadConfig:
@@ -260,7 +289,7 @@ def _apad(a: Fields, default_id: int) -> ApadConfig:
         battery_end_v=a.number("battery_end_v", 11.0, lo=10.5, hi=16.0,
                                about="the mission ends when the aPad battery falls to this"),
         battery_wh=a.number("battery_wh", 400.0, lo=1.0, hi=100_000.0,
-                            about="the aPad battery's energy between 10.5 and 16 V, Wh (docs/long_term.md)"),
+                            about="the aPad battery's energy between 10.5 and 16 V, Wh (docs/energy.md)"),
         home_charge_w=a.number("home_charge_w", 150.0, lo=0.0, hi=10_000.0,
                                about="the home charger's power, W; 0: no charger"),
     )

@@ -14,6 +14,7 @@ from apad_sitl.params import ApadParams
 from apad_sitl.vocabulary import N_SLOTS
 from gcs.mission.scenario import ApadConfig, Scenario, ScenarioError
 from gcs.mission.strategies import Outlook, PlanInput, StrategyError, is_plugin, plan
+from mussel_sim.behaviour import BehaviourProfile
 from mussel_sim.drift import NO_CURRENT, UniformCurrent
 from mussel_sim.fleet_state import FleetParams
 from mussel_sim.geo import LocalFrame
@@ -49,8 +50,18 @@ def check_inputs(scenario: Scenario) -> None:
     except (ValueError, KeyError, TypeError, IndexError, AttributeError) as exc:
         detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise ScenarioError(f"{path}: bad {what}: {detail}") from None
-    _real_and_simulated(scenario, simulated)
+    replaced = _real_and_simulated(scenario, simulated)
+    _check_profile_ids(scenario, set(map(int, simulated)) - set(replaced))
     _probe_strategy(scenario, area)
+
+
+def _check_profile_ids(scenario: Scenario, simulated: set[int]) -> None:
+    """Every id of [fleet.profiles] is one of the simulated aMussels: one `ScenarioError` line naming the field."""
+    for name, ids in scenario.fleet.profiles:
+        stray = [i for i in ids if i not in simulated]
+        if stray:
+            raise ScenarioError(f"{scenario.path}: fleet.profiles.{name}: aMussel {stray[0]} is not in the simulated "
+                                f"fleet ({len(simulated)} aMussels)")
 
 
 def _probe_strategy(scenario: Scenario, area: Area) -> None:
@@ -135,6 +146,9 @@ def fleet_params(scenario: Scenario) -> FleetParams:
         acoustic_range_m=f.acoustic_range_m,
         drift_half_width_m=f.drift_cm / 100.0,
         current=current,
+        profile=f.profile,
+        profile_ids=f.profiles,
+        sleep_charge_profile=f.sleep_charge,
     )
 
 
@@ -167,3 +181,22 @@ def geofence_ring(area: Area, frame: LocalFrame, buffer_m: float) -> list[tuple[
     return [(float(a), float(b)) for a, b in zip(lat, lon, strict=True)]
 
 
+
+
+def planning_profile(scenario: Scenario) -> BehaviourProfile:
+    """The behaviour profile the strategies plan with: the fleet's (fleet.profile), with the scenario's
+    battery models. aMussels on another profile ([fleet.profiles], sleep orders) are planned as if on it."""
+    table = fleet_params(scenario).profile_table
+    return table.profiles[table.index(scenario.fleet.profile)]
+
+
+def call_up_wait_s(scenario: Scenario, floor_s: float) -> float:
+    """How long a call-up may take to float an aMussel, mission seconds: `floor_s`, or with aMussels on
+    a wake schedule (fleet.profile, [fleet.profiles]) the longest wait for a wake (a call-up is held
+    until it), its rise and a margin of as much again. Sleep orders given later are not foreseen."""
+    table = fleet_params(scenario).profile_table
+    used = {scenario.fleet.profile, *(name for name, _ in scenario.fleet.profiles)}
+    gap_s = max((float(table.interval_s[table.index(n)]) for n in used), default=0.0) / scenario.mission.theta
+    if gap_s == 0.0:
+        return floor_s
+    return max(floor_s, gap_s + 2 * scenario.fleet.surfacing_time_s)

@@ -23,7 +23,15 @@ from gcs.mission.energy_budget import EnergyBudget
 from gcs.mission.loop import EnergySharingLoop
 from gcs.mission.real_fleet import RealFleet
 from gcs.mission.scenario import ApadConfig, Scenario
-from gcs.mission.scenario_models import apad_params, fleet_params, geofence_ring, sensor_field, start_config
+from gcs.mission.scenario_models import (
+    apad_params,
+    call_up_wait_s,
+    fleet_params,
+    geofence_ring,
+    planning_profile,
+    sensor_field,
+    start_config,
+)
 from gcs.mission.swarm import FleetShares
 from gcs.records.events import EventLog
 from gcs.records.run_folder import RunFolder
@@ -48,7 +56,8 @@ GCS_SIGNING_LINK_ID = 1
 APAD_HEARS_FROM_FLEET = frozenset({mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS})
 # What a bridge of real aMussels is sent: their commands and the GCS heartbeat, nothing of the
 # simulated fleet's traffic or the aPads' (a radio link has little to spare).
-BRIDGE_HEARS = frozenset({mavlink.MAVLINK_MSG_ID_AMUSSEL_COMMAND, mavlink.MAVLINK_MSG_ID_HEARTBEAT})
+BRIDGE_HEARS = frozenset({mavlink.MAVLINK_MSG_ID_AMUSSEL_COMMAND, mavlink.MAVLINK_MSG_ID_AMUSSEL_SLEEP_ORDER,
+                          mavlink.MAVLINK_MSG_ID_HEARTBEAT})
 
 
 @dataclass(frozen=True)
@@ -133,8 +142,9 @@ class World:
             battery_end_v=a.battery_end_v,
             apad_speed_mps=a.speed_mps,
             mussel_surfacing_s=s.fleet.surfacing_time_s,
-            mussel_discharge=s.fleet.discharge,
-            mussel_charge=s.fleet.charge,
+            surfacing_timeout_s=call_up_wait_s(s, LoopSettings.surfacing_timeout_s),  # sleepers wake first
+            mussel_discharge=planning_profile(s).discharge.name,  # fleet.profile's battery models
+            mussel_charge=planning_profile(s).charge.name,
             energy=EnergyBudget.of(apad_params(s, a), a.speed_mps),
             home=(a.home_lat_deg, a.home_lon_deg),
         )

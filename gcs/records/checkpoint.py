@@ -61,7 +61,7 @@ if TYPE_CHECKING:
     from gcs.mission.world import World
 
 CHECKPOINT_PERIOD_S = 10.0  # mission time between checkpoints
-FORMAT_VERSION = 5
+FORMAT_VERSION = 6
 RESTORE_SLACK_US = 30_000_000  # a wall clock started at the checkpoint's time runs on while the world is built
 STEPS_SUFFIX = ".steps"  # side files beside the checkpoint
 TRACES_SUFFIX = ".traces"
