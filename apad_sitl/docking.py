@@ -37,7 +37,7 @@ MAX_LON_E7 = 180 * 10**7
 KNOWN_STATES = np.array([int(s) for s in MusselState])
 _STATES = frozenset(KNOWN_STATES.tolist())
 STATUS = "AMUSSEL_STATUS"
-BatteryListener = Callable[[Iterable[tuple[int, float]]], None]  # (aMussel id, battery 0..1) as heard
+BatteryListener = Callable[[Iterable[tuple[int, float, int]]], None]  # (aMussel id, battery 0..1, sender) heard
 
 
 class MusselFixTable(Mapping[int, MusselFix]):
@@ -159,7 +159,7 @@ class Docking:
     """The vehicle's docking part: feeds the aMussel table, runs Dock and Undock, reports the latches.
 
     `mussels` is the vehicle's table (its physics reads it too); `geofence` (None: none) is the water
-    an Undock must be over; `batteries` (if given) hears each status's (aMussel id, battery).
+    an Undock must be over; `batteries` (if given) hears each status's (aMussel id, battery, sender).
     """
 
     def __init__(
@@ -177,7 +177,7 @@ class Docking:
 
     def _on_amussel_status(self, msg: Any) -> None:
         if self.mussels.update(msg.mussel_id, msg.lat, msg.lon, msg.state) and self._batteries is not None:
-            self._batteries([(msg.mussel_id, msg.battery)])
+            self._batteries([(msg.mussel_id, msg.battery, msg.get_srcSystem())])
 
     def _slot_and_mussel(self, what: str, cmd: Command, lowest_id: int) -> tuple[int, int] | Reply:
         """param1 a slot 1..N_SLOTS, param2 an aMussel id (from `lowest_id`); a refusal if either is none."""

@@ -339,7 +339,8 @@ class SitlVehicle:
                 self.mussels.take(_checked(split))
                 if self.energy.listening:  # an aMussel latched here: its gain is drawn from the battery
                     f = split.hot.fields
-                    self.energy.heard(zip(f["mussel_id"].tolist(), f["battery"].tolist(), strict=True))
+                    self.energy.heard(zip(f["mussel_id"].tolist(), f["battery"].tolist(),
+                                          split.hot.src_system.tolist(), strict=True))
                 if self.log is not None and split.hot.raw is not None:
                     self.log.messages(self.now_us, split.hot.raw)
         except Exception as exc:  # the batch path promises not to raise; a promise is not a proof

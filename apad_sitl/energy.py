@@ -39,6 +39,7 @@ class EnergyMeter:
     def __init__(self, apad: ApadState) -> None:
         self.apad = apad
         self._last: dict[int, float] = {}  # latched aMussel -> its battery when last heard
+        self._source: dict[int, int] = {}  # latched aMussel -> the system that reports it (the first heard)
 
     @property
     def counters(self) -> EnergyCounters:
@@ -49,17 +50,22 @@ class EnergyMeter:
         """Whether an aMussel is latched here (a batch of statuses is only read for it then)."""
         return bool(self._latched() or self._last)
 
-    def heard(self, reports: Iterable[tuple[int, float]]) -> None:
-        """(aMussel id, battery 0..1) as heard: a rise of one latched here is drawn from the battery."""
+    def heard(self, reports: Iterable[tuple[int, float, int]]) -> None:
+        """(aMussel id, battery 0..1, sending system) as heard: a rise of one latched here is drawn
+        from the battery. Only the system that first reported it since it latched is believed: a
+        stranger's status claiming a jump would otherwise drain the battery (a spoof)."""
         latched = self._latched()
         for mussel_id in [m for m in self._last if m not in latched]:
             del self._last[mussel_id]  # released: its next docking starts afresh
+            self._source.pop(mussel_id, None)
         if not latched:
             return
         p = self.apad.params
         drawn = 0.0
-        for mussel_id, battery in reports:
+        for mussel_id, battery, source in reports:
             if mussel_id not in latched or not math.isfinite(battery):
+                continue
+            if self._source.setdefault(mussel_id, source) != source:
                 continue
             before = self._last.get(mussel_id)
             self._last[mussel_id] = battery

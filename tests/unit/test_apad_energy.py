@@ -29,12 +29,13 @@ def _apad(**params: float) -> ApadState:
 def test_a_latched_amussels_gain_is_drawn_from_the_apads_battery_at_the_links_efficiency() -> None:
     apad = _apad(batt_capacity_wh=400.0, mussel_battery_wh=24.0, charge_efficiency=0.6)  # round numbers
     meter = EnergyMeter(apad)
-    meter.heard([(7, 0.50), (9, 0.30), (3, 0.10)])  # 9 is not latched yet, 3 is not aboard
-    meter.heard([(7, 0.75), (9, 0.60), (3, 0.90)])
+    meter.heard([(7, 0.50, 100), (9, 0.30, 100), (3, 0.10, 100)])  # 9 is not latched yet, 3 is not aboard
+    meter.heard([(7, 0.75, 100), (9, 0.60, 100), (3, 0.90, 100)])
+    meter.heard([(7, 0.0, 66), (7, 1.0, 66)])  # a stranger's claims of aMussel 7: not believed
     assert apad.energy.passed_wh == pytest.approx(0.25 * 24.0)
     assert apad.energy.drawn_wh == pytest.approx(0.25 * 24.0 / 0.6)
     assert apad.state.battery_v == pytest.approx(BATTERY_FULL_V - 10.0 / 400.0 * RANGE_V)
-    meter.heard([(7, 0.70)])  # a report lower than the last: nothing drawn, nothing given back
+    meter.heard([(7, 0.70, 100)])  # a report lower than the last: nothing drawn, nothing given back
     assert apad.energy.drawn_wh == pytest.approx(10.0)
 
 

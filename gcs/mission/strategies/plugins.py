@@ -28,7 +28,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from gcs.mission.strategies.base import STRATEGIES, TRAITS, Strategy, StrategyError, Traits, first_line
+from gcs.mission.strategies.base import COLLECT, STRATEGIES, TRAITS, Strategy, StrategyError, Traits, first_line
 
 ENTRY_POINT_GROUP = "vil.strategies"
 SOURCES: dict[str, str] = {}  # a loaded strategy's name -> the spec that loads it again (absolute for files)
@@ -82,8 +82,8 @@ def source_of(name: str) -> str:
 
 
 def strategy_names() -> tuple[str, ...]:
-    """Every strategy a run may name now: the shipped ones, then those loaded, in load order."""
-    return tuple(STRATEGIES)
+    """Every strategy a run may name now: the shipped ones (in `COLLECT`'s order), then those loaded."""
+    return (*(str(s) for s in COLLECT if s in STRATEGIES), *(name for name in STRATEGIES if is_plugin(name)))
 
 
 def _register(name: str, fn: Any, source: str, spec: str) -> str:
