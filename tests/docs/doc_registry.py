@@ -1,0 +1,189 @@
+"""The registry: every example command of README.md and docs/*.md, keyed by its exact text, with how it
+runs and which of its claims is checked.
+
+- `room`: the test file that runs it (test_doc_ROOM.py); `run`: the function that runs it and checks
+  its claim (its docstring says what is checked). Several commands that make one story (a SITL aPad and
+  what connects to it, a sweep and its report) share one run, and so one test.
+- `ci`: the line the default run uses when it is not the command as written, and `why`. A placeholder
+  (NAME, SPEC.toml, DIR, HOST, runs/A) is always filled in by the `ci` line.
+- `full`: in a run under the `long` marker (`make test-long`, `pytest -m long tests/docs`), the command as written runs
+  instead of its `ci` line (True), or the line given, or nothing (False: the `ci` line is the example).
+- `long_only`: why its run is left out of the default run (the suite's CPU budget: about 60 s for the
+  doc examples) and runs only under the `long` marker, and which default test covers the same path.
+
+test_doc_coverage.py holds the table to the docs: every example has an entry, every entry an example.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Literal
+
+import doc_consoles as con
+import doc_links as lnk
+import doc_runs as run
+import doc_sweeps as swp
+import doc_tools as tls
+from doc_harness import Work
+
+Room = Literal["runs", "consoles", "links", "sweeps", "tools"]
+
+
+@dataclass(frozen=True)
+class Entry:
+    room: Room
+    run: Callable[[Work], None]
+    ci: str = ""
+    why: str = ""
+    full: bool | str = True
+    long_only: str = ""  # why it runs only under the long marker (its ci line, or as written): CPU, covered where
+
+    def line(self, command: str, full: bool) -> str:
+        """The line to run for `command` in a default run (`full` False) or a long one."""
+        if not full or self.full is False:
+            return self.ci or command
+        return self.full if isinstance(self.full, str) else command
+
+
+SWEEP_LONG = ("a local Dask cluster, its missions and the report: 7-15 s of CPU a sweep; `vil sweep` with its report "
+              "and --keep-runs are tests/sweep/test_sweep_run.py's, the shipped spec test_doc_sweeps.py's, in the "
+              "default run")
+CLUSTER_LONG = ("a scheduler, a worker and a client start for 8 s of CPU; `dask scheduler`, `dask worker` and "
+                "`vil sweep --scheduler` are tests/sweep/test_sweep_cluster.py's too, in the default run")
+DEV_MAKE = "`-o .venv/.installed`: a test never rebuilds the shared venv (it is rebuilt when pyproject.toml changes)"
+
+REGISTRY: dict[str, Entry] = {
+    # README: Quick start
+    tls.MAKE_RUN: Entry("tools", tls.run_make_run, ci="make -n -o .venv/.installed run",
+                        full="make -o .venv/.installed run",
+                        why="Table II is 4 x 40 mission minutes, 17 s of CPU: the dry run shows `vil run` is what runs "
+                            "(and, in a folder without .venv, that it is created first); " + DEV_MAKE),
+    tls.MAKE_TEST: Entry("tools", tls.run_make_test, ci="make -n -o .venv/.installed test",
+                         full="make -o .venv/.installed test",
+                         why="the whole suite cannot run inside itself: the dry run shows ruff, mypy and pytest; "
+                             "the long run runs it (the long tests left out, as `make test` leaves them); " + DEV_MAKE),
+    # README: Examples
+    run.SEED3: Entry("runs", run.run_seed3, ci=run.SEED3 + " --duration 7m",
+                     why="the claim needs a second run (seed 1): two 40-minute missions are 8 s of CPU; 7 minutes "
+                         "tell the fleets apart (at 5 both are still at 100 %: nobody collected, nobody depleted)"),
+    run.SEEDS20: Entry("runs", run.run_seeds20, ci="vil run --seeds 2 --duration 2m",
+                       why="120 missions of 40 minutes are 7 minutes of CPU; 2 drawn fleets of 2 minutes keep the "
+                           "shape (both scenarios, the three strategies, n per row)"),
+    lnk.SITL: Entry("links", lnk.run_sitl_listing1),
+    lnk.LISTING1: Entry("links", lnk.run_sitl_listing1, ci=lnk.LISTING1 + " --distance 2",
+                        why="aMussel 24 rests 10 m away, 20 s of sailing at 0.5 m/s (31 s of wall time, idle); 2 m "
+                            "is the same listing in 9 s"),
+    con.GCS_SITL: Entry("consoles", con.run_gcs_sitl),
+    con.WEB: Entry("consoles", con.run_web),
+    con.WEB_ALL: Entry("consoles", con.run_web_all),
+    con.REPLAY: Entry("consoles", con.run_replay),
+    tls.REPORT_LATEST: Entry("tools", tls.run_report_latest),
+    tls.REPORT_AB: Entry("tools", tls.run_report_ab, full=False,
+                         ci="vil report runs/pool12-greedy-seed1-run1 runs/pool12-cautious-seed1-run1 -o compare/",
+                         why="A, B: the two recorded runs",
+                         long_only="two reports and their comparison, 6 s of CPU; the comparison page is "
+                                   "tests/tui/test_report.py's, in the default run"),
+    swp.STRATEGIES_SWEEP: Entry("sweeps", swp.run_strategies_sweep, long_only=SWEEP_LONG),
+    # README: Stock MAVLink tools
+    lnk.MAVPROXY: Entry("links", lnk.run_mavproxy),
+    lnk.MAVLOGDUMP: Entry("links", lnk.run_mavlogdump),
+    # README: A swarm
+    run.POOL12X2: Entry("runs", run.run_pool12x2, ci=run.POOL12X2 + " --duration 2m",
+                        why="the shares and a loop per aPad are there from the start: 2 of the 40 minutes"),
+    run.BAY120: Entry("runs", run.run_bay120, ci="vil run bay120 --fail-apad 3:60s --duration 2m",
+                      why="bay120 costs 0.4 s of CPU a mission minute (40: 10 s; 11, to pass 600 s: 5 s): aPad 3 "
+                          "fails at 60 s of a 2-minute mission, is lost and its share re-shared the same way"),
+    lnk.SITL_X2: Entry("links", lnk.run_sitl_x2_and_gcs),
+    lnk.GCS_CONNECT: Entry("links", lnk.run_sitl_x2_and_gcs),
+    con.GCS_X2: Entry("consoles", con.run_gcs_x2),
+    # README: Faults, signing, crash and resume
+    run.LOSS: Entry("runs", run.run_loss, ci=run.LOSS + " --duration 5m",
+                    why="the proxy's drops, delays and duplicates in both directions show within 5 minutes"),
+    run.OUTAGE: Entry("runs", run.run_outage, ci=run.OUTAGE + " --duration 7m",
+                      why="the hold at 94.5 s and the resumed Go To at 112 s, then the collection going on: 7 minutes "
+                          "(not fewer: nobody is called up in a mission's last 5 minutes)"),
+    run.SIGNING: Entry("runs", run.run_signing, ci=run.SIGNING + " --duration 2m",
+                       why="every frame signed shows in 2 minutes as in 40"),
+    run.RESUME: Entry("runs", run.run_resume, ci=run.RESUME + " --duration 5m",
+                      why="the run killed first is `vil run pool12 --duration 5m` (SIGKILL past its checkpoint at "
+                          "120 s), and the resume takes the flags it was started with; the long run kills the "
+                          "40-minute pool12 and pool12x2 and resumes them as written"),
+    con.GCS_RESUME: Entry("consoles", con.run_gcs_resume,
+                          long_only="two consoles and minutes of mission at 100x, 7 s of CPU; a console killed with "
+                                    "aMussels docked and resumed is tests/robust/test_console_crash_resume.py's, in "
+                                    "the default run"),
+    # README: Benchmarks
+    tls.MAKE_BENCH: Entry("tools", tls.run_make_bench, ci="make -n -o .venv/.installed bench",
+                          full="make -o .venv/.installed bench",
+                          why="every benchmark at full size takes minutes: the dry run shows what runs, and each "
+                              "of the six below runs on its own; " + DEV_MAKE),
+    tls.THROUGHPUT: Entry("tools", tls.run_throughput, ci=tls.THROUGHPUT + " --count 2000",
+                          why="50,000 messages per figure take 10 s; 2,000 print the same tables"),
+    tls.FLEET_STEP: Entry("tools", tls.run_fleet_step),
+    tls.SCENARIO_SPEED: Entry("tools", tls.run_scenario_speed,
+                              ci=tls.SCENARIO_SPEED + " --scenarios pool12-2m.toml --repeat 1",
+                              why="four 40-minute missions, each timed 3 times and once more instrumented, are a "
+                                  "minute of CPU: pool12 of 2 minutes (a copy of pool12.toml), timed once"),
+    tls.TUI_FRAME: Entry("tools", tls.run_tui_frame,
+                         long_only="6 s of CPU, and no flag makes it smaller; drawing the console is tests/tui's"),
+    tls.LONG_MISSION: Entry("tools", tls.run_long_mission, ci=tls.LONG_MISSION + " --short 1 --long 6",
+                            why="a 4-hour mission is 20 s of CPU: 6 minutes against 1, the same ratio of 6"),
+    tls.STARTUP: Entry("tools", tls.run_startup, ci=tls.STARTUP + " --repeat 1",
+                       why="best of 5 fresh processes each; one shows the same rows"),
+    # README: A scenario of your own
+    run.COPY: Entry("runs", run.run_own_scenario),
+    run.SED: Entry("runs", run.run_own_scenario),
+    run.MINE: Entry("runs", run.run_own_scenario, ci=run.MINE + " --duration 5m",
+                    why="the copy's paths and its run are what is checked: 5 of the 40 minutes (4.5 s of CPU less)"),
+    # README and docs/strategies.md: A strategy of your own
+    run.SLACK_RUN: Entry("runs", run.run_slack_first, ci=run.SLACK_RUN + " --duration 6m",
+                         why="the strategy plans its first collection at 0.05 s; 6 minutes, as nobody is called up "
+                             "in a mission's last 5"),
+    swp.SLACK_SWEEP: Entry("sweeps", swp.run_slack_sweep,
+                           long_only="20 missions of 40 minutes on a local cluster (20 s of CPU); the plugin in a "
+                                     "sweep is tests/plugins' (default run); the long run checks the doc's table"),
+    # docs/strategies.md: Measured
+    run.POOL12_NAME: Entry("runs", run.run_pool12_name, ci="vil run pool12 --strategy lookahead --seeds 2 "
+                                                              "--json pool12-lookahead.json --duration 2m",
+                           why="NAME: lookahead; 8 strategies x 20 fleets x 40 minutes are 8 minutes of CPU: the long "
+                               "run checks the Measured table's figures against all of them"),
+    run.BAY24_NAME: Entry("runs", run.run_bay24_name,
+                          ci="vil run bay24 --strategy lookahead --seeds 2 --json bay24-lookahead.json --duration 2m",
+                          why="as pool12's"),
+    # docs/sweeps.md
+    swp.KEEP_RUNS: Entry("sweeps", swp.run_keep_runs, full=False, ci=f"vil sweep {swp.ONE_SPEC} --out kept --keep-runs",
+                         why="SPEC.toml: one 2-minute mission; DIR: kept", long_only=SWEEP_LONG),
+    swp.REPORT: Entry("sweeps", swp.run_strategies_sweep, ci="vil sweep report sweeps/strategies", full=False,
+                      why="DIR: the shipped spec's sweep above", long_only=SWEEP_LONG),
+    swp.ON_CLUSTER: Entry("sweeps", swp.run_cluster, full=False,
+                          ci=f"vil sweep {swp.ONE_SPEC} --out one --scheduler tcp://127.0.0.1:8786 --no-report",
+                          why="SPEC.toml: one 2-minute mission, DIR: one, HOST: this machine; --no-report: the "
+                              "report is `vil sweep report DIR`'s, checked on the local sweep",
+                          long_only=CLUSTER_LONG),
+    swp.SCHEDULER: Entry("sweeps", swp.run_cluster, full=False, ci=swp.SCHEDULER + " --host 127.0.0.1",
+                         why="a test opens no Dask scheduler (it runs the code it is sent) to every network",
+                         long_only=CLUSTER_LONG),
+    swp.WORKER: Entry("sweeps", swp.run_cluster, full=False, ci="dask worker tcp://127.0.0.1:8786 --nthreads 1",
+                      why="HOST: this machine", long_only=CLUSTER_LONG),
+}
+
+
+def runs_of(room: Room, full: bool = False) -> list[Callable[[Work], None]]:
+    """The runs of a room, each once, in the registry's order: those of the default run, or (`full`)
+    those of the long run: a run with an entry whose long run differs from its ci line, or long only."""
+    found: list[Callable[[Work], None]] = []
+    for entry in REGISTRY.values():
+        if entry.room == room and entry.run not in found:
+            found.append(entry.run)
+
+    def entries(r: Callable[[Work], None]) -> list[Entry]:
+        return [e for e in REGISTRY.values() if e.run is r]
+
+    if full:
+        return [r for r in found if any((e.ci and e.full) or e.long_only for e in entries(r))]
+    return [r for r in found if not any(e.long_only for e in entries(r))]
+
+
+def commands_of(run_function: Callable[[Work], None]) -> list[str]:
+    return [command for command, entry in REGISTRY.items() if entry.run is run_function]

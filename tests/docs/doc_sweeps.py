@@ -1,0 +1,122 @@
+"""How the `vil sweep` and Dask examples run and what of their claims is checked (the registry's "sweeps"
+room). A Dask cluster costs seconds of CPU to start: these run under the long marker (doc_registry.py says
+why), and the default run checks what the shipped spec holds (`check_shipped_spec`)."""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+from pathlib import Path
+
+from doc_harness import Work, ports_held, words
+
+STRATEGIES_SWEEP = "vil sweep missions/sweeps/strategies.toml --out sweeps/strategies"
+KEEP_RUNS = "vil sweep SPEC.toml --out DIR --keep-runs"
+REPORT = "vil sweep report DIR"
+ON_CLUSTER = "vil sweep SPEC.toml --out DIR --scheduler tcp://HOST:8786"
+SCHEDULER = "dask scheduler --port 8786"
+WORKER = "dask worker tcp://HOST:8786 --nthreads 1"
+ONE_SPEC = "one.toml"
+SLACK_SWEEP = "vil sweep docs/examples/slack_sweep.toml --out sweeps/slack"
+REPORT_FILES = ("summary.csv", "summary.md", "pareto.png", "uptime.png", "active.png")
+
+
+def write_one_spec(w: Work) -> None:
+    """SPEC.toml of the examples that name it: one 2-minute pool12 mission."""
+    (w.path / ONE_SPEC).write_text('[sweep]\nscenarios = ["pool12"]\nstrategies = ["greedy"]\nseeds = "1-1"\n'
+                                   '[set]\nmission.duration = "2m"\n')
+
+
+def check_shipped_spec(root: Path) -> int:
+    """missions/sweeps/strategies.toml is what both docs say: every registered strategy x pool12, bay24 x
+    seeds 1-20, as many missions as the README's claim; the number of missions."""
+    from gcs.sweep.cells import make_cells, registered_strategies
+    from gcs.sweep.spec import load_spec
+
+    spec = load_spec(root / "missions/sweeps/strategies.toml")
+    cells = make_cells(spec)
+    strategies = registered_strategies()
+    assert spec.seeds == tuple(range(1, 21)) and set(spec.scenarios) == {"pool12", "bay24"} and spec.draw_fleet
+    assert {(c.scenario.name, c.strategy) for c in cells} == {(s, n) for s in ("pool12", "bay24") for n in strategies}
+    claimed = re.search(r"(\d+) missions", _readme_claim(STRATEGIES_SWEEP)).group(1)  # type: ignore[union-attr]
+    assert len(cells) == int(claimed) == 2 * 20 * len(strategies), (len(cells), claimed)
+    return len(cells)
+
+
+def run_strategies_sweep(w: Work) -> None:
+    """The shipped spec's sweep leaves one row per mission (320: every strategy, pool12 and bay24, seeds
+    1-20), and `vil sweep report DIR` on it writes the tables and plots again."""
+    import pandas as pd
+
+    n = check_shipped_spec(w.path)
+    sweep = w.line(STRATEGIES_SWEEP)
+    out = w.path / sweep.split("--out ")[1].split()[0]
+    w.sh(sweep, timeout_s=3600)
+    rows = pd.read_parquet(out / "results.parquet")
+    assert len(rows) == n and len(set(zip(rows["scenario"], rows["strategy"], rows["seed"], strict=True))) == n
+
+    report = w.line(REPORT)
+    assert w.path / report.split()[-1] == out
+    shutil.rmtree(out / "report")  # what the report example writes, it writes itself
+    printed = words(w.sh(report, timeout_s=600).stdout)
+    assert all((out / "report" / name).stat().st_size for name in REPORT_FILES)
+    assert "means with 95 % intervals" in printed and "lookahead" in printed
+
+
+def run_keep_runs(w: Work) -> None:
+    """--keep-runs also keeps each mission's folder (its .tlog and logs) in DIR/runs/, named in its row."""
+    import pandas as pd
+
+    write_one_spec(w)
+    line = w.line(KEEP_RUNS)
+    out = w.path / line.split("--out ")[1].split()[0]
+    w.sh(line, timeout_s=600)
+    rows = pd.read_parquet(out / "results.parquet")
+    runs = [p for p in (out / "runs").iterdir() if p.is_dir()]
+    assert len(runs) == len(rows) == 1 and Path(rows["run_dir"][0]).name == runs[0].name
+    assert (runs[0] / "gcs.tlog").stat().st_size and (runs[0] / "events.jsonl").stat().st_size
+    assert list(runs[0].glob("apad1.*")), "the aPad's own .tlog and event log"
+
+
+def _readme_claim(command: str) -> str:
+    from doc_examples import all_examples
+
+    return next(e.claim for e in all_examples() if e.command == command and e.doc == "README.md")
+
+
+def run_cluster(w: Work) -> None:
+    """A Dask scheduler and a worker started as the doc says, and a sweep on that cluster: it says where it
+    ran, and its rows are written."""
+    import pandas as pd
+
+    write_one_spec(w)
+    with ports_held(8786, kind="tcp"):
+        scheduler = w.start(w.line(SCHEDULER))
+        worker = None
+        try:
+            scheduler.wait_output(r"Scheduler at:\s+tcp://[\d.]+:8786", 60)
+            worker = w.start(w.line(WORKER))
+            worker.wait_output(r"Registered to:\s+tcp://127\.0\.0\.1:8786", 60)
+            done = words(w.sh(w.line(ON_CLUSTER), timeout_s=300).stdout)
+        finally:
+            if worker is not None:
+                worker.stop()
+            scheduler.stop()
+    assert "on tcp://127.0.0.1:8786 (1 workers, 1 threads)" in done, done
+    out = w.path / w.line(ON_CLUSTER).split("--out ")[1].split()[0]
+    rows = pd.read_parquet(out / "results.parquet")
+    assert list(zip(rows["scenario"], rows["strategy"], rows["seed"], strict=True)) == [("pool12", "greedy", 1)]
+    assert json.loads(next((out / "cells").glob("*.json")).read_text())
+
+
+def run_slack_sweep(w: Work) -> None:
+    """a strategy of one's own swept against three shipped ones: the sweep ends with the Pareto table
+    docs/strategies.md shows (the same configurations, n, means, intervals and front marks)."""
+    printed = w.sh(w.line(SLACK_SWEEP), timeout_s=3600).stdout
+    doc = (w.path / "docs/strategies.md").read_text().split("The sweep ends with its Pareto table", 1)[1]
+    sample = doc.split("```", 2)[1]
+    rows = [words(line) for line in sample.splitlines() if line.strip().startswith("pool12")]
+    assert len(rows) == 4
+    got = [words(line) for line in printed.splitlines() if line.strip().startswith("pool12")]
+    assert got == rows, printed
