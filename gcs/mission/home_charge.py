@@ -14,18 +14,14 @@ after it arrived), the wait ends with a `home_charge_failed` event and the missi
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from gcs.api import Location
 from gcs.mission.control import Phase
+from gcs.mission.crew import Crew
 from gcs.mission.fleet_knowledge import FleetKnowledge
 from gcs.mission.strategies import route_length_m
 from mussel_sim.geo import distance_m
-
-if TYPE_CHECKING:
-    from gcs.mission.phases import Crew
 
 IDLE_LOOKAHEAD_S = 600.0  # idle: the hotel load this long is counted besides the way home
 NOT_CHARGING_S = 120.0  # at home and not charging this long: the charger is not there or not working

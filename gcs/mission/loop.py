@@ -18,8 +18,9 @@ from __future__ import annotations
 from gcs.api import ApadApi, Location
 from gcs.mission.actions import ApadActions
 from gcs.mission.control import EndReason, LoopControl, LoopLog, LoopSettings, LoopStatus, MissionEnded, Phase
+from gcs.mission.crew import Crew
 from gcs.mission.fleet_knowledge import FleetKnowledge
-from gcs.mission.phases import Crew, recover
+from gcs.mission.phases import recover
 from gcs.mission.real_fleet import RealFleet
 from gcs.mission.swarm import FleetShares
 from gcs.mission.turns import turn_for

@@ -11,41 +11,19 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from apad_sitl.vocabulary import Latch
 from gcs.mission.accounting import SURFACE_DEPTH_M
-from gcs.mission.actions import ApadActions
-from gcs.mission.control import LoopControl, LoopLog, LoopSettings, LoopStatus, Phase
+from gcs.mission.control import Phase
+from gcs.mission.crew import Crew
 from gcs.mission.fleet_knowledge import FleetKnowledge
 from gcs.mission.home_charge import needs_home
-from gcs.mission.strategies import CollectStrategy, CostWeights, PlanInput, StrategyError, plan
+from gcs.mission.strategies import CollectStrategy, PlanInput, StrategyError, plan
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
 RESHARED = "another aPad's since the fleet was re-shared"
-
-
-@dataclass(frozen=True)
-class Crew:
-    """What a phase works with: the fleet as known, the aPad's actions, the status, the operator's
-    controls, the loop's event log."""
-
-    knows: FleetKnowledge
-    act: ApadActions
-    status: LoopStatus
-    control: LoopControl
-    log: LoopLog
-
-    @property
-    def settings(self) -> LoopSettings:
-        return self.knows.settings
-
-    @property
-    def weights(self) -> CostWeights:
-        mission = self.settings.mission
-        return CostWeights(mission.distance_scale, mission.energy_scale)
 
 
 # --- collection ---------------------------------------------------------------------------------

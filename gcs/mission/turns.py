@@ -11,9 +11,9 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from gcs.mission.control import Phase
+from gcs.mission.crew import Crew
 from gcs.mission.home_charge import go_home_and_charge, needs_home, within_energy
 from gcs.mission.phases import (
-    Crew,
     charge_and_redeploy,
     collect,
     collection_route,
