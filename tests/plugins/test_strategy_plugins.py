@@ -14,8 +14,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-
-from tests.sweep.test_sweep_cluster import dask_processes
+from testkit import dask_processes
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "docs" / "examples" / "slack_first.py"

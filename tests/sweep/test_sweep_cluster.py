@@ -4,24 +4,16 @@ worker` processes gives the same rows (but the wall times)."""
 from __future__ import annotations
 
 import io
-import socket
-import subprocess
-import sys
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 
 import pandas as pd
 import pytest
-from distributed import Client
 from rich.console import Console
+from testkit import dask_processes
 
 from gcs.sweep.cells import make_cells
 from gcs.sweep.runner import sweep
 from gcs.sweep.spec import load_spec
-
-DASK = Path(sys.executable).parent / "dask"
-START_TIMEOUT_S = 60.0
 
 SPEC = """
 [sweep]
@@ -32,38 +24,6 @@ seeds = "{seeds}"
 mission.duration = "{duration}"
 mission.theta = 60
 """
-
-
-def free_tcp_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return int(probe.getsockname()[1])
-
-
-@contextmanager
-def dask_processes(folder: Path, workers: int = 2) -> Iterator[str]:
-    """`dask scheduler` and `workers` x `dask worker` as processes of their own; killed on the way out."""
-    address = f"tcp://127.0.0.1:{free_tcp_port()}"
-    port = address.rsplit(":", 1)[1]
-    log = (folder / "dask.log").open("w")
-    procs: list[subprocess.Popen[bytes]] = []
-    try:
-        procs.append(subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port", port,
-                                       "--dashboard-address", ":0"], stdout=log, stderr=subprocess.STDOUT,
-                                      cwd=folder))
-        for i in range(workers):
-            procs.append(subprocess.Popen([DASK, "worker", address, "--nthreads", "1", "--no-nanny",
-                                           "--no-dashboard", "--local-directory", str(folder / f"worker{i}")],
-                                          stdout=log, stderr=subprocess.STDOUT, cwd=folder))
-        with Client(address, timeout=START_TIMEOUT_S) as client:
-            client.wait_for_workers(workers, timeout=START_TIMEOUT_S)
-        yield address
-    finally:
-        for proc in procs:  # nothing of theirs to keep: a graceful close only waits on reconnects
-            proc.kill()
-        for proc in procs:
-            proc.wait()
-        log.close()
 
 
 def figures(out: Path) -> pd.DataFrame:
