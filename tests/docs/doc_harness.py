@@ -125,8 +125,9 @@ class Background:
             time.sleep(0.05)
         return found
 
-    def stop(self, sig: int = signal.SIGINT, timeout_s: float = 15.0) -> int:
-        """Ctrl-C (or `sig`), as a person at its terminal would; SIGKILL if it does not end."""
+    def stop(self, sig: int = signal.SIGTERM, timeout_s: float = 15.0) -> int:
+        """SIGTERM (or `sig`) to its process group; SIGKILL if it does not end. Not Ctrl-C's SIGINT: a
+        suite started in the background (`make test &`) hands its processes SIGINT ignored."""
         if self.popen.poll() is None:
             with contextlib.suppress(ProcessLookupError):
                 os.killpg(self.popen.pid, sig)

@@ -22,7 +22,7 @@ SITL_STARTED = r"^vil sitl: aPad sysid \d+ listening on udp:127\.0\.0\.1:14550"
 
 def run_sitl_listing1(w: Work) -> None:
     """a SITL aPad listening on udp 14550, then Listing 1 against it: Go To aMussel 24's position, dock
-    it into slot 2, exit 0; the aPad stops cleanly on Ctrl-C."""
+    it into slot 2, exit 0; the aPad stops cleanly when told to (SIGTERM)."""
     with ports_held(14550):
         sitl = w.start(w.line(SITL))
         try:
