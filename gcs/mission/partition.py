@@ -14,8 +14,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.cluster.vq import kmeans2
-from scipy.optimize import linear_sum_assignment
 
 
 @dataclass(frozen=True)
@@ -49,6 +47,11 @@ def partition(
     cap = math.ceil(n / k) if capacity is None else capacity
     if cap * k < n:
         raise ValueError(f"{k} aPads of {cap} places cannot serve {n} aMussels")
+    # Imported here, not with the module: scipy's are ~0.4 s of every `vil` start, and a run of one
+    # aPad never shares its fleet.
+    from scipy.cluster.vq import kmeans2
+    from scipy.optimize import linear_sum_assignment
+
     points = np.asarray(xy_m, np.float64).reshape(n, 2)
     homes = np.array([apads_xy_m[a] for a in apads], np.float64).reshape(k, 2)
     if n == 0:
