@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import tomllib
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -12,7 +11,14 @@ import pandas as pd
 from rich.console import Console
 
 from gcs.mission.headless import run_mission, run_stem
-from gcs.mission.scenario import Scenario, ScenarioError, load_scenario, resolve_scenario, scenario_from_data
+from gcs.mission.scenario import (
+    Scenario,
+    ScenarioError,
+    load_scenario,
+    read_toml,
+    resolve_scenario,
+    scenario_from_data,
+)
 from gcs.mission.scenario_models import check_inputs
 from gcs.mission.strategies import StrategyError, load_strategy
 from gcs.records.run_folder import RunFolder
@@ -35,9 +41,8 @@ def scenario(name: str | Path = "pool12", fields: dict[str, Any] | None = None) 
     The variant is checked as a file would be: a wrong field or value is an `Error` naming it."""
     try:
         path = resolve_scenario(name)
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-        return scenario_from_data(path, patched(data, fields or {})) if fields else load_scenario(path)
-    except (ScenarioError, OSError, tomllib.TOMLDecodeError) as exc:
+        return scenario_from_data(path, patched(read_toml(path), fields)) if fields else load_scenario(path)
+    except ScenarioError as exc:
         raise Error(str(exc)) from None
 
 

@@ -24,12 +24,11 @@ from gcs.mission.headless import run_mission, run_stem
 from gcs.mission.scenario import Scenario, ScenarioError, load_scenario, scenario_from_data
 from gcs.mission.scenario_models import check_inputs
 from gcs.mission.strategies import (
-    COLLECT,
-    STRATEGIES,
     StrategyError,
     fingerprint,
     is_plugin,
     load_strategy,
+    shipped_names,
     source_of,
 )
 from gcs.mission.world import World
@@ -56,16 +55,11 @@ class Cell:
         return f"{self.scenario.name} {self.strategy} seed {self.seed}" + (f" {values}" if values else "")
 
 
-def registered_strategies() -> tuple[str, ...]:
-    """Every shipped collect strategy, in the enum's order (a new one is in the next sweep of "all")."""
-    return tuple(str(s) for s in COLLECT if s in STRATEGIES)
-
-
 def make_cells(spec: SweepSpec) -> list[Cell]:
     """Every mission of the spec, each scenario checked with each point's fields (`SpecError` if one fails).
     A strategy from a file is found from the spec's folder."""
     try:
-        strategies = (registered_strategies() if spec.strategies is None
+        strategies = (shipped_names() if spec.strategies is None
                       else tuple(load_strategy(s, spec.path.parent) for s in spec.strategies))
     except StrategyError as exc:
         raise spec.fail(f"sweep.strategies: {exc}") from None

@@ -31,12 +31,13 @@ def write_one_spec(w: Work) -> None:
 def check_shipped_spec(root: Path) -> int:
     """missions/sweeps/strategies.toml is what both docs say: every registered strategy x pool12, bay24 x
     seeds 1-20, as many missions as the README's claim; the number of missions."""
-    from gcs.sweep.cells import make_cells, registered_strategies
+    from gcs.mission.strategies import shipped_names
+    from gcs.sweep.cells import make_cells
     from gcs.sweep.spec import load_spec
 
     spec = load_spec(root / "missions/sweeps/strategies.toml")
     cells = make_cells(spec)
-    strategies = registered_strategies()
+    strategies = shipped_names()
     assert spec.seeds == tuple(range(1, 21)) and set(spec.scenarios) == {"pool12", "bay24"} and spec.draw_fleet
     assert {(c.scenario.name, c.strategy) for c in cells} == {(s, n) for s in ("pool12", "bay24") for n in strategies}
     claimed = re.search(r"(\d+) missions", _readme_claim(STRATEGIES_SWEEP)).group(1)  # type: ignore[union-attr]

@@ -6,7 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from gcs.sweep.cells import make_cells, registered_strategies
+from gcs.mission.strategies import shipped_names
+from gcs.sweep.cells import make_cells
 from gcs.sweep.spec import SpecError, load_spec
 
 MISSIONS = Path(__file__).resolve().parents[2] / "missions"
@@ -31,7 +32,7 @@ mission.duration = "10m"
 fleet.drift_cm = [0.5]
 """))
     cells = make_cells(spec)
-    strategies = registered_strategies()
+    strategies = shipped_names()
     assert {"greedy", "cautious", "none"} <= set(strategies)
     assert len(cells) == 2 * 2 * len(strategies) * 3
     assert spec.swept == ("mission.pool_threshold", "fleet.drift_cm")
@@ -124,6 +125,6 @@ def test_the_shipped_strategies_sweep_is_valid() -> None:
     spec = load_spec(MISSIONS / "sweeps" / "strategies.toml")
     cells = make_cells(spec)
     assert {c.scenario.name for c in cells} == {"pool12", "bay24"}
-    assert {c.strategy for c in cells} == set(registered_strategies())
+    assert {c.strategy for c in cells} == set(shipped_names())
     assert {c.seed for c in cells} == set(range(1, 21))
-    assert len(cells) == 2 * len(registered_strategies()) * 20 >= 160
+    assert len(cells) == 2 * len(shipped_names()) * 20 >= 160

@@ -37,6 +37,7 @@ from gcs.mission.strategies.plugins import (
     fingerprint,
     is_plugin,
     load_strategy,
+    shipped_names,
     source_of,
     strategy_names,
 )
@@ -44,5 +45,5 @@ from gcs.mission.strategies.plugins import (
 __all__ = [
     "COLLECT", "ENTRY_POINT_GROUP", "REDEPLOY", "STRATEGIES", "CollectStrategy", "CostWeights", "Outlook", "Plan",
     "PlanInput", "RedeployStrategy", "Strategy", "StrategyError", "Traits", "check_plan", "fingerprint", "is_plugin",
-    "load_strategy", "plan", "route_length_m", "source_of", "strategy", "strategy_names", "traits",
+    "load_strategy", "plan", "route_length_m", "shipped_names", "source_of", "strategy", "strategy_names", "traits",
 ]

@@ -81,9 +81,14 @@ def source_of(name: str) -> str:
     return SOURCES.get(name, name)
 
 
+def shipped_names() -> tuple[str, ...]:
+    """The shipped collection strategies, in `COLLECT`'s order (a sweep's "all")."""
+    return tuple(str(s) for s in COLLECT if s in STRATEGIES)
+
+
 def strategy_names() -> tuple[str, ...]:
-    """Every strategy a run may name now: the shipped ones (in `COLLECT`'s order), then those loaded."""
-    return (*(str(s) for s in COLLECT if s in STRATEGIES), *(name for name in STRATEGIES if is_plugin(name)))
+    """Every strategy a run may name now: the shipped ones, then those loaded."""
+    return (*shipped_names(), *(name for name in STRATEGIES if is_plugin(name)))
 
 
 def _register(name: str, fn: Any, source: str, spec: str) -> str:
