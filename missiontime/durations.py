@@ -1,4 +1,4 @@
-"""Durations as people write them, always with their unit: "90s", "40min", "1.5h", "200ms".
+"""Durations as people write them, always with their unit: "90s", "40min", "1.5h", "7d", "200ms".
 
 A bare number is refused: `--duration 40` could be seconds or minutes, and guessing wrong runs a
 mission sixty times too short or too long. The one parser for every flag and scenario field that
@@ -11,7 +11,7 @@ import math
 import re
 
 WEEK_S = 7 * 86400.0  # a week at sea; longer is a typo that would run for hours of CPU
-UNIT_S = {"ms": 1e-3, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0}
+UNIT_S = {"ms": 1e-3, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0, "d": 86400.0}  # d: long missions
 _DURATION = re.compile(r"^\s*(\d+(?:\.\d*)?|\.\d+)\s*([a-z]*)\s*$")
 
 

@@ -21,7 +21,7 @@ from missiontime.durations import parse_duration_s
 
 @pytest.mark.parametrize("text, seconds", [
     ("90s", 90.0), ("40min", 2400.0), ("40m", 2400.0), ("1h", 3600.0), ("1.5h", 5400.0), ("200ms", 0.2),
-    (" 2 min ", 120.0), (".5s", 0.5), ("168h", 7 * 86400.0),
+    (" 2 min ", 120.0), (".5s", 0.5), ("168h", 7 * 86400.0), ("7d", 7 * 86400.0), ("1.5d", 1.5 * 86400.0),
 ])
 def test_a_duration_with_its_unit_is_read_in_seconds(text: str, seconds: float) -> None:
     assert parse_duration_s(text) == pytest.approx(seconds)
@@ -39,7 +39,7 @@ def test_a_duration_with_its_unit_is_read_in_seconds(text: str, seconds: float) 
     (True, "is not a duration"),
     ("-5s", "-5s is not a positive duration"),
     ("0s", "0s is not a positive duration"),
-    ("169h", "169h is more than a week"),
+    ("169h", "169h is more than a week"), ("8d", "8d is more than a week"),
 ])
 def test_a_duration_without_its_unit_or_out_of_range_is_refused_in_one_line(text: object, message: str) -> None:
     with pytest.raises(ValueError) as exc:
