@@ -12,6 +12,13 @@
     [grid]                            # every combination of these values
     mission.pool_threshold = [0.7, 0.8, 0.9]
 
+    [[grid]]                          # or several blocks, each a grid of its own (the same fields in
+    fleet.profile = ["always_on"]     # each): the points of all of them, e.g. counts per profile
+    fleet.count = [4, 8]
+    [[grid]]
+    fleet.profile = ["hourly_wake"]
+    fleet.count = [48, 96]
+
     [sample]                          # n points drawn at random (seeded), crossed with the grid
     n = 8
     seed = 1
@@ -97,10 +104,8 @@ def load_spec(path: str | Path) -> SweepSpec:
         raise fail(f"sweep.draw_fleet: expected true or false, got {draw_fleet!r}")
 
     fixed = _fields(_table(data, "set", fail), "set", fail)
-    grid = _fields(_table(data, "grid", fail), "grid", fail)
-    for key, values in grid.items():
-        if not isinstance(values, list) or not values:
-            raise fail(f"grid.{key}: expected a non-empty list of values, got {values!r}")
+    blocks = _grids(data.get("grid", {}), fail)
+    grid = blocks[0]
     sample_table = dict(_table(data, "sample", fail))
     sampled = _sample(sample_table, fail) if sample_table else []
     sampled_keys = list(sampled[0]) if sampled else []
@@ -108,7 +113,8 @@ def load_spec(path: str | Path) -> SweepSpec:
     if twice:
         raise fail(f"{twice[0]}: set in more than one of [set], [grid], [sample]")
     swept = (*grid, *sampled_keys)
-    points = [dict(zip(grid, combo, strict=True)) for combo in itertools.product(*grid.values())]
+    points = [dict(zip(block, combo, strict=True)) for block in blocks
+              for combo in itertools.product(*block.values())]
     if sampled:
         points = [p | s for p in points for s in sampled]
     n_strategies = len(strategies) if strategies is not None else 1
@@ -124,6 +130,23 @@ def _table(data: dict[str, Any], key: str, fail: Any) -> dict[str, Any]:
     if not isinstance(value, dict):
         raise fail(f"{key}: expected a table [{key}]")
     return value
+
+
+def _grids(value: Any, fail: Any) -> list[dict[str, Value]]:
+    """[grid] as one block, or [[grid]] as several (each a product of its own; every block sweeps the
+    same fields, so every row has every column). Shape: the blocks, each field -> its values."""
+    tables = value if isinstance(value, list) else [value]
+    if not tables or not all(isinstance(t, dict) for t in tables):
+        raise fail("grid: expected a table [grid] or tables [[grid]]")
+    blocks = [_fields(t, "grid", fail) for t in tables]
+    for block in blocks:
+        for key, values in block.items():
+            if not isinstance(values, list) or not values:
+                raise fail(f"grid.{key}: expected a non-empty list of values, got {values!r}")
+        if set(block) != set(blocks[0]):
+            raise fail(f"grid: every [[grid]] block sweeps the same fields ({', '.join(blocks[0]) or 'none'}), "
+                       f"one sweeps {', '.join(block) or 'none'}")
+    return [{k: block[k] for k in blocks[0]} for block in blocks]  # one column order
 
 
 def _fields(table: dict[str, Any], where: str, fail: Any) -> dict[str, Value]:
