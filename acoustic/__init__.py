@@ -1,0 +1,19 @@
+"""The sea between the vehicles: the acoustic channel, TDMA, and the nanomodem v3 on a serial port.
+
+Pure models (no I/O, no clock reads; time is passed in, randomness is a seeded numpy Generator):
+
+- params.py        `AcousticParams`: the scenario's `[acoustic]` table (off by default)
+- airtime.py       the nanomodem v3's packet durations (its user guide's formula), payload limits
+- propagation.py   delay, Thorp absorption, spreading loss, noise and SNR (vectorised)
+- per.py           packet error rate from SNR and payload size (noncoherent BFSK, FEC, fading)
+- channel.py       `Medium`: transmissions in time, each reception decided once it has ended
+                   (delay, half duplex, collisions, packet errors), deterministic from a seed
+- tdma.py          the TDMA frame and slot table of a fleet over an area
+- status_packet.py a submerged aMussel's status report in <= 64 bytes (struct)
+
+The serial modem (`acoustic.nanomodem`): the protocol (parser of commands, formatter and parser of
+replies), the emulator's pure core over a `Medium`, its edge on a pty (`vil modem`), and the GCS's
+driver over a byte port (pyserial, or an in-process pipe for lockstep runs).
+
+Imports: numpy, and `missiontime` (the driver's bounded waits take a Clock); never `gcs`.
+"""

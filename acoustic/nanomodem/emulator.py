@@ -1,0 +1,256 @@
+"""The nanomodem emulator's pure core: the local unit on the serial line, remote units on the water.
+
+`ModemEmulator` takes the host's bytes with their arrival times (`from_host`) and is advanced to an
+instant (`advance`), returning the bytes the unit writes by then; `next_due_s` says when it next has
+something to do (the edge sleeps until then). Between units go `Frame`s over a `Medium`, so delay,
+loss, half duplex and collisions are the channel model's. The remote units answer as the real ones
+do: a ping or an acknowledged unicast with a reply, `$V` with their voltage, `$E` with the data
+back; a unit answers as soon as the request has arrived (`TURNAROUND_S`). Pure: no clock, no I/O.
+
+Where the unit's guide is silent (NOTES.md), the emulator's reading: `$V` and `$M` unanswered give
+`#TO` after the same 4 s as a ping; `$T` sends a command packet the remote counts; an echo comes
+back as a unicast (`#Unn<data>`); `$Q` before any packet, or after one that failed to decode, is
+`$C-`, else the mean number of wrong coded bytes at the packet's SNR (0-8).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+
+import numpy as np
+
+from acoustic.airtime import PING_TIMEOUT_S, RANGE_TICK_S, airtime_s
+from acoustic.channel import Medium, Outcome, Reception, Transmission
+from acoustic.nanomodem.commands import GAP_S, MAX_ADDRESS, Command, CommandParser, Kind
+from acoustic.nanomodem.grammar import STRAY, Rejected
+from acoustic.nanomodem.replies import (
+    MAX_TICKS,
+    VOLTS_PER_TICK,
+    Ack,
+    AddressSet,
+    Error,
+    Quality,
+    Range,
+    Received,
+    Reply,
+    Status,
+    Timeout,
+)
+from acoustic.params import AcousticParams
+from acoustic.per import expected_byte_errors
+
+TURNAROUND_S = 0.0
+LOCAL = 0  # the local unit's node index in the medium; remote unit i is node i + 1
+
+
+class FrameKind(Enum):
+    PING = "ping"
+    PING_REPLY = "ping_reply"
+    VOLTAGE_REQUEST = "voltage_request"
+    VOLTAGE_REPLY = "voltage_reply"
+    BROADCAST = "broadcast"
+    UNICAST = "unicast"
+    UNICAST_ACK = "unicast_ack"
+    ACK = "ack"
+    TEST = "test"
+    ECHO = "echo"
+
+
+ANSWERS = {FrameKind.PING: FrameKind.PING_REPLY, FrameKind.UNICAST_ACK: FrameKind.ACK,
+           FrameKind.VOLTAGE_REQUEST: FrameKind.VOLTAGE_REPLY}
+
+
+@dataclass(frozen=True)
+class Frame:
+    kind: FrameKind
+    source: int  # the sending unit's address
+    dest: int | None  # None: to all
+    data: bytes = b""
+
+
+@dataclass(frozen=True)
+class RemoteUnit:
+    address: int
+    position_m: tuple[float, float, float]  # x east, y north, z down
+    supply_v: float = 12.0
+
+
+@dataclass
+class _Wait:
+    """An answer the local unit waits for: a reply of `kind` from `address` by `deadline_s`."""
+
+    kind: FrameKind
+    address: int
+    sent_s: float
+    first_leg_s: float  # the request's airtime
+    deadline_s: float
+
+
+@dataclass
+class HeardLog:
+    """What the remote units heard (time, address, frame), for tests and the records."""
+
+    entries: list[tuple[float, int, Frame]] = field(default_factory=list)
+
+
+def supply_ticks(volts: float) -> int:
+    return int(min(max(round(volts / VOLTS_PER_TICK), 0), 65535))
+
+
+class ModemEmulator:
+    def __init__(
+        self, params: AcousticParams, remotes: tuple[RemoteUnit, ...], rng: np.random.Generator, *,
+        address: int = 0, position_m: tuple[float, float, float] = (0.0, 0.0, 0.0), supply_v: float = 12.0,
+        gap_s: float = GAP_S, ping_timeout_s: float = PING_TIMEOUT_S,
+    ) -> None:
+        addresses = [r.address for r in remotes]
+        if len(set(addresses)) != len(addresses) or any(not 0 <= a <= MAX_ADDRESS for a in addresses):
+            raise ValueError(f"remote addresses must differ and be 0..{MAX_ADDRESS}, got {addresses}")
+        self.params, self.remotes = params, remotes
+        self.address, self.supply_v, self.ping_timeout_s = address, supply_v, ping_timeout_s
+        positions = np.array([position_m, *(r.position_m for r in remotes)], dtype=np.float64)
+        self.medium = Medium(params, positions, rng)
+        self.parser = CommandParser(gap_s)
+        self.heard = HeardLog()
+        self.counts: dict[str, int] = {}
+        self._waits: list[_Wait] = []
+        self._quality: int | None = None
+        self._out = bytearray()
+
+    # ---- the serial side
+    def from_host(self, data: bytes, t_s: float) -> None:
+        """Bytes the host wrote, arrived at `t_s` (call `advance(t_s)` first, so time runs in order)."""
+        for item in self.parser.feed(data, t_s):
+            self._command(item, t_s)
+
+    def advance(self, t_s: float) -> bytes:
+        """Run to `t_s`; the bytes the unit has written to the host since the last call."""
+        while (due := self.next_due_s()) is not None and due <= t_s:
+            self._step(due)
+        self._step(t_s)
+        out, self._out = bytes(self._out), bytearray()
+        return out
+
+    def next_due_s(self) -> float | None:
+        times = [t for t in (self.parser.deadline_s(), self.medium.next_decision_s()) if t is not None]
+        times += [w.deadline_s for w in self._waits]
+        return min(times, default=None)
+
+    def remote_send(self, address: int, t_s: float, data: bytes, dest: int | None = None) -> Transmission:
+        """Remote unit `address` sends `data` at `t_s`: a broadcast, or a unicast to `dest`."""
+        node = self._node_of(address)
+        kind = FrameKind.BROADCAST if dest is None else FrameKind.UNICAST
+        return self._send(node, t_s, Frame(kind, address, dest, data))
+
+    def _count(self, reason: str) -> None:
+        self.counts[reason] = self.counts.get(reason, 0) + 1
+
+    def _reply(self, reply: Reply) -> None:
+        self._out += reply.encode()
+
+    def _node_of(self, address: int) -> int:
+        for i, r in enumerate(self.remotes):
+            if r.address == address:
+                return i + 1
+        raise KeyError(f"no remote unit {address}")
+
+    def _send(self, node: int, t_s: float, frame: Frame) -> Transmission:
+        start = max(t_s, self.medium.busy_until_s(node))
+        return self.medium.transmit(node, start, len(frame.data), frame)
+
+    def _command(self, item: Command | Rejected, t_s: float) -> None:
+        if isinstance(item, Rejected):
+            self._count(item.reason)
+            if item.reason != STRAY:
+                self._reply(Error())
+            return
+        self._count("command")
+        kind, a = item.kind, item.address
+        if kind is Kind.SET_ADDRESS:
+            assert a is not None
+            self.address = a
+            self._reply(AddressSet(a))
+        elif kind is Kind.STATUS:
+            self._reply(Status(self.address, supply_ticks(self.supply_v)))
+        elif kind is Kind.QUALITY:
+            self._reply(Quality(self._quality))
+        else:
+            assert kind is Kind.BROADCAST or a is not None
+            self._reply(Ack(kind, a, len(item.data) if kind.has_data else None))
+            frame_kind = {Kind.PING: FrameKind.PING, Kind.VOLTAGE: FrameKind.VOLTAGE_REQUEST,
+                          Kind.BROADCAST: FrameKind.BROADCAST, Kind.UNICAST: FrameKind.UNICAST,
+                          Kind.UNICAST_ACK: FrameKind.UNICAST_ACK, Kind.TEST: FrameKind.TEST,
+                          Kind.ECHO: FrameKind.ECHO}[kind]
+            tx = self._send(LOCAL, t_s, Frame(frame_kind, self.address, a, item.data))
+            if frame_kind in ANSWERS and a is not None:
+                self._waits.append(_Wait(ANSWERS[frame_kind], a, tx.start_s, tx.airtime_s, t_s + self.ping_timeout_s))
+
+    # ---- the water side
+    def _step(self, t_s: float) -> None:
+        for item in self.parser.expire(t_s):
+            self._command(item, t_s)
+        for reception in self.medium.settle(t_s):
+            self._reception(reception)
+        for wait in [w for w in self._waits if w.deadline_s <= t_s]:
+            self._waits.remove(wait)
+            self._count("timeout")
+            self._reply(Timeout())
+
+    def _reception(self, r: Reception) -> None:
+        frame = r.transmission.data
+        assert isinstance(frame, Frame)
+        if r.outcome is not Outcome.DELIVERED:
+            self._count(f"{'local' if r.receiver == LOCAL else 'remote'}_{r.outcome.value}")
+            if r.receiver == LOCAL:
+                self._quality = None
+            return
+        if r.receiver == LOCAL:
+            self._quality = min(round(expected_byte_errors(r.snr_db, len(frame.data), self.params)), 8)
+            self._local_heard(frame, r)
+        else:
+            self._remote_heard(self.remotes[r.receiver - 1], r.receiver, frame, r)
+
+    def _local_heard(self, frame: Frame, r: Reception) -> None:
+        if frame.kind is FrameKind.BROADCAST:
+            self._count("heard")
+            self._reply(Received(frame.data, frame.source))
+            return
+        if frame.dest != self.address:
+            self._count("not_for_us")
+            return
+        if frame.kind in (FrameKind.UNICAST, FrameKind.UNICAST_ACK, FrameKind.ECHO):
+            self._count("heard")
+            self._reply(Received(frame.data))
+        if frame.kind in ANSWERS:  # a remote unit's request of this one: answered, nothing printed
+            self._answer(LOCAL, self.address, frame, r)
+            return
+        wait = next((w for w in self._waits if w.kind is frame.kind and w.address == frame.source), None)
+        if wait is None:
+            if frame.kind in ANSWERS.values():
+                self._count("late_answer")
+            return
+        self._waits.remove(wait)
+        if frame.kind is FrameKind.VOLTAGE_REPLY:
+            self._reply(Received(frame.data, frame.source))
+            return
+        answer_s = airtime_s(len(frame.data))
+        one_way_s = (r.end_s - wait.sent_s - wait.first_leg_s - answer_s - TURNAROUND_S) / 2.0
+        self._reply(Range(frame.source, int(min(max(round(one_way_s / RANGE_TICK_S), 0), MAX_TICKS))))
+
+    def _remote_heard(self, unit: RemoteUnit, node: int, frame: Frame, r: Reception) -> None:
+        if frame.dest is not None and frame.dest != unit.address:
+            return
+        self.heard.entries.append((r.end_s, unit.address, frame))
+        self._answer(node, unit.address, frame, r)
+
+    def _answer(self, node: int, address: int, frame: Frame, r: Reception) -> None:
+        """A unit's automatic answer to a request it heard (after `TURNAROUND_S`)."""
+        t = r.end_s + TURNAROUND_S
+        if frame.kind in ANSWERS:
+            volts = self.supply_v if node == LOCAL else self.remotes[node - 1].supply_v
+            data = f"V{supply_ticks(volts):05d}".encode() if frame.kind is FrameKind.VOLTAGE_REQUEST else b""
+            self._send(node, t, Frame(ANSWERS[frame.kind], address, frame.source, data))
+        elif frame.kind is FrameKind.ECHO:
+            self._send(node, t, Frame(FrameKind.UNICAST, address, frame.source, frame.data))
+

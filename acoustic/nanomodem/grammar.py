@@ -1,0 +1,157 @@
+"""Matching a byte stream against templates, one byte at a time (both directions of the protocol).
+
+A template is a sequence of tokens: a literal, a fixed-width decimal number with its range, or data
+whose length an earlier number gave. Several templates are matched in parallel (`#Axxx` and
+`#AxxxVyyyyy` share a prefix); when none can go on, what was taken is rejected with the reason of the
+template that got furthest, and the byte that broke it starts afresh if a template can begin with it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Generic, TypeVar
+
+T = TypeVar("T")
+
+STRAY = "stray_byte"  # a byte outside any message: dropped, counted
+BAD_DIGIT = "bad_digit"
+
+
+@dataclass(frozen=True)
+class Lit:
+    text: bytes
+    reason: str  # why a message is rejected when this literal is not there
+
+
+@dataclass(frozen=True)
+class Num:
+    name: str
+    width: int
+    lo: int
+    hi: int
+    reason: str  # why a message is rejected when the number is out of range
+
+
+@dataclass(frozen=True)
+class Data:
+    length_field: str  # the Num giving its length
+
+
+Token = Lit | Num | Data
+
+
+@dataclass(frozen=True)
+class Template(Generic[T]):
+    tokens: tuple[Token, ...]
+    build: Callable[[dict[str, int], bytes], T]
+
+
+@dataclass(frozen=True)
+class Rejected:
+    reason: str
+    raw: bytes
+
+
+class _Cursor(Generic[T]):
+    __slots__ = ("consumed", "data", "digits", "fields", "pos", "template", "token")
+
+    def __init__(self, template: Template[T]) -> None:
+        self.template, self.token, self.pos, self.consumed = template, 0, 0, 0
+        self.digits = 0
+        self.fields: dict[str, int] = {}
+        self.data = bytearray()
+
+    def step(self, byte: int) -> str | None:
+        """Take one byte: None if it fits, else the rejection's reason."""
+        tok = self.template.tokens[self.token]
+        if isinstance(tok, Lit):
+            if tok.text[self.pos] != byte:
+                return tok.reason
+            self.pos += 1
+            done = self.pos == len(tok.text)
+        elif isinstance(tok, Num):
+            if not 0x30 <= byte <= 0x39:
+                return BAD_DIGIT
+            self.digits = self.digits * 10 + byte - 0x30
+            self.pos += 1
+            done = self.pos == tok.width
+            if done:
+                if not tok.lo <= self.digits <= tok.hi:
+                    return tok.reason
+                self.fields[tok.name] = self.digits
+                self.digits = 0
+        else:
+            self.data.append(byte)
+            done = len(self.data) == self.fields[tok.length_field]
+        self.consumed += 1
+        if done:
+            self.token += 1
+            self.pos = 0
+        return None
+
+    @property
+    def complete(self) -> bool:
+        return self.token == len(self.template.tokens)
+
+    def result(self) -> T:
+        return self.template.build(self.fields, bytes(self.data))
+
+
+class Matcher(Generic[T]):
+    """Bytes in, messages (or `Rejected`) out."""
+
+    def __init__(self, templates: tuple[Template[T], ...]) -> None:
+        self.templates = templates
+        self._live: list[_Cursor[T]] = []
+        self._raw = bytearray()
+
+    @property
+    def busy(self) -> bool:
+        """Part of a message has been taken."""
+        return bool(self._live)
+
+    def abandon(self) -> bytes:
+        """Forget the message under way; its bytes."""
+        raw = bytes(self._raw)
+        self._live, self._raw = [], bytearray()
+        return raw
+
+    def push(self, byte: int) -> list[T | Rejected]:
+        """One byte: what it finished (a message, a rejection; a rejection and then what the breaking
+        byte began or was), usually nothing."""
+        if not self._live:
+            return self._begin(byte)
+        reasons: list[tuple[int, str]] = []
+        survivors: list[_Cursor[T]] = []
+        for cursor in self._live:
+            why = cursor.step(byte)
+            if why is None:
+                if cursor.complete:
+                    self.abandon()
+                    return [cursor.result()]
+                survivors.append(cursor)
+            else:
+                reasons.append((cursor.consumed, why))
+        if survivors:
+            self._live = survivors
+            self._raw.append(byte)
+            return []
+        rejected = Rejected(max(reasons)[1], self.abandon())
+        after = self._begin(byte)  # the breaking byte may begin the next message
+        if len(after) == 1 and isinstance(after[0], Rejected) and after[0].reason == STRAY:
+            return [Rejected(rejected.reason, rejected.raw + after[0].raw)]  # it began nothing: it was this one's
+        return [rejected, *after]
+
+    def _begin(self, byte: int) -> list[T | Rejected]:
+        live = []
+        for template in self.templates:
+            cursor = _Cursor(template)
+            if cursor.step(byte) is None:
+                if cursor.complete:
+                    return [cursor.result()]
+                live.append(cursor)
+        if not live:
+            return [Rejected(STRAY, bytes([byte]))]
+        self._live, self._raw = live, bytearray([byte])
+        return []
