@@ -9,11 +9,13 @@ looked for in the working directory first, then among the shipped missions/ (`re
 from __future__ import annotations
 
 import tomllib
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 # ScenarioError and out_of_range are read from here by the rest of the package, parse_duration_s by tests.
+from acoustic.params import AcousticParams
+from gcs.mission.scenario_acoustic import read_acoustic
 from gcs.mission.scenario_fields import REQUIRED, Derived, Fields, FieldTable, ScenarioError
 from gcs.mission.scenario_fields import out_of_range as out_of_range
 from gcs.mission.strategies import COLLECT, REDEPLOY, RedeployStrategy, StrategyError, load_strategy
@@ -101,6 +103,7 @@ class Scenario:
     apads: tuple[ApadConfig, ...]  # one `[apad]` table, or several `[[apad]]` (a swarm), by system id
     mission: MissionConfig
     environment: EnvironmentConfig
+    acoustic: AcousticParams = field(default_factory=AcousticParams)  # [acoustic]: off by default (docs/acoustic.md)
 
     @property
     def apad(self) -> ApadConfig:
@@ -253,8 +256,10 @@ def read_scenario(root: Fields, path: Path) -> Scenario:
     ids = [a.system_id for a in apads]
     if len(set(ids)) != len(ids):
         raise root.fail("apad", f"system ids must differ, got {ids}")
+    acoustic = read_acoustic(root.sub("acoustic", about="the acoustic channel, TDMA and the nanomodem "
+                                      "(docs/acoustic.md); off unless enabled"))
     root.done()
-    return Scenario(name, path.resolve(), seed, fleet, apads, mission, environment)
+    return Scenario(name, path.resolve(), seed, fleet, apads, mission, environment, acoustic)
 
 
 def _profiles(f: Fields) -> tuple[tuple[str, tuple[int, ...]], ...]:
