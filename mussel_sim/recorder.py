@@ -1,12 +1,16 @@
 """Activity log of a run: uptime per eq. (3), active count per step, battery traces.
 
-Per-agent counters and per-step scalars cost O(n) and O(steps) memory, so they are always kept.
-Battery traces cost O(n * steps): 100,000 aMussels for a 40 min run at 1 Hz would be 0.96 GB as
-float32. So traces have a memory budget (`max_trace_bytes`, default 64 MiB): when the next row
-would exceed it, every other stored row is dropped and the sampling stride doubles. The kept rows
-are always the steps that are multiples of the current stride, so a trace stays evenly sampled,
-complete for small fleets (12 aMussels x 24 h at 1 Hz is 4 MB) and bounded for large ones.
-`trace_every_steps=0` turns traces off; `trace_ids` restricts them to some aMussels.
+Per-agent counters and per-step scalars cost O(n) and O(steps) memory, so they are always kept
+(12 bytes a step: 7 MB for a week at 1 Hz). Traces (each traced aMussel's battery, float32, and
+state, uint8, at a step) cost O(n * steps): 100,000 aMussels for a 40 min run at 1 Hz would be
+1.2 GB, and 12 for a week 36 MB. So traces have a budget of rows (`max_trace_rows`, default 8,192:
+a 2-h mission at 1 Hz whole) and of bytes (`max_trace_bytes`, default 64 MiB): when the next row
+would exceed either, every other stored row is dropped and the sampling stride doubles. The kept
+rows are always the steps that are multiples of the current stride, so a trace stays evenly sampled
+and holds at most `max_trace_rows` rows whatever the mission's length. What is summed over a
+simulated day (`DayLedger`, given `day_us`) is counted at every step, so the per-day figures are
+exact whatever the traces kept. `trace_every_steps=0` turns traces off; `trace_ids` restricts them
+to some aMussels.
 
 What counts as active (eq. (3) and the active count): ACTIVE, and SINKING unless
 `sinking_counts_active=False`. The paper's simulated aMussel "transitions to a discharging battery
@@ -39,10 +43,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from mussel_sim.fleet_state import ACTIVE, N_STATES, SINKING, FleetState
-from mussel_sim.state_time import StateTimes
+from mussel_sim.day_ledger import DayLedger
+from mussel_sim.fleet_state import ACTIVE, DEPLETED, N_STATES, SINKING, FleetState
+from mussel_sim.state_time import NEVER, StateTimes
 
 DEFAULT_MAX_TRACE_BYTES = 64 * 2**20
+DEFAULT_MAX_TRACE_ROWS = 8192
 
 
 @dataclass(frozen=True)
@@ -71,6 +77,8 @@ class RecorderHead:
     last_us: int  # mission time of the last state recorded (or the start)
     samples_taken: NDArray[np.int64] | None = None  # (n,) as the last state recorded said; None: zeros
     samples_due: NDArray[np.int64] | None = None
+    max_trace_rows: int = DEFAULT_MAX_TRACE_ROWS
+    days: DayLedger | None = None  # a copy; None: no per-day figures
 
 
 @dataclass(frozen=True)
@@ -80,7 +88,8 @@ class RecorderRows:
     time_us: NDArray[np.int64]  # (m,) mission time at the end of each step
     active_count: NDArray[np.int32]  # (m,)
     trace_steps: NDArray[np.int64]  # (j,) step index of each trace row, increasing
-    trace: NDArray[np.float32]  # (j, n_trace)
+    trace: NDArray[np.float32]  # (j, n_trace) battery fraction
+    trace_state: NDArray[np.uint8] | None = None  # (j, n_trace) MusselState; None: not recorded (all ACTIVE)
 
 
 class Recorder:
@@ -94,9 +103,12 @@ class Recorder:
         max_trace_bytes: int = DEFAULT_MAX_TRACE_BYTES,
         sinking_counts_active: bool = True,
         start_us: int = 0,
+        max_trace_rows: int = DEFAULT_MAX_TRACE_ROWS,
+        day_us: int | None = None,
     ) -> None:
         """`start_us`: mission time of the state before the first step (a step's length, when
-        `record` is not told it, is the time since the state recorded before)."""
+        `record` is not told it, is the time since the state recorded before); `day_us`: mission time
+        of one simulated day (`day_ledger.day_us(theta)`), None: no per-day figures."""
         self.ids = np.asarray(ids, np.int64)
         self.sinking_counts_active = sinking_counts_active
         self._counts = np.zeros(N_STATES, bool)  # MusselState -> counts as active
@@ -106,6 +118,8 @@ class Recorder:
         self._last_us = int(start_us)
         self._trace_ids_arg = None if trace_ids is None else np.asarray(trace_ids, np.int64)
         self._max_trace_bytes = int(max_trace_bytes)
+        self._max_trace_rows = int(max_trace_rows)
+        self.days = DayLedger(int(day_us), int(start_us)) if day_us is not None else None
         n = self.ids.size
         self.active_steps = np.zeros(n, np.int64)  # (n,) steps each agent ended active
         self.samples_taken = np.zeros(n, np.int64)  # (n,) wakes ACTIVE on the seabed (the last state's count)
@@ -125,14 +139,16 @@ class Recorder:
             n_trace = want.size
         self.trace_ids = self.ids if self._trace_cols is None else self.ids[self._trace_cols]
         self.trace_stride = int(trace_every_steps)
-        self._row_bytes = max(n_trace * np.dtype(np.float32).itemsize, 1)
-        self._max_rows = max(int(max_trace_bytes // self._row_bytes), 2)
+        self._row_bytes = max(n_trace * (np.dtype(np.float32).itemsize + 1), 1)  # battery float32, state uint8
+        self._max_rows = max(min(int(max_trace_bytes // self._row_bytes), self._max_trace_rows), 2)
         self._trace_rows: list[NDArray[np.float32]] = []
+        self._state_rows: list[NDArray[np.uint8]] = []
         self._trace_steps: list[int] = []
 
     def record(self, state: FleetState, dt_us: int | None = None) -> None:
         """Count one step of `dt_us` (default: since the last state recorded) that ended in `state`
         (state.ids must be this recorder's ids)."""
+        alive_before = int(np.count_nonzero(self.times.first_depleted_us == NEVER)) if self.days is not None else 0
         self.times.add(state.state, state.time_us - self._last_us if dt_us is None else dt_us)
         self._last_us = state.time_us
         self.samples_taken, self.samples_due = state.samples_taken, state.samples_due  # read-only: no copy
@@ -142,38 +158,52 @@ class Recorder:
         if k == self._active_count.size:
             self._active_count = np.concatenate([self._active_count, np.zeros_like(self._active_count)])
             self._time_us = np.concatenate([self._time_us, np.zeros_like(self._time_us)])
-        self._active_count[k] = int(np.count_nonzero(active))
+        self._active_count[k] = n_active = int(np.count_nonzero(active))
         self._time_us[k] = state.time_us
         self.n_steps = k + 1
+        if self.days is not None:
+            never = int(np.count_nonzero(self.times.first_depleted_us == NEVER))
+            self.days.add(state.time_us, n_active, int(np.count_nonzero(state.state != DEPLETED)), alive_before - never)
         if self.trace_stride > 0 and k % self.trace_stride == 0:
             if len(self._trace_rows) >= self._max_rows:
                 self._decimate()
             if k % self.trace_stride == 0:
-                u = state.battery_frac if self._trace_cols is None else state.battery_frac[self._trace_cols]
+                cols = self._trace_cols
+                u = state.battery_frac if cols is None else state.battery_frac[cols]
                 self._trace_rows.append(u.astype(np.float32))
+                self._state_rows.append(state.state.copy() if cols is None else state.state[cols])
                 self._trace_steps.append(k)
 
     def _decimate(self) -> None:
         self.trace_stride *= 2
         keep = [i for i, s in enumerate(self._trace_steps) if s % self.trace_stride == 0]
         self._trace_rows = [self._trace_rows[i] for i in keep]
+        self._state_rows = [self._state_rows[i] for i in keep]
         self._trace_steps = [self._trace_steps[i] for i in keep]
 
     def head(self) -> RecorderHead:
         """The fixed-size state (a copy): what `restore` needs besides the rows."""
         return RecorderHead(self.ids, self._trace_ids_arg, self._max_trace_bytes, self.active_steps.copy(),
                             self.n_steps, self.trace_stride, self.sinking_counts_active, self.times.copy(),
-                            self._last_us, self.samples_taken.copy(), self.samples_due.copy())
+                            self._last_us, self.samples_taken.copy(), self.samples_due.copy(), self._max_trace_rows,
+                            self.days.copy() if self.days is not None else None)
 
     def rows_since(self, k: int) -> RecorderRows:
         """The rows of steps k, k + 1, ... recorded so far (copies; trace rows only as kept now)."""
         if not 0 <= k <= self.n_steps:
             raise ValueError(f"step {k} is outside 0..{self.n_steps}")
         j = bisect_left(self._trace_steps, k)
-        rows = self._trace_rows[j:]
-        trace = np.stack(rows) if rows else np.zeros((0, self.trace_ids.size), np.float32)
+        steps, trace, trace_state = self._traces(j)
         return RecorderRows(self._time_us[k: self.n_steps].copy(), self._active_count[k: self.n_steps].copy(),
-                            np.asarray(self._trace_steps[j:], np.int64), trace)
+                            steps, trace, trace_state)
+
+    def _traces(self, j: int = 0) -> tuple[NDArray[np.int64], NDArray[np.float32], NDArray[np.uint8]]:
+        """The trace rows kept, from the j-th on: (steps `(k,)`, battery `(k, n_trace)`, state `(k, n_trace)`)."""
+        n = self.trace_ids.size
+        steps = np.asarray(self._trace_steps[j:], np.int64)
+        if j >= len(self._trace_rows):
+            return steps, np.zeros((0, n), np.float32), np.zeros((0, n), np.uint8)
+        return steps, np.stack(self._trace_rows[j:]), np.stack(self._state_rows[j:])
 
     @classmethod
     def restore(cls, head: RecorderHead, rows: RecorderRows) -> Recorder:
@@ -181,7 +211,9 @@ class Recorder:
 
         `rows.trace` may hold rows that were decimated since they were taken: they are dropped here.
         """
-        rec = cls(head.ids, 1, head.trace_ids, head.max_trace_bytes, head.sinking_counts_active, head.last_us)
+        rec = cls(head.ids, 1, head.trace_ids, head.max_trace_bytes, head.sinking_counts_active, head.last_us,
+                  head.max_trace_rows)
+        rec.days = head.days.copy() if head.days is not None else None
         n = int(head.n_steps)
         if head.active_steps.shape != rec.ids.shape or n < 0 or int(head.trace_stride) < 0:
             raise ValueError("recorder head does not fit its ids")
@@ -193,6 +225,9 @@ class Recorder:
         steps = np.asarray(rows.trace_steps, np.int64)
         if rows.trace.shape != (steps.size, rec.trace_ids.size):
             raise ValueError("trace rows do not fit the traced aMussels")
+        states = rows.trace_state if rows.trace_state is not None else np.full(rows.trace.shape, ACTIVE, np.uint8)
+        if states.shape != rows.trace.shape:
+            raise ValueError("trace state rows do not fit the battery rows")
         if steps.size and (steps[0] < 0 or steps[-1] >= n or (np.diff(steps) <= 0).any()):
             raise ValueError("trace rows are not in step order")
         rec.active_steps = np.array(head.active_steps, np.int64)
@@ -213,6 +248,7 @@ class Recorder:
             keep = steps % rec.trace_stride == 0
             kept = np.ascontiguousarray(rows.trace[keep], np.float32)
             rec._trace_rows = list(kept)
+            rec._state_rows = list(np.ascontiguousarray(states[keep], np.uint8))
             rec._trace_steps = steps[keep].tolist()
         if len(rec._trace_rows) > rec._max_rows:
             raise ValueError("more trace rows than the recorder's budget")
@@ -239,10 +275,18 @@ class Recorder:
 
     def battery_trace(self) -> tuple[NDArray[np.int64], NDArray[np.float32]]:
         """(step indices `(k,)` (0 = first recorded step), battery u `(k, n_trace)` float32)."""
-        steps = np.asarray(self._trace_steps, np.int64)
-        if not self._trace_rows:
-            return steps, np.zeros((0, self.trace_ids.size), np.float32)
-        return steps, np.stack(self._trace_rows)
+        steps, battery, _ = self._traces()
+        return steps, battery
+
+    def state_trace(self) -> tuple[NDArray[np.int64], NDArray[np.uint8]]:
+        """(step indices `(k,)`, MusselState `(k, n_trace)` uint8) at the same steps as `battery_trace`."""
+        steps, _, state = self._traces()
+        return steps, state
+
+    @property
+    def max_trace_rows(self) -> int:
+        """The most trace rows kept at any time, whatever the mission's length."""
+        return self._max_rows
 
     def summary(self) -> UptimeSummary:
         up = self.uptime_pct()

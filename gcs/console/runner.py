@@ -228,7 +228,7 @@ class ConsoleRunner:
             end = session.run()
             if self.config.out_dir is not None:  # the mission's figures, as `vil run` writes them
                 write_outputs(world, session.result(time.perf_counter() - started_s), RunFolder(self.config.out_dir),
-                              session.apad_times)
+                              session.apad_times, session.apad_record)
             session.finish()
             sampling.active = False  # the plots and the clock stop at the mission's end
             why = END_WORDS.get(end, end)

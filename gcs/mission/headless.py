@@ -66,7 +66,7 @@ def run_mission(
             on_end(world)
         result = session.result(time.perf_counter() - wall_start)
         if folder is not None:
-            write_outputs(world, result, folder, session.apad_times)
+            write_outputs(world, result, folder, session.apad_times, session.apad_record)
         session.finish()
         return result
     finally:

@@ -12,7 +12,9 @@ import numpy as np
 
 from apad_sitl.energy_counters import EnergyCounters
 from gcs.mission.accounting import account
+from gcs.mission.apad_record import ApadRecord, energy_now
 from gcs.mission.control import Phase
+from gcs.mission.days import day_rows
 from gcs.mission.loop import EnergySharingLoop
 from gcs.mission.results import MusselResult, RunResult
 from gcs.mission.swarm import FleetShares
@@ -20,6 +22,8 @@ from gcs.mission.time_accounting import ApadTimes, apad_shares, mussel_times, tr
 from gcs.mission.world import World
 from gcs.records.run_folder import RunFolder
 from mavlink_dialect.transport import UdpTransport
+
+TRACES_FORMAT = 2  # traces.npz with state traces, aPad tracks and positions (1: none of them, no field)
 
 
 @dataclass
@@ -29,6 +33,7 @@ class Outcome:
     loops: dict[int, EnergySharingLoop]
     shares: FleetShares | None
     apad_times: dict[int, ApadTimes]
+    apad_record: ApadRecord | None = None
 
     @property
     def cost_m(self) -> float:
@@ -111,7 +116,23 @@ def collect_result(world: World, outcome: Outcome, wall_s: float) -> RunResult:
         whereabouts=whereabouts,
         apads=apads,
         happened=happenings(world, outcome),
+        **per_day(world, outcome),
     )
+
+
+def per_day(world: World, outcome: Outcome) -> dict[str, Any]:
+    """result.json's sim_day_s and days (`gcs.mission.days`); nothing without the recorder's ledger."""
+    days = world.fleet.recorder.days
+    if days is None:
+        return {}
+    ids = tuple(a.system_id for a in world.scenario.apads)
+    dockings = {a: [t for t, _ in loop.status.dockings] for a, loop in outcome.loops.items()}
+    end = energy_now(world, ids)
+    record = outcome.apad_record
+    energy = record.energy_per_day(end, len(days.steps)) if record is not None and record.apad_ids == ids else \
+        np.full((len(days.steps), len(ids), end.shape[1]), np.nan)
+    return {"sim_day_s": round(days.day_us / 1e6, 3),
+            "days": day_rows(days, world.fleet.recorder.ids.size, dockings, energy, ids)}
 
 
 def happenings(world: World, outcome: Outcome) -> dict[str, Any]:
@@ -190,13 +211,27 @@ def write_endpoints(world: World, folder: RunFolder) -> None:
     folder.endpoints.write_text(json.dumps(ports) + "\n")
 
 
-def write_outputs(world: World, result: RunResult, folder: RunFolder, apad_times: dict[int, ApadTimes]) -> None:
-    """traces.npz and result.json."""
+def write_outputs(world: World, result: RunResult, folder: RunFolder, apad_times: dict[int, ApadTimes],
+                  record: ApadRecord | None = None) -> None:
+    """traces.npz and result.json. traces.npz (format TRACES_FORMAT) holds what a report draws, at a
+    bounded number of points: the recorder's traces (battery and state), the active count per step,
+    each aPad's track (`record`), each aMussel's start and end position; a report reads it instead of
+    replaying the GCS's log (`gcs.records.report_traces`)."""
     rec = world.fleet.recorder
     steps, battery = rec.battery_trace()
+    _, state = rec.state_trace()
+    start, end = world.start, world.fleet.state  # the start configuration's order may not be the ids'
+    order = np.argsort(start.ids)[np.searchsorted(np.sort(start.ids), rec.ids)]
+    end_lat, end_lon = world.frame.to_geodetic(end.x_m, end.y_m)
     arrays: dict[str, Any] = dict(
         ids=rec.ids, step_time_us=rec.step_time_us(), active_count=rec.active_count(),
-        battery_steps=steps, battery=battery, trace_ids=rec.trace_ids, **trace_arrays(rec, apad_times),
+        battery_steps=steps, battery=battery, battery_state=state, trace_ids=rec.trace_ids,
+        **trace_arrays(rec, apad_times), traces_format=np.int64(TRACES_FORMAT),
+        start_lat_deg=start.lat_deg[order], start_lon_deg=start.lon_deg[order], end_lat_deg=end_lat,
+        end_lon_deg=end_lon, end_battery=end.battery_frac, end_state=end.state,
     )
+    if record is not None:
+        arrays |= record.track() | {"track_apad_ids": np.array(record.apad_ids, np.int64),
+                                    "track_complete": np.bool_(record.complete)}
     np.savez_compressed(folder.traces, **arrays)
     folder.result.write_text(json.dumps(result.to_json(), indent=1) + "\n")

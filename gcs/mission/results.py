@@ -73,6 +73,9 @@ class RunResult:
     # One row per aPad (gcs.mission.outcome.apad_rows), with its travelling, docking and holding shares
     # of the mission time (gcs.mission.time_accounting).
     apads: list[dict[str, Any]] = field(default_factory=list)
+    # Per simulated day (86,400 s / theta of mission time; `gcs.mission.days.day_rows`), every day
+    sim_day_s: float = 0.0
+    days: list[dict[str, Any]] = field(default_factory=list)
 
     def to_json(self) -> dict[str, Any]:
         return asdict(self)

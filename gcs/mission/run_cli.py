@@ -35,6 +35,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from gcs.link.faultproxy import LinkFaults
 from gcs.mission import flags
+from gcs.mission.days import days_table
 from gcs.mission.headless import run_mission, run_stem
 from gcs.mission.results import (
     RunResult,
@@ -337,6 +338,9 @@ def run(args: argparse.Namespace) -> int:
         where_time_went = time_table(results)
         if where_time_went is not None:
             console.print(where_time_went)
+        per_day = days_table([(f"{r.scenario} {r.strategy} s{r.seed}", r.days) for r in results])
+        if per_day is not None:
+            console.print(per_day)
     for line in happened_lines(results):  # faults, holds, link losses, lost aPads: what the figures do not say
         console.print(line, highlight=False)
     mission_s = sum(r.duration_s for r in results)

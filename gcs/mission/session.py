@@ -26,6 +26,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable, Mapping
 
+from gcs.mission import apad_record
 from gcs.mission.control import EndReason, LoopControl, LoopStatus
 from gcs.mission.loop import EnergySharingLoop
 from gcs.mission.outcome import Outcome, collect_result
@@ -76,6 +77,7 @@ class MissionSession:
         if self._replaying:
             world.mute_logs(True)
         track(world, self.apad_times)
+        self.apad_record = apad_record.start(world, complete=not self.resuming)
 
     @property
     def swarm(self) -> bool:
@@ -133,7 +135,7 @@ class MissionSession:
             self._checkpoints.close()
 
     def outcome(self) -> Outcome:
-        return Outcome(dict(sorted(self.loops.items())), self.shares, self.apad_times)
+        return Outcome(dict(sorted(self.loops.items())), self.shares, self.apad_times, self.apad_record)
 
     def result(self, wall_s: float) -> RunResult:
         return collect_result(self.world, self.outcome(), wall_s)

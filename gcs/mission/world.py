@@ -40,6 +40,7 @@ from mavlink_dialect.transport import UdpTransport
 from missiontime import Clock, VirtualClock, seconds_to_us
 from mussel_sim.battery import charge_profile, discharge_profile
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner
+from mussel_sim.day_ledger import day_us
 from mussel_sim.fleet_state import initial_state
 from mussel_sim.geo import LocalFrame
 from mussel_sim.placement import load_area
@@ -225,7 +226,7 @@ def build_world(
         CommsConfig(status_rate_hz=scenario.fleet.status_rate_hz, sensors_rate_hz=scenario.fleet.sensors_rate_hz,
                     apad_ids=apad_ids, commanders=frozenset({link.codec.system_id})),
         recorder=Recorder(state.ids, sinking_counts_active=scenario.mission.sinking_counts_active,
-                          start_us=state.time_us),
+                          start_us=state.time_us, day_us=day_us(scenario.mission.theta)),
         local=port.send_local, local_batch=port.send_batch,
     )
     port.handler = fleet.handle

@@ -17,7 +17,7 @@ interrupted (`EnergySharingLoop.run(resume=True)`). Either way `cut_logs` first 
 to its length at the checkpoint, so each event and message is in the logs once.
 
 A save costs the same at any mission time. What grows with the mission (the recorder's rows: active
-count and time per step, battery trace rows) is appended to two side files, `checkpoint.steps` and
+count and time per step, battery and state trace rows) is appended to two side files, `checkpoint.steps` and
 `checkpoint.traces` (a 16-byte header, then fixed-size little-endian records), and never rewritten.
 Everything else, the recorder's fixed-size head included, is the small file `checkpoint.pkl`, written
 atomically (temp file, then `os.replace`) after the rows: it says how many records of each side file
@@ -61,7 +61,7 @@ if TYPE_CHECKING:
     from gcs.mission.world import World
 
 CHECKPOINT_PERIOD_S = 10.0  # mission time between checkpoints
-FORMAT_VERSION = 6
+FORMAT_VERSION = 7
 RESTORE_SLACK_US = 30_000_000  # a wall clock started at the checkpoint's time runs on while the world is built
 STEPS_SUFFIX = ".steps"  # side files beside the checkpoint
 TRACES_SUFFIX = ".traces"
@@ -181,7 +181,7 @@ _CHUNK_BYTES = 1 << 22  # side files are read this much at a time
 
 
 def _trace_dtype(n_trace: int) -> np.dtype[Any]:
-    return np.dtype([("step", "<i8"), ("u", "<f4", (n_trace,))])
+    return np.dtype([("step", "<i8"), ("u", "<f4", (n_trace,)), ("s", "u1", (n_trace,))])
 
 
 @dataclass(frozen=True)
@@ -290,7 +290,8 @@ class CheckpointFiles:
         traces = _read_records(self.traces_path, _TRACES_MAGIC, _trace_dtype(n_trace), small.traces,
                                (lambda c: c["step"] % stride == 0) if stride > 0 else None)
         rows = RecorderRows(steps["time_us"].astype(np.int64), steps["active"].astype(np.int32),
-                            traces["step"].astype(np.int64), traces["u"].astype(np.float32))
+                            traces["step"].astype(np.int64), traces["u"].astype(np.float32),
+                            traces["s"].astype(np.uint8))
         try:
             recorder = Recorder.restore(head, rows)
             ckpt = Checkpoint(**small.fields, recorder=recorder)
@@ -311,6 +312,7 @@ class CheckpointFiles:
         self._steps.append(steps)
         traces = np.empty(new.trace_steps.size, self._traces.dtype)
         traces["step"], traces["u"] = new.trace_steps, new.trace
+        traces["s"] = new.trace_state if new.trace_state is not None else 0
         self._traces.append(traces)
         rest = {f.name: getattr(ckpt, f.name) for f in fields(ckpt) if f.name != "recorder"}
         small = _Small(FORMAT_VERSION, rest, head, self._steps.valid(), self._traces.valid())

@@ -14,7 +14,7 @@ from mussel_sim.fleet_state import ACTIVE, SURFACING, FleetParams, FleetState, s
 from mussel_sim.recorder import Recorder, RecorderRows
 
 N = 7
-ROW_BYTES = N * 4  # one battery trace row, float32
+ROW_BYTES = N * 5  # one trace row: battery float32 and state uint8 per aMussel
 
 
 def states(steps: int, seed: int = 0) -> list[FleetState]:
