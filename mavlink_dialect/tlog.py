@@ -70,3 +70,10 @@ def frames(path: Path) -> Iterator[tuple[int, bytes]]:
             raise TlogError(f"{path}: not a MAVLink .tlog (bad frame at byte {i + 8})")
         yield stamp, data[i + 8 : i + 8 + size]
         i += 8 + size
+
+
+def first_stamp_us(path: Path) -> int | None:
+    """The first record's stamp (the log's clock at its start), reading 8 bytes; None if the log is empty."""
+    with path.open("rb") as f:
+        head = f.read(_STAMP.size)
+    return _STAMP.unpack(head)[0] if len(head) == _STAMP.size else None
