@@ -14,7 +14,6 @@ from enum import Enum
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.spatial.distance import pdist
 
 from acoustic.airtime import airtime_s
 from acoustic.params import AcousticParams
@@ -69,7 +68,7 @@ def largest_range_m(points_m: ArrayLike, depth_m: float = 0.0) -> float:
     """The largest distance between two of the (n, 2) points (a polygon's vertices: its diameter),
     with `depth_m` of vertical separation on top (a node on the seabed to one at the surface)."""
     pts = np.asarray(points_m, dtype=np.float64).reshape(-1, 2)
-    horizontal = float(pdist(pts).max()) if len(pts) > 1 else 0.0
+    horizontal = float(np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=-1).max())  # a polygon's few vertices
     return math.hypot(horizontal, depth_m)
 
 

@@ -63,6 +63,8 @@ COMMANDS = (
             "add_arguments", "run"),
     Command("scenario", "check scenario files (schema and reader), or write a new one from an area",
             "gcs.mission.scenario_cli", "add_arguments", "run"),
+    Command("modem", "a nanomodem v3 emulated on a pty (or serial device) over the acoustic channel model",
+            "gcs.modem_cli", "add_arguments", "run"),
 )
 
 

@@ -1,0 +1,94 @@
+"""The driver against the emulator over an in-process pipe on a virtual clock: every command, its
+answer from the water, and the bounded waits' outcomes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from acoustic.airtime import RANGE_TICK_S
+from acoustic.nanomodem.driver import ModemDriver, Outcome
+from acoustic.nanomodem.emulator import ModemEmulator, RemoteUnit
+from acoustic.nanomodem.lockstep import attach
+from acoustic.nanomodem.ports import pipe
+from acoustic.nanomodem.replies import AddressSet, Quality, Range, Received, Status
+from acoustic.params import AcousticParams
+from missiontime.clocks import VirtualClock
+
+NEAR, FAR = RemoteUnit(5, (300.0, 0.0, 5.0), supply_v=11.5), RemoteUnit(9, (5000.0, 0.0, 5.0))
+
+
+def _rig(seed: int = 1) -> tuple[ModemDriver, ModemEmulator, VirtualClock]:
+    clock = VirtualClock()
+    host, modem = pipe()
+    core = ModemEmulator(AcousticParams(), (NEAR, FAR), np.random.default_rng(seed))
+    attach(core, modem, clock.scheduler)
+    return ModemDriver(host, clock), core, clock
+
+
+def test_status_address_and_quality() -> None:
+    driver, core, _ = _rig()
+    status = driver.status()
+    assert status.ok and isinstance(status.reply, Status) and status.reply.supply_v == pytest.approx(12.0, abs=1e-3)
+    assert driver.set_address(42).reply == AddressSet(42) and core.address == 42
+    assert driver.quality().reply == Quality(None)  # nothing heard yet
+
+
+def test_ping_gives_the_range_and_an_unreachable_unit_times_out_after_4_s() -> None:
+    driver, _, clock = _rig()
+    result = driver.ping(5)
+    assert result.ok and isinstance(result.reply, Range)
+    true_range = float(np.linalg.norm(NEAR.position_m))
+    assert abs(result.reply.range_m(1500.0) - true_range) <= 1500.0 * RANGE_TICK_S
+    assert clock.time() == pytest.approx(0.105 * 2 + 2 * true_range / 1500.0, abs=0.011)  # both legs, polls
+    t0 = clock.time()
+    lost = driver.ping(9)
+    assert lost.outcome is Outcome.TIMEOUT and clock.time() - t0 == pytest.approx(4.0, abs=0.011)
+    assert driver.quality().reply == Quality(0)  # the reply from 300 m: no byte wrong
+
+
+def test_unicast_with_ack_voltage_echo_and_packets_heard() -> None:
+    driver, core, clock = _rig()
+    assert driver.unicast_ack(5, b"surface!").ok
+    assert [(a, f.data) for _, a, f in core.heard.entries] == [(5, b"surface!")]
+    volts = driver.voltage(5)
+    assert volts.ok and isinstance(volts.reply, Received) and volts.reply.data == b"V50244"  # 11.5 V
+    assert driver.echo(5, b"$#\r\n").ok
+    clock.sleep(2.0)  # the echo back: this unit cannot hear it while sending the next
+    assert driver.broadcast(b"hello all").ok and driver.unicast(5, b"hi").ok
+    assert driver.test(5).ok
+    clock.sleep(3.0)
+    core.remote_send(5, clock.time(), b"status 31 bytes")
+    clock.sleep(2.0)
+    assert driver.received() == [Received(b"$#\r\n"), Received(b"status 31 bytes", 5)]
+    assert driver.dropped == {}
+    assert [f.data for _, a, f in core.heard.entries if a == 5][-3:] == [b"hello all", b"hi", b""]
+
+
+def test_the_unit_answering_E_ends_the_wait_as_error_and_silence_as_no_reply() -> None:
+    clock = VirtualClock()
+    host, modem = pipe()
+    driver = ModemDriver(host, clock)
+    answers = [b"E\r\n", b""]
+
+    def unit(_now_us: int) -> None:
+        if modem.read():
+            modem.write(answers.pop(0) if answers else b"")
+
+    clock.scheduler.every(0.001, unit, "a unit that refuses, then says nothing")
+    assert driver.status().outcome is Outcome.ERROR
+    t0 = clock.time()
+    assert driver.status().outcome is Outcome.NO_REPLY and clock.time() - t0 == pytest.approx(0.5, abs=0.006)
+    modem.write(b"E\r\n")  # late: the next command does not take it for its own
+    assert driver.status().outcome is Outcome.NO_REPLY and driver.dropped == {"unexpected_reply": 1}
+
+
+def test_a_seed_repeats_the_water_exactly() -> None:
+    def session(seed: int) -> list[object]:
+        driver, core, clock = _rig(seed)
+        core.medium.move(np.array([[0, 0, 0], [1700.0, 0, 5.0], [5000.0, 0, 5.0]]))  # where packets get lost
+        return [driver.ping(5).outcome for _ in range(12)] + [clock.time()]
+
+    first = session(3)
+    assert session(3) == first
+    assert Outcome.TIMEOUT in first and Outcome.REPLIED in first
