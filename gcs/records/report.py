@@ -9,7 +9,8 @@ One run writes, in OUT: index.html (what ran, the Table II indices beside the pa
 aMussel and per aPad, every figure with how to read it, the event timeline), battery.png,
 battery_map.png, states.png, active.png (the paper's Fig. 9), uptime.png (eq. 3; never-collected
 and depleted aMussels marked), track.png (metres from the first aPad's home, stated on the axis),
-phases.png (each aPad's time per phase), partition.png (several aPads: who serves which
+phases.png (each aPad's time per phase), days.png (runs of two simulated days or more: uptime,
+alive, charges and energy per day), partition.png (several aPads: who serves which
 aMussels) and run.geojson (RFC 7946: area, tracks with timestamps, a point per aMussel).
 
 Several runs write each run's report in OUT/RUN_NAME/ and, in OUT, index.html with a row per run
@@ -28,13 +29,15 @@ from pathlib import Path
 
 from gcs.mission import flags
 from gcs.mission.scenario import ScenarioError
+from gcs.records import report_days as days
 from gcs.records import report_figures as figs
 from gcs.records import report_maps as maps
 from gcs.records.replay import ReplayError
 from gcs.records.report_compare import write_comparison
-from gcs.records.report_data import RunData, load_run
+from gcs.records.report_data import RunData
 from gcs.records.report_geojson import write_geojson
 from gcs.records.report_html import Figure, write_page
+from gcs.records.report_load import load_run
 from gcs.records.report_style import use_files_only
 from gcs.records.run_folder import RunFolder
 
@@ -67,6 +70,10 @@ FIGURES: tuple[tuple[str, Draw, str, str], ...] = (
      "Top: each aPad's mission minutes by its loop's phase (idle: waiting for enough charging candidates; "
      "the planning phases take no time). Below, for runs that recorded it: by what the aPad was doing: "
      "travelling (a Go To in progress), docking (a Dock or Undock in progress), holding (the rest)."),
+    ("days.png", days.days_png, "Per simulated day",
+     "The aMussels' days (86,400 s / theta of mission time each): above, the fleet's mean uptime that day (bars) "
+     "and the aMussels alive at its end (line); below, the aMussels each aPad charged that day (line) and the "
+     "energy it passed into them (dotted). Every day is in the table of the same name."),
     ("partition.png", maps.partition_png, "The fleet shared among the aPads",
      "Which aPad served which aMussels (k-means, balanced): the first sharing, then the last re-shares "
      "after an aPad was lost or came back. X marks each share's centre."),
@@ -89,7 +96,8 @@ def write_run_report(data: RunData, out: Path) -> list[Path]:
             written.append(path)
             shown.append(Figure(file, title, caption))
     written.append(write_geojson(data, out / "run.geojson"))
-    written.append(write_page(data, shown, out / "index.html"))
+    per_day = days.days_table(data) if len(days.day_rows(data)) > 1 else ""
+    written.append(write_page(data, shown, out / "index.html", days_html=per_day))
     return written
 
 

@@ -3,7 +3,9 @@ each aMussel's figures, each aPad's track, the area, the origin of the metre axe
 
 The history comes from the GCS log replayed through the console's model (`gcs.records.replay`),
 sampled once per second of mission time; the indices and the per-aMussel facts from result.json
-when the run wrote one (headless runs), else from the same replay.
+when the run wrote one (headless runs), else from the same replay. A run whose traces.npz holds
+what a report draws is read from it instead, at a cost that does not grow with the mission
+(`gcs.records.report_traces`; `gcs.records.report_load` chooses).
 """
 
 from __future__ import annotations
@@ -132,8 +134,10 @@ class RunData:
         return len(self.tracks) > 1
 
 
-def load_run(run: str | Path, scenario: str | Path | None = None) -> RunData:
-    """Everything a report shows of one run; `ReplayError` / `ScenarioError` on bad input."""
+def load_replayed_run(run: str | Path, scenario: str | Path | None = None) -> RunData:
+    """Everything a report shows of one run, from its GCS log replayed (every run folder has one; its
+    cost grows with the mission: `gcs.records.report_load` reads traces.npz instead where it can);
+    `ReplayError` / `ScenarioError` on bad input."""
     files = run_files(run)
     check_result(files.result, files.run.result)
     found = find_scenario(files, scenario)
@@ -150,7 +154,7 @@ def load_run(run: str | Path, scenario: str | Path | None = None) -> RunData:
     outline = last.outline_lat_deg, last.outline_lon_deg
     return RunData(
         folder=files.folder,
-        title=_title(files.result, strategy, files.folder),
+        title=run_title(files.result, strategy, files.folder),
         strategy=strategy,
         result=files.result,
         indices=indices(files.result, last),
@@ -171,7 +175,7 @@ def load_run(run: str | Path, scenario: str | Path | None = None) -> RunData:
         outline_lat_deg=outline[0],
         outline_lon_deg=outline[1],
         area=load_area(found.fleet.area).geometry if found is not None else None,  # the replay read it already
-        origin=_origin(found, tracks, outline),
+        origin=origin_of(found, tracks, outline),
         events=events,
     )
 
@@ -211,7 +215,7 @@ def indices(result: dict[str, object], last: Snapshot) -> Indices:
                    float(last.hist_active.mean()) if last.hist_active.size else 0.0, "replay")
 
 
-def _title(result: dict[str, object], strategy: str, folder: Path) -> str:
+def run_title(result: dict[str, object], strategy: str, folder: Path) -> str:
     if "scenario" in result and "strategy" in result:
         return f"{result['scenario']} {strategy} seed {result.get('seed', '?')}"
     return folder.resolve().name  # `runs/latest` is the folder it points at
@@ -241,7 +245,7 @@ def _track(frames: list[Snapshot], column: int) -> ApadTrack:
     return ApadTrack(sysid, t[ok], lat[ok], lon[ok], cost)
 
 
-def _origin(found: Scenario | None, tracks: tuple[ApadTrack, ...],
+def origin_of(found: Scenario | None, tracks: tuple[ApadTrack, ...],
             outline: tuple[NDArray[np.float64], NDArray[np.float64]]) -> Origin:
     """The first aPad's home (the scenario's), else where it was first heard, else the area's centre."""
     if found is not None:
@@ -285,7 +289,7 @@ def _mussels(frames: list[Snapshot], state: NDArray[np.uint8], result: dict[str,
     for c, mussel in enumerate(int(m) for m in last.mussel_ids):
         rec = from_result.get(mussel, {})
         heard = battery[:, c][np.isfinite(battery[:, c])]
-        state_s = _state_seconds(rec) or {s.name.lower(): float(np.count_nonzero(state[:, c] == s))
+        state_s = state_seconds(rec) or {s.name.lower(): float(np.count_nonzero(state[:, c] == s))
                                           for s in MusselState}
         dockings = as_list(rec.get("dockings"))
         out.append(MusselFacts(
@@ -296,9 +300,9 @@ def _mussels(frames: list[Snapshot], state: NDArray[np.uint8], result: dict[str,
             # The loop's list misses the operator's manual docks; the 1 Hz states would miss one shorter
             # than a sample: each is a lower bound, so the larger holds.
             dockings=max(len(dockings) if "dockings" in rec else docked_events.get(mussel, 0),
-                         _entries_into_docked(state[:, c])),
+                         entries_into_docked(state[:, c])),
             depleted_s=state_s.get(MusselState.DEPLETED.name.lower(), 0.0),
-            first_depleted_s=_first_depleted(rec, t_s, state[:, c]),
+            first_depleted_s=first_depleted(rec, t_s, state[:, c]),
             state_s=state_s,
             end_state=MusselState(int(last.state[c])).name.lower() if heard.size else "never heard",
             apad=int(owner[c]) if owner is not None else single,
@@ -308,13 +312,13 @@ def _mussels(frames: list[Snapshot], state: NDArray[np.uint8], result: dict[str,
     return tuple(out)
 
 
-def _entries_into_docked(state: NDArray[np.uint8]) -> int:
+def entries_into_docked(state: NDArray[np.uint8]) -> int:
     """How many times the sampled states enter DOCKED (a docking the telemetry saw)."""
     docked = state == MusselState.DOCKED
     return int(np.count_nonzero(docked[1:] & ~docked[:-1]) + (1 if docked.size and docked[0] else 0))
 
 
-def _first_depleted(rec: dict[str, Any], t_s: NDArray[np.float64], state: NDArray[np.uint8]) -> float | None:
+def first_depleted(rec: dict[str, Any], t_s: NDArray[np.float64], state: NDArray[np.uint8]) -> float | None:
     """result.json's `first_depleted_s` when the run wrote it (exact), else the first 1 Hz sample DEPLETED."""
     if "first_depleted_s" in rec:
         given = rec["first_depleted_s"]
@@ -323,7 +327,7 @@ def _first_depleted(rec: dict[str, Any], t_s: NDArray[np.float64], state: NDArra
     return float(t_s[flat[0]]) if flat.size else None
 
 
-def _state_seconds(rec: dict[str, Any]) -> dict[str, float] | None:
+def state_seconds(rec: dict[str, Any]) -> dict[str, float] | None:
     """Seconds per state as result.json gives them, when the run wrote them (exact, not 1 Hz samples)."""
     given = rec.get("state_s")
     if not isinstance(given, dict):

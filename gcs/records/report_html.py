@@ -87,11 +87,15 @@ def indices_rows(data: RunData, name: str = "this run") -> list[list[object]]:
 INDEX_HEADERS = ("run", "avg uptime %", "max uptime %", "min uptime %", "cost m", "active aMussels (mean)")
 
 
-def write_page(data: RunData, figures: Sequence[Figure], path: Path, geojson: str = "run.geojson") -> Path:
+def write_page(data: RunData, figures: Sequence[Figure], path: Path, geojson: str = "run.geojson",
+               days_html: str = "") -> Path:
+    """`days_html`: the per-day section's body (`gcs.records.report_days.days_table`), none if empty."""
     sections = [
         f"<h1>{html.escape(data.title)}</h1>",
         "<nav>" + " ".join(f'<a href="#{a}">{t}</a>' for a, t in (("summary", "Summary"), ("amussels", "aMussels"),
-                                                                   ("apads", "aPads"), ("figures", "Figures"),
+                                                                   ("apads", "aPads"),
+                                                                   *((("days", "Per day"),) if days_html else ()),
+                                                                   ("figures", "Figures"),
                                                                    ("events", "Event timeline"))) + "</nav>",
         _facts(data),
         '<h2 id="summary">Summary (the paper\'s Table II indices)</h2>',
@@ -101,6 +105,7 @@ def write_page(data: RunData, figures: Sequence[Figure], path: Path, geojson: st
               f"Indices from {data.indices.source}."),
         '<h2 id="amussels">aMussels</h2>', _mussel_table(data),
         '<h2 id="apads">aPads</h2>', _apad_table(data),
+        *(('<h2 id="days">Per simulated day</h2>', days_html) if days_html else ()),
         '<h2 id="figures">Figures</h2>', figures_html(figures),
         '<h2 id="events">Event timeline</h2>', _timeline(data.events),
         "<h2>Files</h2>",

@@ -22,7 +22,7 @@ from gcs.mission.headless import run_mission
 from gcs.mission.loop import LoopControl
 from gcs.mission.scenario import load_scenario
 from gcs.mission.world import MISSION_TELEMETRY_HZ, LinkOptions, lockstep_world
-from gcs.records.report_data import load_run
+from gcs.records.report_load import load_run
 
 pytestmark = pytest.mark.tui
 

@@ -38,13 +38,15 @@ def assert_same(a: Recorder, b: Recorder) -> None:
     sb, tb = b.battery_trace()
     np.testing.assert_array_equal(sa, sb)
     np.testing.assert_array_equal(ta, tb)
+    np.testing.assert_array_equal(a.state_trace()[1], b.state_trace()[1])
+    assert a.days == b.days
     assert a.summary() == b.summary()
     assert a.trace_stride == b.trace_stride
 
 
 def concat(pieces: list[RecorderRows]) -> RecorderRows:
     return RecorderRows(*(np.concatenate([getattr(p, f) for p in pieces])
-                          for f in ("time_us", "active_count", "trace_steps", "trace")))
+                          for f in ("time_us", "active_count", "trace_steps", "trace", "trace_state")))
 
 
 # --- the recorder's own split ------------------------------------------------------------------------
@@ -53,7 +55,7 @@ def concat(pieces: list[RecorderRows]) -> RecorderRows:
 @pytest.mark.parametrize("budget_rows", [10**6, 16, 5])
 def test_rows_taken_in_pieces_rebuild_the_same_recorder_and_it_goes_on_the_same(budget_rows: int) -> None:
     run = states(400)
-    rec = Recorder(np.arange(1, N + 1), max_trace_bytes=budget_rows * ROW_BYTES)
+    rec = Recorder(np.arange(1, N + 1), max_trace_bytes=budget_rows * ROW_BYTES, day_us=7_000_000)
     pieces, done = [], 0
     for k, s in enumerate(run[:300]):
         rec.record(s)
