@@ -91,6 +91,12 @@ class EnergyMeter:
             self.apad.energy.home_wh += wh
             self._set_volts(state.battery_v + wh / p.batt_capacity_wh * VOLT_RANGE)
 
+    def could_charge(self) -> bool:
+        """Whether the hull is where and as still as home charging needs (a rest there would charge)."""
+        state, p = self.apad.state, self.apad.params
+        return (p.home_charge_w > 0.0 and math.hypot(state.x_m, state.y_m) <= p.home_radius_m
+                and state.ground_speed_mps < HOME_STILL_MPS)
+
     def _latched(self) -> set[int]:
         return {s.mussel_id for s in self.apad.primitive.slots if s.mussel_id and s.latch == Latch.LATCHED}
 

@@ -5,7 +5,7 @@ Three changes are reported: `set_primitive`, `set_mode` and `set_armed` call the
 vehicle's core registered for them, in the order registered (the "primitive" event, the slot
 bookkeeping, the on-change telemetry: their order is what the .tlogs and event logs record). A
 part that changes the mode or the primitive calls these and knows nothing of who listens.
-Assigning a field changes it silently: the physics steps `state`, PARAM_SET swaps `params`,
+Assigning a field changes it silently: the physics steps `state` (or lets it rest, `rest`), PARAM_SET swaps `params`,
 DO_CHANGE_SPEED sets `speed_override_mps`, the energy part counts in `energy`, and a checkpoint's
 restore puts mode and arming back.
 """
@@ -17,6 +17,7 @@ from collections.abc import Callable
 from apad_sitl.energy_counters import EnergyCounters
 from apad_sitl.params import ApadParams
 from apad_sitl.primitives import PrimitiveState
+from apad_sitl.rest import Rest
 from apad_sitl.vehicle import VehicleState
 from apad_sitl.vocabulary import RoverMode
 
@@ -30,7 +31,9 @@ class ApadState:
 
     def __init__(self, params: ApadParams) -> None:
         self.params = params  # frozen; PARAM_SET swaps in a new set
-        self.state = VehicleState()  # the hull: position, velocity, heading, battery
+        self._state = VehicleState()  # the hull: position, velocity, heading, battery
+        # Not None: the hull rests at a fixed point and `state` is advanced in closed form (apad_sitl.rest).
+        self.rest: Rest | None = None
         self.mode: int = RoverMode.HOLD
         self.armed = True  # boots armed so a mission script needs no arming step
         self.speed_override_mps = 0.0  # DO_CHANGE_SPEED for later Go Tos; 0: SPEED_MAX
@@ -39,6 +42,18 @@ class ApadState:
         self._primitive_listeners: list[PrimitiveListener] = []
         self._mode_listeners: list[ModeListener] = []
         self._armed_listeners: list[ArmedListener] = []
+
+    @property
+    def state(self) -> VehicleState:
+        """The hull now; while it rests, the rest's closed form after the steps counted so far."""
+        rest = self.rest
+        return self._state if rest is None else rest.state()
+
+    @state.setter
+    def state(self, value: VehicleState) -> None:
+        """A new hull state (a physics step, a battery draw, a restore) ends any rest."""
+        self.rest = None
+        self._state = value
 
     @property
     def primitive(self) -> PrimitiveState:

@@ -60,6 +60,11 @@ def _snap(v_mps: float) -> float:
     return 0.0 if -1e-12 < v_mps < 1e-12 else v_mps
 
 
+def drain_v(params: ApadParams, thrust_mps2: float, dt_s: float) -> float:
+    """Volts the battery loses in `dt_s` seconds at this thrust: the hotel load plus the thrusters'."""
+    return (params.batt_drain_idle_vph + params.batt_drain_thrust_vph * thrust_mps2 * thrust_mps2) * dt_s / 3600.0
+
+
 def step(
     state: VehicleState,
     velocity_setpoint_mps: tuple[float, float],  # (east, north), water-relative
@@ -87,7 +92,7 @@ def step(
     thrust = math.hypot(dvx / dt_s + params.drag_per_s * wvx, dvy / dt_s + params.drag_per_s * wvy)
     if state.battery_v <= BATTERY_EMPTY_V:
         thrust = 0.0  # slowing down is drag's work, not the thrusters'
-    drain_v = (params.batt_drain_idle_vph + params.batt_drain_thrust_vph * thrust * thrust) * dt_s / 3600.0
+    drain = drain_v(params, thrust, dt_s)
 
     gvx, gvy = wvx + current_mps[0], wvy + current_mps[1]
 
@@ -109,6 +114,6 @@ def step(
         heading_rad=heading,
         yaw_rate_radps=yaw_rate,
         thrust_mps2=thrust,
-        battery_v=max(BATTERY_EMPTY_V, state.battery_v - drain_v),
+        battery_v=max(BATTERY_EMPTY_V, state.battery_v - drain),
         distance_travelled_m=state.distance_travelled_m + math.hypot(gvx, gvy) * dt_s,
     )

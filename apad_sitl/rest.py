@@ -1,0 +1,60 @@
+"""A hull at rest, advanced in closed form: a holding aPad costs nothing per physics step.
+
+An aPad holding at its hold point in slack water reaches a fixed point of `vehicle.step`: the
+velocities flush to 0 (`vehicle._snap`), the position and heading stop changing, and every further
+step only takes the same drain from the battery (the hotel load, plus the thrust of a setpoint too
+small to move the hull). Once one step leaves the hull as it found it but for the battery
+(`at_rest`), the vehicle's core stops stepping it and counts the steps instead (`Rest`): the state
+after n more steps is the origin with n drains taken, clamped at empty, in closed form. The result
+equals stepping to float rounding (a product for a sum of n terms; tests/unit/test_sitl_rest.py).
+
+Pure: no clock, no I/O; `dt_s` is the physics step the rest was found at.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from apad_sitl.params import ApadParams
+from apad_sitl.vehicle import BATTERY_EMPTY_V, VehicleState, drain_v
+
+
+def at_rest(before: VehicleState, after: VehicleState) -> bool:
+    """True if a step from `before` to `after` changed nothing but the battery: a fixed point."""
+    return (
+        after.x_m == before.x_m and after.y_m == before.y_m
+        and after.vx_mps == before.vx_mps == 0.0 and after.vy_mps == before.vy_mps == 0.0
+        and after.water_vx_mps == before.water_vx_mps and after.water_vy_mps == before.water_vy_mps
+        and after.heading_rad == before.heading_rad and after.yaw_rate_radps == before.yaw_rate_radps
+        and after.thrust_mps2 == before.thrust_mps2
+        and after.distance_travelled_m == before.distance_travelled_m
+    )
+
+
+class Rest:
+    """The hull at rest since `origin` (the state after the step that found the fixed point).
+
+    `steps` counts the physics steps of `dt_s` taken since; `state()` is the hull after them.
+    """
+
+    __slots__ = ("_cache", "_drain_v", "dt_s", "origin", "steps")
+
+    def __init__(self, origin: VehicleState, params: ApadParams, dt_s: float) -> None:
+        self.origin = origin
+        self.dt_s = dt_s
+        self.steps = 0
+        self._drain_v = drain_v(params, origin.thrust_mps2, dt_s)
+        self._cache = (0, origin)
+
+    def state(self) -> VehicleState:
+        """The hull after `steps` more steps: the battery drained `steps` times, clamped at empty."""
+        steps, cached = self._cache
+        if steps == self.steps:
+            return cached
+        o, n = self.origin, self.steps
+        battery_v = max(BATTERY_EMPTY_V, o.battery_v - n * self._drain_v)
+        # A flat battery stops the thrusters: from the step after it emptied, the thrust is 0 (as stepped).
+        thrust = 0.0 if o.battery_v - (n - 1) * self._drain_v <= BATTERY_EMPTY_V else o.thrust_mps2
+        state = replace(o, battery_v=battery_v, thrust_mps2=thrust)
+        self._cache = (n, state)
+        return state
