@@ -30,8 +30,21 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
 
+LONG_S = 6 * 3600.0  # a run longer than this is drawn in hours, not minutes (a week is 10,080 min)
+
+
+def time_unit(data: RunData) -> tuple[float, str]:
+    """(seconds per unit, its name) of the mission-time axes: minutes, or hours for a long run."""
+    return (3600.0, "h") if data.end_s > LONG_S else (60.0, "min")
+
+
 def minutes(data: RunData) -> np.ndarray:
-    return data.t_s / 60.0
+    """The history's times in the axes' unit (`time_unit`: minutes, or hours for a long run)."""
+    return data.t_s / time_unit(data)[0]
+
+
+def time_label(data: RunData, what: str = "mission time") -> str:
+    return f"{what} [{time_unit(data)[1]}]"
 
 
 def battery_png(data: RunData, path: Path) -> Path:
@@ -60,7 +73,7 @@ def battery_png(data: RunData, path: Path) -> Path:
         ax.plot(t, np.nanmin(np.where(heard[:, None], pct, 100.0), axis=1), color=palette()[2], lw=1, ls=":",
                 label="lowest")
         ax.legend(fontsize=8, loc="lower left")
-    ax.set(xlabel="mission time [min]", ylabel="battery [% of the 3.6-4.2 V range]", ylim=(0, 102),
+    ax.set(xlabel=time_label(data), ylabel="battery [% of the 3.6-4.2 V range]", ylim=(0, 102),
            title=f"aMussel battery levels — {data.title}")
     return save(fig, path)
 
@@ -68,11 +81,11 @@ def battery_png(data: RunData, path: Path) -> Path:
 def battery_map_png(data: RunData, path: Path) -> Path:
     """Battery as a colour map, a row per aMussel: readable for any fleet size."""
     fig, ax = figure(8.5, max(2.5, min(0.22 * data.ids.size + 1.2, 9.0)))
-    t_end = float(data.t_s[-1]) / 60.0 if data.t_s.size else 0.0
+    t_end = float(minutes(data)[-1]) if data.t_s.size else 0.0
     image = ax.imshow(100.0 * data.battery.T.astype(np.float64), aspect="auto", interpolation="nearest",
                       cmap=SEQUENTIAL_MAP, vmin=0, vmax=100, extent=(0, max(t_end, 1 / 60), data.ids.size - 0.5, -0.5))
     _mussel_ticks(ax, data)
-    ax.set(xlabel="mission time [min]", ylabel="aMussel id", title=f"Battery per aMussel over time — {data.title}")
+    ax.set(xlabel=time_label(data), ylabel="aMussel id", title=f"Battery per aMussel over time — {data.title}")
     fig.colorbar(image, ax=ax, label="battery [%]", pad=0.01)
     return save(fig, path)
 
@@ -89,18 +102,18 @@ def states_png(data: RunData, path: Path) -> Path:
     lut = [(1.0, 1.0, 1.0)] * 256  # unheard: white
     for state, colour in colours.items():
         lut[int(state)] = colour
-    t_end = float(data.t_s[-1]) / 60.0 if data.t_s.size else 0.0
+    t_end = float(minutes(data)[-1]) if data.t_s.size else 0.0
     line.imshow(data.state.T, aspect="auto", interpolation="nearest", cmap=ListedColormap(lut), vmin=0,
                 vmax=UNHEARD, extent=(0, max(t_end, 1 / 60), n - 0.5, -0.5))
-    line.set(xlabel="mission time [min]", ylabel="aMussel id", title="State over time")
+    line.set(xlabel=time_label(data), ylabel="aMussel id", title="State over time")
     _mussel_ticks(line, data)
     left = np.zeros(n)
     rows = np.arange(n)
     for state in STATE_ORDER:
-        width = np.array([m.state_s.get(state.name.lower(), 0.0) for m in data.mussels]) / 60.0
+        width = np.array([m.state_s.get(state.name.lower(), 0.0) for m in data.mussels]) / time_unit(data)[0]
         bars.barh(rows, width, left=left, color=colours[state], height=0.8)
         left += width
-    bars.set(xlabel="time in state [min]", title="Time per state")
+    bars.set(xlabel=time_label(data, "time in state"), title="Time per state")
     grid(bars)
     handles = [Patch(color=colours[s], label=s.name.lower()) for s in STATE_ORDER]
     fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), fontsize=8)
@@ -116,7 +129,7 @@ def active_png(data: RunData, path: Path) -> Path:
     if data.active.size:  # the index (result.json's where the run wrote one): the number the tables show
         mean = data.indices.active_avg
         ax.axhline(mean, color=c[6], ls="--", lw=1.2, label=f"mean {mean:.2f}")
-    ax.set(xlabel="mission time [min]", ylabel="active aMussels [count]", ylim=(0, data.ids.size + 0.5),
+    ax.set(xlabel=time_label(data), ylabel="active aMussels [count]", ylim=(0, data.ids.size + 0.5),
            title=f"Active aMussels over time — {data.title}")
     ax.yaxis.get_major_locator().set_params(integer=True)
     ax.legend(loc="lower left")

@@ -123,7 +123,8 @@ def _facts(data: RunData) -> str:
         ("run folder", str(data.folder.resolve())),
         ("scenario", str(r.get("scenario") or (data.scenario.name if data.scenario else "-"))),
         ("strategy", data.strategy), ("seed", str(r.get("seed", "-"))),
-        ("mission time", f"{data.end_s / 60:.1f} of {data.duration_s / 60:.1f} min"),
+        ("mission time", f"{data.end_s / 3600:.1f} of {data.duration_s / 3600:.1f} h" if data.duration_s > 6 * 3600
+         else f"{data.end_s / 60:.1f} of {data.duration_s / 60:.1f} min"),
         ("ended", data.end_reason),
         ("aMussels", str(data.ids.size)), ("aPads", ", ".join(str(t.system_id) for t in data.tracks)),
         ("maps' origin (0, 0)", data.origin.text()),
