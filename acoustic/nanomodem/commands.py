@@ -105,8 +105,9 @@ class CommandParser:
         return out
 
     def expire(self, t_s: float) -> list[Command | Rejected]:
-        """The command under way, rejected (`gap`) if its last byte came more than `gap_s` before `t_s`."""
-        if self._matcher.busy and t_s - self._last_s > self.gap_s:
+        """The command under way, rejected (`gap`) if its last byte came `gap_s` or more before `t_s`."""
+        deadline = self.deadline_s()
+        if deadline is not None and t_s >= deadline:  # the same sum as deadline_s: at it, never short of it
             return [Rejected(GAP, self._matcher.abandon())]
         return []
 

@@ -78,6 +78,7 @@ class _Cursor(Generic[T]):
             done = self.pos == tok.width
             if done:
                 if not tok.lo <= self.digits <= tok.hi:
+                    self.consumed += 1  # a number, out of range: further in than a wrong letter here
                     return tok.reason
                 self.fields[tok.name] = self.digits
                 self.digits = 0

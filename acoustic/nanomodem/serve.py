@@ -5,7 +5,8 @@ bytes read are handed to the core with their arrival time (time.monotonic from t
 is advanced to each instant it asks for (`next_due_s`: a command's 2 ms gap, a reception's end, a
 ping's 4 s) and what it writes goes out. The first line printed is the device's path alone; a host
 that does not read its replies does not stall the emulator: what cannot be written is dropped and
-counted (`host_not_reading`). SIGINT/SIGTERM end it, with the counts on stderr.
+counted (`host_not_reading`). SIGINT/SIGTERM end it (0), a device that vanishes too (1, one line);
+either way the counts go to stderr.
 """
 
 from __future__ import annotations
@@ -29,6 +30,10 @@ from acoustic.nanomodem.ports import BAUD
 MAX_IDLE_S = 0.5  # the loop wakes at least this often (to see a stop request)
 
 
+class Vanished(Exception):
+    """The served device has gone."""
+
+
 class _Line:
     """The served end: a pty's master, or a serial device."""
 
@@ -48,10 +53,16 @@ class _Line:
         os.set_blocking(self.fd, False)
 
     def read(self) -> bytes:
+        """What has arrived; `Vanished` if the device has gone (EIO: unplugged, its pty closed)."""
         try:
-            return os.read(self.fd, 4096)
+            data = os.read(self.fd, 4096)
         except BlockingIOError:
             return b""
+        except OSError as exc:
+            raise Vanished(f"{self.name}: gone ({exc.strerror})") from None
+        if not data:
+            raise Vanished(f"{self.name}: gone (end of file)")
+        return data
 
     def write(self, data: bytes) -> int:
         """Bytes written (a host that does not read fills the buffer: the rest is for the caller to count)."""
@@ -59,6 +70,8 @@ class _Line:
             return os.write(self.fd, data)
         except BlockingIOError:
             return 0
+        except OSError as exc:
+            raise Vanished(f"{self.name}: gone ({exc.strerror})") from None
 
     def close(self) -> None:
         if self._serial is not None:
@@ -70,7 +83,8 @@ class _Line:
 
 def serve(core: ModemEmulator, device: str | None, out: TextIO, describe: str = "",
           monotonic: Callable[[], float] = time.monotonic) -> int:
-    """Serve until SIGINT/SIGTERM; 0. The first line on `out` is the device's path."""
+    """Serve until SIGINT/SIGTERM (0) or the device vanishes (1, one line); the first line on `out` is
+    the device's path."""
     line = _Line(device)
     stop: list[int] = []
 
@@ -83,6 +97,7 @@ def serve(core: ModemEmulator, device: str | None, out: TextIO, describe: str = 
     if describe:
         print(describe, file=out, flush=True)
     t0 = monotonic()
+    code = 0
     try:
         while not stop:
             now = monotonic() - t0
@@ -103,8 +118,11 @@ def serve(core: ModemEmulator, device: str | None, out: TextIO, describe: str = 
                 sent = line.write(written)
                 if sent < len(written):
                     core.counts["host_not_reading"] = core.counts.get("host_not_reading", 0) + len(written) - sent
+    except Vanished as exc:
+        print(f"vil modem: {exc}", file=sys.stderr, flush=True)
+        code = 1
     finally:
         line.close()
     counts = ", ".join(f"{k} {v}" for k, v in sorted({**core.counts, **core.medium.counts}.items()) if v)
     print(f"vil modem: stopped; {counts or 'nothing happened'}", file=sys.stderr, flush=True)
-    return 0
+    return code

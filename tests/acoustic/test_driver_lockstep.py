@@ -92,3 +92,13 @@ def test_a_seed_repeats_the_water_exactly() -> None:
     first = session(3)
     assert session(3) == first
     assert Outcome.TIMEOUT in first and Outcome.REPLIED in first
+
+
+def test_the_emulator_runs_to_any_instant_through_a_slow_command_and_a_timeout() -> None:
+    core = ModemEmulator(AcousticParams(), (NEAR, FAR), np.random.default_rng(1))
+    core.from_host(b"$P0", 1.0)
+    due = core.next_due_s()
+    assert due == pytest.approx(1.002)
+    assert core.advance(due) == b"E\r\n" and core.next_due_s() is None  # at its deadline exactly
+    core.from_host(b"$P009", 2.0)
+    assert core.advance(5.999) == b"$P009\r\n" and core.advance(6.0) == b"#TO\r\n"
