@@ -7,12 +7,16 @@ import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
+from typing import TYPE_CHECKING
 
 from gcs.mission.energy_budget import EnergyBudget
 from gcs.mission.scenario import MissionConfig
 from gcs.records.events import EventLog
 from missiontime import Clock
 from mussel_sim.battery import DEFAULT_CHARGE, DEFAULT_DISCHARGE
+
+if TYPE_CHECKING:
+    from gcs.mission.duty import Duty
 
 
 class Phase(StrEnum):
@@ -85,6 +89,9 @@ class LoopSettings:
     mussel_surfacing_s: float = 20.0  # how long an aMussel takes to rise once called up (the fleet's)
     mussel_discharge: str = DEFAULT_DISCHARGE  # the fleet's battery profiles (strategies plan with them)
     mussel_charge: str = DEFAULT_CHARGE
+    # Each simulated aMussel's scenario profile (gcs.mission.duty): its own drain and wake schedule; an
+    # aMussel not in it (a real one) is planned on mussel_discharge, always on.
+    duties: dict[int, Duty] = field(default_factory=dict)
     # Bounds on retrying (lossy links, a refusing aPad): at the bound the loop logs `gave_up`,
     # leaves that aMussel or step for now, and goes on.
     goto_attempts: int = 8  # Go To commands per target (after failsafe preemptions or trip timeouts)

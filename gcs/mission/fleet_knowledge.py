@@ -15,6 +15,7 @@ from apad_sitl.vocabulary import Latch
 from gcs.api import ApadApi, Location
 from gcs.link.telemetry import SlotView
 from gcs.mission.control import LoopLog, LoopSettings
+from gcs.mission.duty import Duty
 from gcs.mission.real_fleet import RealFleet
 from gcs.mission.strategies import Outlook, traits
 from gcs.mission.swarm import FleetShares, orphans
@@ -65,6 +66,8 @@ class FleetKnowledge:
         self.shares = shares
         self.real = real
         self.unreachable: set[int] = set()
+        self.duties: dict[int, Duty] = dict(settings.duties)  # each aMussel's, and the sleep orders sent since
+        self._default_duty = Duty(discharge_profile(settings.mussel_discharge).rate_per_min)
         self._log = log
 
     # --- the charging pool ----------------------------------------------------------------------
@@ -139,7 +142,30 @@ class FleetKnowledge:
         if not traits(strategy).release_early:
             return False
         view = self.outlook()
-        return battery >= view.drain_per_s * (view.time_left_s + RELEASE_MARGIN_S)
+        return battery >= self.drain_per_s(mussel_id) * (view.time_left_s + RELEASE_MARGIN_S)
+
+    # --- each aMussel's duty: its drain and wake schedule --------------------------------------
+
+    def duty(self, mussel_id: int) -> Duty:
+        """What it does deployed, as known: its scenario profile or the last sleep order sent to it."""
+        return self.duties.get(mussel_id, self._default_duty)
+
+    def ordered(self, mussel_id: int, duty: Duty) -> None:
+        """A sleep order was sent: plan with it from now on."""
+        self.duties[mussel_id] = duty
+
+    def drain_per_s(self, mussel_id: int) -> float:
+        return self.duty(mussel_id).drain_per_s(self.settings.mission.theta)
+
+    def wake_in_s(self, mussel_id: int) -> float:
+        """Mission seconds until it next hears a call-up (0: awake, or always on)."""
+        return self.duty(mussel_id).wake_in_s(mussel_id, self.clock.time(), self.settings.mission.theta)
+
+    def call_up_wait_s(self, mussel_id: int) -> float:
+        """How long a call-up may take to float it: the loop's bound, or its longest wake gap and twice
+        its rise (a sleep order given during the mission may sleep longer than the scenario's profiles)."""
+        gap_s = self.duty(mussel_id).longest_wait_s(self.settings.mission.theta)
+        return max(self.settings.surfacing_timeout_s, gap_s + 2 * self.settings.mussel_surfacing_s)
 
     # --- slots and aMussels ---------------------------------------------------------------------
 

@@ -20,6 +20,7 @@ from gcs.api import Location
 from gcs.mission.control import Phase
 from gcs.mission.crew import Crew
 from gcs.mission.fleet_knowledge import FleetKnowledge
+from gcs.mission.sleep_orders import GOING_HOME, reschedule
 from gcs.mission.strategies import route_length_m
 from mussel_sim.geo import distance_m
 
@@ -78,6 +79,7 @@ def go_home_and_charge(crew: Crew, route: list[int]) -> None:
     assert budget is not None and home is not None
     volts = knows.api.battery_v(knows.apad_id)
     act.set_phase(Phase.HOME_CHARGE)
+    reschedule(crew, GOING_HOME, why="home charge")  # hours away: a strategy that orders sleep does so now
     crew.log("home_charge", battery_v=round(volts or 0.0, 3), trip_wh=round(trip_need_wh(knows, route), 1),
              route=route)
     act.go_to(Location(*home))

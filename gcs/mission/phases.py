@@ -101,6 +101,8 @@ def collection_input(crew: Crew, ids: list[int], capacity: int) -> PlanInput:
         lon_deg=np.array([m.location.lon for m in views]),
         battery_frac=np.array([knows.battery(m) for m in ids]),
         outlook=knows.outlook(),
+        drain_per_s=np.array([knows.drain_per_s(m) for m in ids], np.float64),
+        wake_in_s=np.array([knows.wake_in_s(m) for m in ids], np.float64),
     )
 
 
@@ -137,7 +139,7 @@ def collect(crew: Crew, route: list[int]) -> None:
                      why=RESHARED if not knows.serves(mussel_id) else "no aPad within acoustic range")
             continue
         if not act.wait_until(functools.partial(_floating_or_depleted, knows, mussel_id),
-                              crew.settings.surfacing_timeout_s, interruptible=False):
+                              knows.call_up_wait_s(mussel_id), interruptible=False):
             if knows.taken_over(mussel_id):
                 continue
             crew.log("skip", mussel=mussel_id, why="did not surface", state=knows.state(mussel_id).name)

@@ -22,6 +22,7 @@ from gcs.mission.phases import (
     plan_redeployment,
     redeploy,
 )
+from gcs.mission.sleep_orders import reschedule
 from gcs.mission.strategies import traits
 
 Turn = Callable[[Crew], None]
@@ -35,6 +36,7 @@ def rounds(crew: Crew) -> None:
     Before each, with nothing on board: home to charge if the battery would not cover the trip."""
     if recharged(crew):
         return
+    reschedule(crew)  # a strategy that orders sleep schedules: before the round
     idle_wait(crew)
     if recharged(crew):
         return

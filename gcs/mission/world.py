@@ -19,6 +19,7 @@ from gcs.api import ApadApi, Location
 from gcs.link.faultproxy import FaultProxy, LinkFaults
 from gcs.link.router import Link
 from gcs.mission.control import LoopControl, LoopSettings, LoopStatus
+from gcs.mission.duty import scenario_duties
 from gcs.mission.energy_budget import EnergyBudget
 from gcs.mission.loop import EnergySharingLoop
 from gcs.mission.real_fleet import RealFleet
@@ -146,6 +147,7 @@ class World:
             surfacing_timeout_s=call_up_wait_s(s, LoopSettings.surfacing_timeout_s),  # sleepers wake first
             mussel_discharge=planning_profile(s).discharge.name,  # fleet.profile's battery models
             mussel_charge=planning_profile(s).charge.name,
+            duties=scenario_duties(s, sorted(self.homes)),  # each aMussel's own profile
             energy=EnergyBudget.of(apad_params(s, a), a.speed_mps),
             home=(a.home_lat_deg, a.home_lon_deg),
         )

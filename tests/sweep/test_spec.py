@@ -128,3 +128,43 @@ def test_the_shipped_strategies_sweep_is_valid() -> None:
     assert {c.strategy for c in cells} == set(shipped_names())
     assert {c.seed for c in cells} == set(range(1, 21))
     assert len(cells) == 2 * len(shipped_names()) * 20 >= 160
+
+
+def test_grid_blocks_sweep_counts_per_profile_and_the_capacity_spec_parses(tmp_path: Path) -> None:
+    """[[grid]] blocks: each a grid of its own, their points one after the other (issue 20's capacity study)."""
+    spec = load_spec(spec_file(tmp_path, """
+[sweep]
+scenarios = ["pool12"]
+strategies = ["cautious"]
+seeds = [1]
+[[grid]]
+fleet.profile = ["always_on"]
+fleet.count = [4, 8]
+[[grid]]
+fleet.count = [48]
+fleet.profile = ["hourly_wake"]
+"""))
+    assert spec.swept == ("fleet.profile", "fleet.count")
+    assert spec.points == ({"fleet.profile": "always_on", "fleet.count": 4},
+                           {"fleet.profile": "always_on", "fleet.count": 8},
+                           {"fleet.profile": "hourly_wake", "fleet.count": 48})
+    cells = make_cells(spec)
+    assert [(c.scenario.fleet.profile, c.scenario.fleet.count) for c in cells] == [
+        ("always_on", 4), ("always_on", 8), ("hourly_wake", 48)]
+    capacity = load_spec(MISSIONS / "sweeps" / "capacity.toml")
+    shipped = make_cells(capacity)
+    assert {c.scenario.mission.duration_s for c in shipped} == {86400.0}
+    assert {c.scenario.fleet.profile for c in shipped} == {"always_on", "hourly_wake"}
+    assert all(len(c.scenario.apads) == 1 for c in shipped)
+
+
+def test_grid_blocks_must_sweep_the_same_fields(tmp_path: Path) -> None:
+    with pytest.raises(SpecError, match="every \\[\\[grid\\]\\] block sweeps the same fields"):
+        load_spec(spec_file(tmp_path, """
+[sweep]
+scenarios = ["pool12"]
+[[grid]]
+fleet.count = [4]
+[[grid]]
+fleet.profile = ["hourly_wake"]
+"""))

@@ -6,6 +6,7 @@ docs/strategies.md says what each does and when it wins, and how to write one of
 from gcs.mission.strategies import (  # noqa: F401  (each module registers its strategy)
     cautious,
     greedy,
+    keep_alive,
     least_slack,
     lookahead,
     none,
@@ -16,6 +17,7 @@ from gcs.mission.strategies import (  # noqa: F401  (each module registers its s
 from gcs.mission.strategies.base import (
     COLLECT,
     REDEPLOY,
+    SCHEDULERS,
     STRATEGIES,
     CollectStrategy,
     CostWeights,
@@ -23,6 +25,8 @@ from gcs.mission.strategies.base import (
     Plan,
     PlanInput,
     RedeployStrategy,
+    ScheduleInput,
+    Scheduler,
     Strategy,
     StrategyError,
     Traits,
@@ -43,7 +47,8 @@ from gcs.mission.strategies.plugins import (
 )
 
 __all__ = [
-    "COLLECT", "ENTRY_POINT_GROUP", "REDEPLOY", "STRATEGIES", "CollectStrategy", "CostWeights", "Outlook", "Plan",
-    "PlanInput", "RedeployStrategy", "Strategy", "StrategyError", "Traits", "check_plan", "fingerprint", "is_plugin",
+    "COLLECT", "ENTRY_POINT_GROUP", "REDEPLOY", "SCHEDULERS", "STRATEGIES", "CollectStrategy", "CostWeights", "Outlook",
+    "Plan", "PlanInput", "RedeployStrategy", "ScheduleInput", "Scheduler", "Strategy", "StrategyError", "Traits",
+    "check_plan", "fingerprint", "is_plugin",
     "load_strategy", "plan", "route_length_m", "shipped_names", "source_of", "strategy", "strategy_names", "traits",
 ]

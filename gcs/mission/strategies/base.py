@@ -71,6 +71,23 @@ class PlanInput:
     lon_deg: NDArray[np.float64]
     battery_frac: NDArray[np.float64]
     outlook: Outlook = field(default_factory=Outlook)
+    # Each candidate's own behaviour, as the GCS knows it (its profile, or the sleep order it was given):
+    # battery fraction used per mission second (None: `outlook.drain_per_s` for every one), and mission
+    # seconds until it can take a call-up (asleep, a call-up is held to its next wake; None: at once).
+    drain_per_s: NDArray[np.float64] | None = None
+    wake_in_s: NDArray[np.float64] | None = None
+
+    def drains(self) -> NDArray[np.float64]:
+        """Each candidate's drain, battery fraction per mission second. Shape (n,)."""
+        if self.drain_per_s is None:
+            return np.full(len(self.mussel_ids), self.outlook.drain_per_s)
+        return np.asarray(self.drain_per_s, np.float64)
+
+    def wake_waits(self) -> NDArray[np.float64]:
+        """Mission seconds until each candidate hears a call-up (0: awake now). Shape (n,)."""
+        if self.wake_in_s is None:
+            return np.zeros(len(self.mussel_ids))
+        return np.asarray(self.wake_in_s, np.float64)
 
 
 @dataclass(frozen=True)
@@ -109,6 +126,7 @@ class CollectStrategy(StrEnum):
     ROUTE_OPTIMAL = "route_optimal"
     ROLLING = "rolling"
     LOOKAHEAD = "lookahead"
+    KEEP_ALIVE = "keep_alive"
 
 
 class RedeployStrategy(StrEnum):
@@ -146,6 +164,38 @@ def strategy(name: str, traits: Traits = Traits()) -> Callable[[Strategy], Strat
 
 def traits(name: str) -> Traits:
     return TRAITS.get(name, Traits())
+
+
+@dataclass(frozen=True)
+class ScheduleInput:
+    """What a sleep-schedule step sees: the aMussels of this aPad's share on the seabed. Arrays (n,)."""
+
+    mussel_ids: NDArray[np.int64]
+    lat_deg: NDArray[np.float64]
+    lon_deg: NDArray[np.float64]
+    battery_frac: NDArray[np.float64]
+    drain_per_s: NDArray[np.float64]  # as it works now (asleep on an order: the order's duty)
+    awake_drain_per_s: NDArray[np.float64]  # always on (what waking it would make it use)
+    asleep: NDArray[np.bool_]  # on a sleep order now
+    orderable: NDArray[np.bool_]  # always on by its profile: the GCS may order it to sleep and back
+    slots: int  # the aPad's
+    start_s: float  # mission seconds before the aPad can start its next collection (inf: gone home)
+    outlook: Outlook = field(default_factory=Outlook)
+
+
+# id -> True: wake it (back to always on), False: put it to sleep; only the aMussels to change.
+Scheduler = Callable[[ScheduleInput], dict[int, bool]]
+SCHEDULERS: dict[str, Scheduler] = {}  # a strategy that orders sleep schedules: its scheduler, by name
+
+
+def sleep_scheduler(name: str) -> Callable[[Scheduler], Scheduler]:
+    """Register strategy `name`'s sleep scheduler: the loop asks it before each round
+    (`gcs.mission.sleep_orders`) and sends what it decides as AMUSSEL_SLEEP_ORDER."""
+    def register(fn: Scheduler) -> Scheduler:
+        SCHEDULERS[name] = fn
+        return fn
+
+    return register
 
 
 class StrategyError(ValueError):

@@ -16,11 +16,24 @@ METRE_S = 1.0  # a metre of travel weighs as much as a second of aMussel time lo
 UNDOCK_S = 10.0  # at each stop of the redeployment besides travel
 
 
-def _depleted_s(o: Outlook, reached_s: NDArray[np.float64], ttd_s: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Seconds depleted of aMussels reached at `reached_s` that deplete at `ttd_s`: one reached too late
-    cannot surface any more, so it is down from its depletion to the end (or for a battery's life)."""
-    end_s = min(o.time_left_s, 1.0 / o.drain_per_s)
+def _depleted_s(o: Outlook, reached_s: NDArray[np.float64], ttd_s: NDArray[np.float64],
+                drain_per_s: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Seconds depleted of aMussels reached at `reached_s` that deplete at `ttd_s` (draining `drain_per_s`):
+    one reached too late cannot surface any more, so it is down from its depletion to the end (or for a
+    battery's life)."""
+    end_s = np.minimum(o.time_left_s, 1.0 / drain_per_s)
     return np.where(reached_s > ttd_s, np.maximum(end_s - ttd_s, 0.0), 0.0)
+
+
+def dock_times_s(o: Outlook, legs_m: NDArray[np.float64], wake_s: NDArray[np.float64]) -> NDArray[np.float64]:
+    """When each stop of each load is docked: after the leg there, or once that aMussel wakes to hear the
+    call-up if that is later (a sleeper holds the route), then the stop. Shapes (n, k)."""
+    dock_s = np.empty_like(legs_m)
+    t = np.zeros(legs_m.shape[0])
+    for j in range(legs_m.shape[1]):
+        t = np.maximum(t + legs_m[:, j] / o.speed_mps, wake_s[:, j]) + o.stop_s
+        dock_s[:, j] = t
+    return dock_s
 
 
 def _with_apad(inp: PlanInput, apad: tuple[float, float], pick: NDArray[np.intp]) -> NDArray[np.float64]:
@@ -37,12 +50,13 @@ def _score(inp: PlanInput, loads: NDArray[np.intp], metres: NDArray[np.float64],
     n, k = loads.shape
     stops = np.concatenate((np.zeros((n, 1), np.intp), loads + 1), axis=1)
     legs_m = metres[stops[:, :-1], stops[:, 1:]]  # (n, k)
-    dock_s = np.cumsum(legs_m / o.speed_mps + o.stop_s, axis=1)
+    drains = inp.drains()
+    dock_s = dock_times_s(o, legs_m, inp.wake_waits()[short[loads]])
     ttd = time_to_depletion_s(inp)
-    member_ttd = ttd[short[loads]]
-    lost = _depleted_s(o, dock_s, member_ttd).sum(axis=1)
-    at_dock = np.maximum(member_ttd - dock_s, 0.0) * o.drain_per_s
-    target = np.minimum(o.charged_frac, o.drain_per_s * (o.time_left_s - dock_s) + 0.05)
+    member_ttd, member_drain = ttd[short[loads]], drains[short[loads]]
+    lost = _depleted_s(o, dock_s, member_ttd, member_drain).sum(axis=1)
+    at_dock = np.maximum(member_ttd - dock_s, 0.0) * member_drain
+    target = np.minimum(o.charged_frac, member_drain * (o.time_left_s - dock_s) + 0.05)
     ready_s = dock_s + o.charge_time_s(at_dock, np.maximum(target, at_dock))
     release_s = ready_s.max(axis=1)
     waited = (release_s[:, None] - ready_s).sum(axis=1)
@@ -51,18 +65,20 @@ def _score(inp: PlanInput, loads: NDArray[np.intp], metres: NDArray[np.float64],
     # The next trip: the rest of the needy, least time to depletion first, one leg each.
     member = np.zeros((n, len(inp.mussel_ids)), bool)
     np.put_along_axis(member, short[loads], True, axis=1)
-    rest = np.sort(np.where(member[:, needy], np.inf, ttd[needy]), axis=1)  # (n, m)
+    order = np.argsort(np.where(member[:, needy], np.inf, ttd[needy]), axis=1, kind="stable")  # (n, m)
+    rest = np.take_along_axis(np.where(member[:, needy], np.inf, ttd[needy]), order, axis=1)
+    rest_drain = drains[needy][order]
     leg_s = np.median(metres[1:, 1:]) / o.speed_mps + o.stop_s if len(short) > 1 else o.stop_s
     rank = np.arange(rest.shape[1])
     pickup_s = next_trip_s[:, None] + (np.minimum(rank, capacity - 1) + 1) * leg_s
     second = rest[:, :capacity]
-    charge_s = o.charge_time_s(np.where(np.isfinite(second), o.drain_per_s * np.maximum(second - next_trip_s[:, None],
-                                                                                         0.0), 1.0)).max(axis=1)
+    at_second = rest_drain[:, :capacity] * np.maximum(second - next_trip_s[:, None], 0.0)
+    charge_s = o.charge_time_s(np.where(np.isfinite(second), at_second, 1.0)).max(axis=1)
     # Beyond the next trip, a coarse queue: trips of `capacity` at the next one's period.
     period_s = charge_s + 2 * capacity * leg_s
     pickup_s = pickup_s + (rank // capacity)[None, :] * period_s[:, None]
     due = np.isfinite(rest)
-    lost_rest = np.where(due, _depleted_s(o, pickup_s, np.where(due, rest, 0.0)), 0.0)
+    lost_rest = np.where(due, _depleted_s(o, pickup_s, np.where(due, rest, 0.0), rest_drain), 0.0)
     return lost + waited + lost_rest.sum(axis=1) + METRE_S * trip_m
 
 

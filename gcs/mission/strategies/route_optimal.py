@@ -18,7 +18,7 @@ PRIZE_M = 200.0
 def lost_share(inp: PlanInput) -> NDArray[np.float64]:
     """The share of the time left (or of a full battery's life, with no end in sight) each candidate
     would spend depleted if never charged. Shape (n,), in [0, 1]."""
-    horizon = min(inp.outlook.time_left_s, 1.0 / inp.outlook.drain_per_s)
+    horizon = np.minimum(inp.outlook.time_left_s, 1.0 / inp.drains())
     return np.clip((horizon - time_to_depletion_s(inp)) / horizon, 0.0, 1.0)
 
 

@@ -10,8 +10,9 @@ from mussel_sim.geo import distance_m
 
 
 def time_to_depletion_s(inp: PlanInput) -> NDArray[np.float64]:
-    """Mission seconds until each candidate's battery is empty, working as now. Shape (n,)."""
-    return inp.battery_frac / inp.outlook.drain_per_s
+    """Mission seconds until each candidate's battery is empty, working as now (each at its own drain:
+    a sleeper lasts longer). Shape (n,)."""
+    return inp.battery_frac / inp.drains()
 
 
 def needs_charge(inp: PlanInput) -> NDArray[np.bool_]:
@@ -21,10 +22,11 @@ def needs_charge(inp: PlanInput) -> NDArray[np.bool_]:
 
 
 def travel_s(inp: PlanInput, lat: float, lon: float) -> NDArray[np.float64]:
-    """Mission seconds the aPad takes from (lat, lon) to each candidate, stopping there. Shape (n,)."""
+    """Mission seconds until the aPad, setting off from (lat, lon) now, has each candidate docked: the
+    trip there, or until it wakes to hear the call-up if that is later, and the stop. Shape (n,)."""
     n = len(inp.mussel_ids)
     metres = distance_m(np.full(n, lat), np.full(n, lon), inp.lat_deg, inp.lon_deg)
-    return metres / inp.outlook.speed_mps + inp.outlook.stop_s
+    return np.maximum(metres / inp.outlook.speed_mps, inp.wake_waits()) + inp.outlook.stop_s
 
 
 def slack_s(inp: PlanInput, lat: float, lon: float) -> NDArray[np.float64]:
