@@ -46,7 +46,7 @@ def check_shipped_spec(root: Path) -> int:
 
 
 def run_strategies_sweep(w: Work) -> None:
-    """The shipped spec's sweep leaves one row per mission (320: every strategy, pool12 and bay24, seeds
+    """The shipped spec's sweep leaves one row per mission (360: every strategy, pool12 and bay24, seeds
     1-20), and `vil sweep report DIR` on it writes the tables and plots again."""
     import pandas as pd
 

@@ -29,6 +29,6 @@ def test_the_example_as_written(run: Callable[[Work], None], check: Check) -> No
     check(run, True)
 
 
-def test_the_shipped_strategies_spec_is_the_320_missions_the_docs_name() -> None:
+def test_the_shipped_strategies_spec_is_the_360_missions_the_docs_name() -> None:
     """Every registered strategy x pool12, bay24 x seeds 1-20 (what the sweeps themselves run under -m long)."""
-    assert check_shipped_spec(ROOT) == 320
+    assert check_shipped_spec(ROOT) == 360

@@ -28,6 +28,8 @@ def _depleted_s(o: Outlook, reached_s: NDArray[np.float64], ttd_s: NDArray[np.fl
 def dock_times_s(o: Outlook, legs_m: NDArray[np.float64], wake_s: NDArray[np.float64]) -> NDArray[np.float64]:
     """When each stop of each load is docked: after the leg there, or once that aMussel wakes to hear the
     call-up if that is later (a sleeper holds the route), then the stop. Shapes (n, k)."""
+    if not np.any(wake_s > 0):  # nobody asleep: the sums as they always were (the same plans, bit for bit)
+        return np.cumsum(legs_m / o.speed_mps + o.stop_s, axis=1)
     dock_s = np.empty_like(legs_m)
     t = np.zeros(legs_m.shape[0])
     for j in range(legs_m.shape[1]):

@@ -1,0 +1,154 @@
+"""The capacity study's table and figure (docs/capacity.md): how many aMussels one aPad keeps alive.
+
+    python -m gcs.sweep.capacity sweeps/capacity --figure docs/capacity.png
+
+Reads the sweep's cell files (DIR/cells/*.json: a sweep still running, or resumed, reports what it has),
+one row per mission: its profile and fleet size, strategy and seed; whether every aMussel lived through
+it (none depleted at any time), how many depleted, uptime, samples taken against scheduled, the aPad's
+dockings (one charge each) and rounds per day of mission time, and its home charges. The table gives,
+per profile and strategy, the largest fleet swept that every seed kept alive, and what the aPad did for it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from gcs.sweep.store import CELLS
+
+DAY_S = 86400.0
+
+
+def mission_row(record: dict[str, Any]) -> dict[str, Any]:
+    """One mission of the sweep, from its cell record."""
+    result, values = record["result"], record["values"]
+    mussels = result["mussels"]
+    days = result["duration_s"] / DAY_S
+    apads = result.get("apads") or [{}]
+    dockings = sum(len(m["dockings"]) for m in mussels)
+    return {
+        "profile": values.get("fleet.profile", "always_on"),
+        "count": int(values.get("fleet.count", len(mussels))),
+        "strategy": record["strategy"],
+        "seed": record["seed"],
+        "alive": all(m["state_s"].get("depleted", 0.0) == 0.0 for m in mussels),
+        "depleted": sum(1 for m in mussels if m["state_s"].get("depleted", 0.0) > 0.0),
+        "uptime_avg": result["uptime"]["avg"],
+        "uptime_min": result["uptime"]["min"],
+        "samples_taken": sum(m.get("samples_taken", 0) for m in mussels),
+        "samples_scheduled": sum(m.get("samples_scheduled", 0) for m in mussels),
+        "dockings_per_day": dockings / days,
+        "rounds_per_day": result["cycles"] / days,
+        "home_charges": sum(a.get("home_charges", 0) for a in apads),
+        "days": days,
+        "end": result["end_reason"],
+    }
+
+
+def read_missions(folder: Path) -> pd.DataFrame:
+    """Every finished mission in `folder`/cells, sorted by profile, strategy, count and seed."""
+    paths = sorted((folder / CELLS).glob("*.json"))
+    if not paths:
+        raise FileNotFoundError(f"{folder}: no finished missions in {folder / CELLS} (run the sweep first)")
+    rows = pd.DataFrame([mission_row(json.loads(p.read_text(encoding="utf-8"))) for p in paths])
+    return rows.sort_values(["profile", "strategy", "count", "seed"], ignore_index=True)
+
+
+def capacity_table(rows: pd.DataFrame) -> pd.DataFrame:
+    """Per profile and strategy: the largest fleet swept that every seed kept alive ("< N": not even the
+    smallest, N), the sizes swept, and at that size (else the smallest) the aPad's dockings and rounds per
+    day, uptime and samples taken of scheduled."""
+    out = []
+    for (profile, strategy), group in rows.groupby(["profile", "strategy"], sort=True):
+        by_count = group.groupby("count").agg(
+            alive=("alive", "all"), depleted=("depleted", "mean"), uptime_avg=("uptime_avg", "mean"),
+            uptime_min=("uptime_min", "mean"), dockings_per_day=("dockings_per_day", "mean"),
+            rounds_per_day=("rounds_per_day", "mean"), home_charges=("home_charges", "mean"),
+            taken=("samples_taken", "sum"), scheduled=("samples_scheduled", "sum"), seeds=("seed", "nunique"))
+        kept = by_count.index[by_count["alive"]]
+        at = int(kept.max()) if len(kept) else int(by_count.index.min())
+        r = by_count.loc[at]
+        out.append({
+            "profile": profile, "strategy": strategy,
+            "largest kept alive": str(at) if len(kept) else f"< {at}",
+            "sizes swept": " ".join(str(int(c)) for c in by_count.index),
+            "dockings / day": round(float(r["dockings_per_day"]), 1),
+            "rounds / day": round(float(r["rounds_per_day"]), 1),
+            "home charges": round(float(r["home_charges"]), 1),
+            "uptime avg %": round(float(r["uptime_avg"]), 1), "uptime min %": round(float(r["uptime_min"]), 1),
+            "samples taken %": round(100.0 * float(r["taken"]) / float(r["scheduled"]), 1) if r["scheduled"] else None,
+            "seeds": int(r["seeds"]),
+        })
+    return pd.DataFrame(out)
+
+
+def figure(rows: pd.DataFrame, path: Path) -> None:
+    """Per profile (columns): aMussels depleted and the aPad's dockings per day against the fleet's size,
+    a line per strategy (the mean over seeds)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    profiles = sorted(rows["profile"].unique())
+    fig, axes = plt.subplots(2, len(profiles), figsize=(5.2 * len(profiles), 6.4), squeeze=False, sharex="col")
+    for col, profile in enumerate(profiles):
+        mine = rows[rows["profile"] == profile]
+        for strategy, group in mine.groupby("strategy", sort=True):
+            means = group.groupby("count")[["depleted", "dockings_per_day"]].mean()
+            axes[0][col].plot(means.index, means["depleted"], marker="o", label=strategy)
+            axes[1][col].plot(means.index, means["dockings_per_day"], marker="o", label=strategy)
+        counts = sorted(mine["count"].unique())
+        axes[0][col].plot(counts, counts, color="0.7", linestyle=":", label="the whole fleet")
+        axes[0][col].set_title(f"{profile}: one aPad, {mine['days'].max():.0f} day(s) of mission time")
+        axes[0][col].set_ylabel("aMussels depleted")
+        axes[1][col].set_ylabel("dockings (charges) per day")
+        axes[1][col].set_xlabel("aMussels in the fleet")
+        axes[0][col].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def markdown(table: pd.DataFrame) -> str:
+    """The table as Markdown (rich's MARKDOWN box), for docs/capacity.md."""
+    from rich import box
+    from rich.console import Console
+    from rich.table import Table
+
+    out = Table(box=box.MARKDOWN, show_edge=True)
+    for name in table.columns:
+        out.add_column(str(name), justify="right" if pd.api.types.is_numeric_dtype(table[name]) else "left")
+    for values in table.itertuples(index=False):
+        out.add_row(*("" if v is None or (isinstance(v, float) and v != v) else str(v) for v in values))
+    text = io.StringIO()
+    Console(width=400, file=text, color_system=None).print(out)
+    return "\n".join(line.rstrip() for line in text.getvalue().splitlines()).strip() + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m gcs.sweep.capacity", description=__doc__.splitlines()[0])
+    parser.add_argument("folder", type=Path, help="the capacity sweep's folder (vil sweep ... --out DIR)")
+    parser.add_argument("--figure", type=Path, help="write the figure here (PNG)")
+    args = parser.parse_args(argv)
+    try:
+        rows = read_missions(args.folder)
+    except (OSError, ValueError, KeyError) as exc:
+        print(f"capacity: {exc}", file=sys.stderr)
+        return 2
+    print(markdown(capacity_table(rows)))
+    print(markdown(rows.drop(columns=["days"])))
+    if args.figure:
+        figure(rows, args.figure)
+        print(f"\nfigure: {args.figure}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
