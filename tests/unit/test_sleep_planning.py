@@ -118,7 +118,8 @@ def test_keep_alive_puts_every_always_on_one_to_sleep_before_a_home_charge() -> 
 
 def test_keep_alive_wakes_a_charged_sleeper_when_the_queue_allows() -> None:
     assert schedule([0.95, 0.6], asleep=[True, False]) == {1: True}
-    assert schedule([0.5, 0.6], asleep=[True, False]) == {}  # not charged: it sleeps on
+    assert schedule([0.3, 0.6], asleep=[True, False]) == {}  # too low: it sleeps on until charged
+    assert schedule([0.75, 0.6], asleep=[True, False]) == {1: True}  # after a home charge: back to work
     assert leg_s(replace_slots(4)) > 0
 
 

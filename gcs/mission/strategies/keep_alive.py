@@ -38,7 +38,7 @@ from mussel_sim.behaviour import duty_cycle_rate_per_min
 
 MARGIN_S = 120.0  # an aMussel must still hold this long when the aPad is due (a late trip, a sleeper's wake)
 PICKUP_FRAC = 0.2  # a round's aMussels are charged from about this
-WAKE_FRAC = 0.9  # only a sleeper holding this much is woken: it has just been charged
+WAKE_FRAC = 0.5  # a sleeper holding less sleeps on until charged: awake, it would soon need the aPad again
 SLEEP_INTERVAL_S = 3600.0  # the order that puts one to sleep: Table I's hourly wake (aMussel seconds)
 SLEEP_AWAKE_S = 10.0
 
