@@ -1,0 +1,62 @@
+"""The capacity study's path on a real Dask cluster: a tiny sweep of the fleet's size per behaviour profile
+([[grid]] blocks) and strategy, then its table and figure (`gcs.sweep.capacity`, docs/capacity.md)."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import pandas as pd
+from rich.console import Console
+
+from gcs.sweep.capacity import capacity_table, main, read_missions
+from gcs.sweep.cells import make_cells
+from gcs.sweep.runner import sweep
+from gcs.sweep.spec import load_spec
+
+MISSIONS = Path(__file__).resolve().parents[2] / "missions"
+TINY = f"""
+[sweep]
+scenarios = ["{MISSIONS / 'bay-capacity.toml'}"]
+strategies = ["cautious", "keep_alive"]
+seeds = [1]
+[set]
+mission.duration = "3m"
+[[grid]]
+fleet.profile = ["always_on"]
+fleet.count = [2]
+[[grid]]
+fleet.profile = ["hourly_wake"]
+fleet.count = [6]
+"""
+
+
+def test_a_tiny_capacity_sweep_gives_its_table_and_figure(tmp_path: Path) -> None:
+    (tmp_path / "tiny.toml").write_text(TINY)
+    spec = load_spec(tmp_path / "tiny.toml")
+    cells = make_cells(spec)
+    out = tmp_path / "out"
+    done = sweep(spec, cells, out, Console(file=io.StringIO(), width=200), workers=1, processes=False)
+    assert (done.cells, done.ran, done.failed) == (4, 4, [])
+
+    rows = read_missions(out)
+    assert sorted(zip(rows["profile"], rows["count"], rows["strategy"], strict=True)) == [
+        ("always_on", 2, "cautious"), ("always_on", 2, "keep_alive"),
+        ("hourly_wake", 6, "cautious"), ("hourly_wake", 6, "keep_alive")]
+    assert (rows["days"] == 180 / 86400).all() and rows["alive"].all()  # 3 minutes: nobody empties
+    sleepers = rows[rows["profile"] == "hourly_wake"]
+    assert (sleepers["samples_scheduled"] > 0).all()
+    assert (sleepers["samples_taken"] <= sleepers["samples_scheduled"]).all()
+
+    table = capacity_table(rows)
+    assert list(table["largest kept alive"]) == ["2", "2", "6", "6"]
+    assert list(zip(table["profile"], table["strategy"], strict=True)) == [
+        ("always_on", "cautious"), ("always_on", "keep_alive"), ("hourly_wake", "cautious"),
+        ("hourly_wake", "keep_alive")]
+
+    figure = tmp_path / "capacity.png"
+    assert main([str(out), "--figure", str(figure)]) == 0
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and figure.stat().st_size > 10_000
+    assert main([str(tmp_path / "nothing")]) == 2  # no sweep there: one line, exit 2
+    frame = pd.read_parquet(out / "results.parquet")
+    assert set(frame["fleet.count"]) == {2, 6} and set(frame["fleet.profile"]) == {"always_on", "hourly_wake"}
