@@ -127,9 +127,8 @@ class Streams:
     def _apply_interval(self, msg_id: int, task: Task, now_us: int) -> None:
         interval_us = self._interval_us[msg_id]
         if interval_us > 0 and not self._host.closed and self._scheduler is not None:
-            self._scheduler.reschedule(
-                task, period_us=interval_us, next_us=max(now_us, min(task.next_us, now_us + interval_us)), active=True
-            )
+            self._scheduler.reschedule(task, period_us=interval_us, next_us=next_send_us(task, now_us, interval_us),
+                                       active=True)
         else:
             task.active = False
 
@@ -227,6 +226,19 @@ class Streams:
                 self.send_slot(i + 1)
         if self._primitive_key() != self._sent_primitive:
             self._send_primitive_status(self._host.now_us)
+
+
+def next_send_us(task: Task, now_us: int, interval_us: int) -> int:
+    """When a stream whose interval changes to `interval_us` sends next: within one new interval.
+
+    Faster than before: at the first instant after now of its old schedule stepped back by the new
+    interval, so the stream keeps its phase (a GCS that slows a stream while the aPad holds and
+    speeds it up again sees the same instants as if it had never slowed it). Slower: at its next
+    instant already due within the new interval, else one new interval from now.
+    """
+    if task.active and task.next_us > now_us + interval_us:
+        return now_us + (task.next_us - now_us - 1) % interval_us + 1
+    return max(now_us, min(task.next_us, now_us + interval_us))
 
 
 def hz_to_us(hz: float) -> int:

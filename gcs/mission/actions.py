@@ -17,6 +17,7 @@ from gcs.api import CommandError, GeofenceError, Location
 from gcs.mission.control import EndReason, LoopControl, LoopLog, LoopStatus, MissionEnded, Phase
 from gcs.mission.fleet_knowledge import FleetKnowledge
 from gcs.mission.swarm import route_conflicts
+from gcs.mission.telemetry_pace import HOLDING_PHASES, TelemetryPace
 from missiontime import seconds_to_us, us_to_s
 from mussel_sim.geo import distance_m
 from mussel_sim.vocabulary import MusselCommand, MusselState
@@ -44,6 +45,7 @@ class ApadActions:
         self.leaving: set[int] = set()
         self._log = log
         self._phase_since_s = self.clock.time()
+        self.pace = TelemetryPace(self.api, self.apad_id, log)  # slow telemetry while it holds, fast while it moves
 
     # --- primitives with waiting ------------------------------------------------------------
 
@@ -218,6 +220,8 @@ class ApadActions:
 
     def wait_until(self, done: Callable[[], bool], timeout_s: float | None = None, interruptible: bool = True) -> bool:
         deadline = None if timeout_s is None else self.clock.time() + timeout_s
+        if self.status.phase in HOLDING_PHASES and not done():
+            self.pace.hold()  # it holds in place until `done`: slow telemetry meanwhile
         while not done():
             if deadline is not None and self.clock.time() >= deadline:
                 return False
@@ -297,3 +301,5 @@ class ApadActions:
             self._phase_since_s = now
             self.status.phase = phase
             self._log("phase", phase=str(phase))
+        if phase not in HOLDING_PHASES:
+            self.pace.move()  # fast telemetry from the first command of a phase that acts

@@ -84,6 +84,7 @@ def go_home_and_charge(crew: Crew, route: list[int]) -> None:
              route=route)
     act.go_to(Location(*home))
     act.command(act.api.hold)
+    act.pace.hold()  # hours at the charger: slow telemetry (the battery's reports keep their rate)
     arrived_s = knows.clock.time()
     charging_seen = [arrived_s]
 

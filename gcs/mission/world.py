@@ -34,6 +34,7 @@ from gcs.mission.scenario_models import (
     start_config,
 )
 from gcs.mission.swarm import FleetShares
+from gcs.mission.telemetry_pace import MISSION_TELEMETRY_HZ
 from gcs.records.events import EventLog
 from gcs.records.run_folder import RunFolder
 from mavlink_dialect import Codec, Transport, mavlink, memory_pair, open_transport, signing
@@ -78,19 +79,6 @@ class LinkOptions:
     bridge: str | None = None
     # Embedded aPads that go silent for good at a mission time: (system id, t_s) (`vil run --fail-apad`).
     fail_apads: tuple[tuple[int, float], ...] = ()
-
-
-# What the mission loop needs from the aPad, requested like any GCS does (SET_MESSAGE_INTERVAL).
-# Slot and primitive changes are also sent the moment they happen, so slow periodic copies do.
-# The battery comes in SYS_STATUS, and a boat's pack drains over hours: 0.2 Hz is plenty for the
-# end-of-mission check. BATTERY_STATUS, which the GCS does not read, is switched off.
-MISSION_TELEMETRY_HZ = {
-    mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: 2.0,
-    mavlink.MAVLINK_MSG_ID_PRIMITIVE_STATUS: 1.0,
-    mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS: 0.2,
-    mavlink.MAVLINK_MSG_ID_SYS_STATUS: 0.2,
-    mavlink.MAVLINK_MSG_ID_BATTERY_STATUS: 0.2,  # charge_state: whether it charges at home
-}
 
 
 @dataclass

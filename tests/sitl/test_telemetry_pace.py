@@ -1,0 +1,81 @@
+"""The GCS paces the aPad's telemetry by activity (issue 20, idle time costs little): slow while the
+loop holds in place, fast while it moves, asked with SET_MESSAGE_INTERVAL. Checked on the real bytes
+the GCS recorded (its .tlog): the requests and ACKs, and the GLOBAL_POSITION_INT the aPad then sent.
+"""
+
+from __future__ import annotations
+
+import json
+from itertools import pairwise
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from gcs.link.telemetry import GCS_SYSTEM_ID
+from gcs.mission.headless import run_mission
+from gcs.mission.scenario import load_scenario
+from gcs.mission.telemetry_pace import HOLDING_PHASES, HOLDING_TELEMETRY_HZ, MOVING_TELEMETRY_HZ
+from gcs.mission.world import LOCKSTEP_EPOCH_US
+from gcs.records.run_folder import RunFolder
+from mavlink_dialect import Codec, mavlink, tlog
+
+pytestmark = pytest.mark.sitl
+
+GPI = mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT
+US = 1_000_000
+
+
+def decoded(path: Path) -> list[tuple[float, Any]]:
+    """(mission seconds, message) for every frame of a lockstep run's .tlog, parsed afresh."""
+    codec = Codec(200, 1)
+    return [((stamp - LOCKSTEP_EPOCH_US) / US, msg)
+            for stamp, frame in tlog.frames(path) for msg in codec.decode(frame)]
+
+
+@pytest.fixture(scope="module")
+def pool12_run(tmp_path_factory: pytest.TempPathFactory) -> RunFolder:
+    out = tmp_path_factory.mktemp("pace") / "run"
+    run_mission(load_scenario("pool12").with_overrides(duration_s=900.0), out)
+    return RunFolder(out)
+
+
+def test_the_gcs_asks_slow_while_holding_and_fast_while_moving(pool12_run: RunFolder) -> None:
+    msgs = decoded(pool12_run.gcs_tlog)
+    asked = [(t, int(m.param1), m.param2) for t, m in msgs
+             if m.get_type() == "COMMAND_LONG" and m.get_srcSystem() == GCS_SYSTEM_ID
+             and m.command == mavlink.MAV_CMD_SET_MESSAGE_INTERVAL and int(m.param1) == GPI]
+    acks = [m for _, m in msgs if m.get_type() == "COMMAND_ACK" and m.command == mavlink.MAV_CMD_SET_MESSAGE_INTERVAL]
+    assert acks and all(a.result == mavlink.MAV_RESULT_ACCEPTED for a in acks)
+    holding_us, moving_us = US / HOLDING_TELEMETRY_HZ[GPI], US / MOVING_TELEMETRY_HZ[GPI]
+    intervals = [interval for _, _, interval in asked]
+    # The world's start asks moving rates; then each change of activity flips it, never twice alike.
+    assert intervals[0] == moving_us and holding_us in intervals and intervals.count(moving_us) >= 2
+    assert all(a != b for a, b in pairwise(intervals[1:]))
+
+    # Slow asked only in a holding phase of the loop, fast only in one that acts.
+    events = [json.loads(line) for line in pool12_run.events.read_text().splitlines()]
+    phases = [(e["t_s"], e["phase"]) for e in events if e.get("event") == "phase"]
+    assert any(p in HOLDING_PHASES for _, p in phases) and any(p not in HOLDING_PHASES for _, p in phases)
+    for t_asked, _, interval in asked[1:]:
+        # The phase the loop was in when it asked: slow from a wait of a holding phase, fast as another began.
+        phase = [p for t, p in phases if t <= round(t_asked, 3)][-1]
+        assert interval == (holding_us if phase in HOLDING_PHASES else moving_us), (t_asked, phase)
+
+
+def test_the_apad_reports_its_position_at_the_rate_asked(pool12_run: RunFolder) -> None:
+    msgs = decoded(pool12_run.gcs_tlog)
+    asked = [(t, m.param2) for t, m in msgs if m.get_type() == "COMMAND_LONG"
+             and m.command == mavlink.MAV_CMD_SET_MESSAGE_INTERVAL and int(m.param1) == GPI]
+    positions = [t for t, m in msgs if m.get_type() == "GLOBAL_POSITION_INT" and m.get_srcSystem() == 1]
+    holding_s, moving_s = 1 / HOLDING_TELEMETRY_HZ[GPI], 1 / MOVING_TELEMETRY_HZ[GPI]
+    spans = [(t0, t1, interval / US) for (t0, interval), (t1, _) in pairwise([*asked, (positions[-1], 0.0)])]
+    seen = {holding_s: 0, moving_s: 0}
+    for t0, t1, period_s in spans:
+        # After the first report at the new rate (within one period), reports keep that period.
+        inside = [t for t in positions if t0 + period_s < t < t1]
+        gaps = [round(b - a, 6) for a, b in pairwise(inside)]
+        for gap in gaps:
+            assert gap == pytest.approx(period_s, abs=1e-6), (t0, period_s, gaps)
+        seen[period_s] += sum(1 for gap in gaps if gap == pytest.approx(period_s, abs=1e-6))
+    assert seen[holding_s] >= 10 and seen[moving_s] >= 100
