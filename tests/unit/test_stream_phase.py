@@ -26,7 +26,9 @@ def test_a_stream_slowed_and_sped_up_again_keeps_its_fast_phase(start_us: int, s
     assert first_slow == start_us + slow_at * FAST_US  # already due within the new interval: unchanged
     fast_now = slow_now + fast_after_us
     # The slow schedule's first send after fast_now: first_slow + k x SLOW_US.
-    slow_next = first_slow + SLOW_US * ((fast_now - first_slow) // SLOW_US + 1) if fast_now >= first_slow else first_slow
+    slow_next = first_slow
+    if fast_now >= first_slow:
+        slow_next += SLOW_US * ((fast_now - first_slow) // SLOW_US + 1)
     sent = next_send_us(task(slow_next, SLOW_US), fast_now, FAST_US)
     assert fast_now < sent <= fast_now + FAST_US
     assert (sent - start_us) % FAST_US == 0  # on the fast schedule it had before it was slowed
