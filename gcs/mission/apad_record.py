@@ -7,7 +7,8 @@ whatever the mission's length. The energy an embedded SITL aPad passed into aMus
 battery and took in at home is read at each simulated day's end (`DayLedger`'s days, exactly on
 the boundary: a task of the mission clock), so the figures per day are differences of exact
 counters; a real aPad's counters are on the aPad. A console mission restored from a checkpoint
-starts its track at the restore (`complete` is then False).
+starts its track at the restore (`complete` is then False), and its energy per day is unknown (NaN,
+left out of result.json) for the days up to the first boundary after it.
 """
 
 from __future__ import annotations
@@ -127,5 +128,7 @@ def start(world: World, complete: bool = True) -> ApadRecord:
     clock.scheduler.every(TRACK_PERIOD_S, sample, "apad-track", clock.now_us)
     if days is not None:
         passed = max(clock.now_us - origin_us, 0) // days.day_us
+        # Started mid-mission (a restored console): the days gone by are not known, not zero.
+        record.day_energy.extend(np.full((len(ids), len(ENERGY_KEYS)), np.nan) for _ in range(passed))
         clock.scheduler.every(days.day_us / US_PER_S, day_end, "apad-day", origin_us + (passed + 1) * days.day_us)
     return record

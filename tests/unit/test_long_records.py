@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gcs.mission.apad_record import ThinnedSeries
+from gcs.mission.apad_record import ApadRecord, ThinnedSeries
 from gcs.mission.days import groups
 from mussel_sim.day_ledger import DayLedger, day_us
 from mussel_sim.fleet_state import (
@@ -147,3 +147,18 @@ def test_a_ledger_with_steps_longer_than_a_day_leaves_no_day_out() -> None:
     ledger = DayLedger(day_us=1_000_000)
     ledger.add(3_000_000, active=2, alive=4, newly_depleted=1)  # a 3-s step over three 1-s days
     assert ledger.steps == [0, 0, 1] and ledger.alive_end == [4, 4, 4] and ledger.depleted_new == [0, 0, 1]
+
+
+def test_energy_per_day_is_the_difference_of_the_counters_at_each_day_end() -> None:
+    record = ApadRecord((1, 2), start_us=0)
+    for wh in (2.0, 5.0, 5.5):  # counters at the ends of days 1..3, both aPads alike, every counter
+        record.day_energy.append(np.full((2, 3), wh))
+    per_day = record.energy_per_day(np.full((2, 3), 9.0), days=4)  # day 4 ends with the mission, at 9 Wh
+    np.testing.assert_allclose(per_day[:, 0, 0], [2.0, 3.0, 0.5, 3.5])
+    assert per_day.shape == (4, 2, 3)
+    # A mission that ended exactly on a boundary has no fifth day; a restored console's lost days are unknown.
+    assert record.energy_per_day(np.full((2, 3), 5.5), days=3).shape[0] == 3
+    restored = ApadRecord((1,), start_us=0, complete=False)
+    restored.day_energy += [np.full((1, 3), np.nan), np.full((1, 3), 4.0)]
+    assert np.isnan(restored.energy_per_day(np.full((1, 3), 6.0), days=3)[:2, 0, 0]).all()
+    assert restored.energy_per_day(np.full((1, 3), 6.0), days=3)[2, 0, 0] == 2.0
