@@ -10,7 +10,8 @@ back; a unit answers as soon as the request has arrived (`TURNAROUND_S`). Pure: 
 Where the unit's guide is silent (NOTES.md), the emulator's reading: `$V` and `$M` unanswered give
 `#TO` after the same 4 s as a ping; `$T` sends a command packet the remote counts; an echo comes
 back as a unicast (`#Unn<data>`); `$Q` before any packet, or after one that failed to decode, is
-`$C-`, else the mean number of wrong coded bytes at the packet's SNR (0-8).
+`$C-`, else the mean number of wrong coded bytes at the packet's SNR (0-8); a command that would
+queue more than `MAX_QUEUED_S` of packets behind the one on the water is answered `E` (`busy`).
 """
 
 from __future__ import annotations
@@ -41,6 +42,10 @@ from acoustic.params import AcousticParams
 from acoustic.per import expected_byte_errors
 
 TURNAROUND_S = 0.0
+# Packets the local unit queues behind the one it is sending, in seconds of airtime; a command that
+# would queue more is answered `E` and counted (`busy`): a host that writes faster than the water
+# carries cannot grow the emulator without bound.
+MAX_QUEUED_S = 4.5
 LOCAL = 0  # the local unit's node index in the medium; remote unit i is node i + 1
 
 
@@ -175,6 +180,9 @@ class ModemEmulator:
             self._reply(Status(self.address, supply_ticks(self.supply_v)))
         elif kind is Kind.QUALITY:
             self._reply(Quality(self._quality))
+        elif self.medium.busy_until_s(LOCAL) > t_s + MAX_QUEUED_S:
+            self._count("busy")
+            self._reply(Error())
         else:
             assert kind is Kind.BROADCAST or a is not None
             self._reply(Ack(kind, a, len(item.data) if kind.has_data else None))

@@ -104,6 +104,12 @@ class Matcher(Generic[T]):
 
     def __init__(self, templates: tuple[Template[T], ...]) -> None:
         self.templates = templates
+        # Templates by the byte they begin with (each begins with a literal): a stray byte costs a lookup.
+        self._by_first: dict[int, tuple[Template[T], ...]] = {}
+        for t in templates:
+            first = t.tokens[0]
+            assert isinstance(first, Lit), "a template begins with a literal"
+            self._by_first[first.text[0]] = (*self._by_first.get(first.text[0], ()), t)
         self._live: list[_Cursor[T]] = []
         self._raw = bytearray()
 
@@ -146,7 +152,7 @@ class Matcher(Generic[T]):
 
     def _begin(self, byte: int) -> list[T | Rejected]:
         live = []
-        for template in self.templates:
+        for template in self._by_first.get(byte, ()):
             cursor = _Cursor(template)
             if cursor.step(byte) is None:
                 if cursor.complete:

@@ -42,7 +42,7 @@ def test_airtime_by_the_modems_formula() -> None:
     assert airtime_s(2) == pytest.approx(0.105 + 18 * 0.0125)
     assert data_airtime_s([2, 16, 64]) == pytest.approx([0.33, 0.505, 1.105])
     for bad in (1, 65, -3):
-        with pytest.raises(ValueError, match="2..64"):
+        with pytest.raises(ValueError, match=r"2\.\.64"):
             airtime_s(bad)
 
 

@@ -74,6 +74,15 @@ def test_a_burst_far_faster_than_9600_baud_is_answered_in_order() -> None:
     assert core.advance(0.0) == b"#A000V52429\r\n" * 500 + b"#A001\r\n" + b"#A001V52429\r\n" * 500
 
 
+def test_a_host_writing_faster_than_the_water_carries_is_refused_not_queued_without_bound() -> None:
+    core = _core()
+    core.from_host(b"$B64" + bytes(64), 0.0)
+    for k in range(1, 11):
+        core.from_host(b"$B64" + bytes(64), k * 0.01)  # 1.1 s packets: four queue behind the first (4.5 s), then E
+    out = core.advance(0.2)
+    assert out == b"$B64\r\n" * 5 + b"E\r\n" * 6 and core.counts["busy"] == 6
+
+
 @settings(max_examples=200, deadline=None)
 @given(st.lists(st.tuples(st.binary(max_size=80), st.floats(0.0, 0.01)), max_size=12))
 def test_any_chunks_at_any_pace_never_raise(chunks: list[tuple[bytes, float]]) -> None:
@@ -164,3 +173,14 @@ def test_a_device_that_cannot_be_opened_is_one_line() -> None:
     with pytest.raises(PortClosed, match="cannot open"):
         SerialPort("/dev/nonexistent-modem")
     assert CommandParser().feed(b"", 0.0) == []
+
+
+def test_a_short_fuzz_run_of_random_and_mutated_inputs_raises_nothing() -> None:
+    """bench/fuzz_modem.py's generator, briefly (the bench runs 120,000 inputs)."""
+    from serial_fuzz import SerialFuzz
+
+    fuzz = SerialFuzz(11)
+    for i in range(600):
+        fuzz.feed(fuzz.random_input() if i % 2 == 0 else fuzz.mutated_input())
+    assert fuzz.command_counts["stray_byte"] > 0 and fuzz.replies.dropped["stray_byte"] > 0
+    assert fuzz.emulator.counts["command"] > 0  # mutated inputs still carry valid commands

@@ -8,9 +8,7 @@ from hypothesis import strategies as st
 
 from acoustic.nanomodem.commands import Command, CommandParser, Kind
 from acoustic.nanomodem.grammar import Rejected
-from acoustic.nanomodem.replies import (
-    Ack, AddressSet, Error, Quality, Range, Received, ReplyParser, Status, Timeout,
-)
+from acoustic.nanomodem.replies import Ack, AddressSet, Error, Quality, Range, Received, ReplyParser, Status, Timeout
 
 # The unit's bytes as its guide writes them (NOTES.md "Its serial protocol").
 WIRE = [
@@ -51,7 +49,8 @@ def test_invalid_commands_are_rejected_by_reason() -> None:
 
 def test_stray_bytes_are_dropped_and_a_command_after_them_parses() -> None:
     got = CommandParser().feed(b"xyz\r\n$?", 0.0)
-    assert [g.reason for g in got[:-1] if isinstance(g, Rejected)] == ["stray_byte"] * 5 and got[-1] == Command(Kind.STATUS)
+    assert [g.reason for g in got[:-1] if isinstance(g, Rejected)] == ["stray_byte"] * 5
+    assert got[-1] == Command(Kind.STATUS)
 
 
 def test_a_gap_of_more_than_2_ms_between_bytes_rejects_the_command() -> None:
@@ -116,7 +115,8 @@ _COMMANDS = st.one_of(
 
 @settings(max_examples=300, deadline=None)
 @given(st.lists(_COMMANDS, min_size=1, max_size=6), st.data())
-def test_any_commands_split_anywhere_within_the_gap_parse_the_same(commands: list[Command], data: st.DataObject) -> None:
+def test_any_commands_split_anywhere_within_the_gap_parse_the_same(commands: list[Command],
+                                                                   data: st.DataObject) -> None:
     wire = b"".join(c.encode() for c in commands)
     cuts = sorted(data.draw(st.lists(st.integers(0, len(wire)), max_size=8)))
     parser, got, t = CommandParser(), [], 0.0

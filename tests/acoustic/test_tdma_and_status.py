@@ -61,7 +61,8 @@ def test_a_status_report_fits_a_packet_and_round_trips_to_its_quanta() -> None:
     assert len(data) == SIZE == 31 <= 64
     back = unpack(data)
     assert back.mussel_id == 42 and back.seq == 7 and back.state == 0 and back.fix_time_s == 1234.0
-    assert back.lat_deg == pytest.approx(REPORT.lat_deg, abs=1e-7) and back.battery_frac == pytest.approx(0.734, abs=1e-5)
+    assert back.lat_deg == pytest.approx(REPORT.lat_deg, abs=1e-7)
+    assert back.battery_frac == pytest.approx(0.734, abs=1e-5)
     assert back.temperature_degc == pytest.approx(21.37) and back.pressure_hpa == pytest.approx(1199.4)
     assert pack(back) == data
 
