@@ -2,11 +2,22 @@
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import json
+import os
+import pty
+import re
+import shlex
+import signal
 import socket
+import struct
 import subprocess
 import sys
-from collections.abc import Iterator
+import termios
+import threading
+import time
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -74,3 +85,116 @@ def dask_processes(folder: Path, workers: int = 2) -> Iterator[str]:
         for proc in procs:
             proc.wait()
         log.close()
+
+
+# --- a console on a pseudo-terminal, as an operator runs it ---------------------------------------
+
+ESCAPES = re.compile(rb"\x1b\[[0-9;?<>=]*[ -/]*[@-~]|\x1b\][^\x07\x1b]*(?:\x07|\x1b\\)|\x1b[()][0-9A-Za-z]|\x1b[=>78]")
+
+
+def words(text: str) -> str:
+    """`text` with every run of blanks one space: rich wraps its lines at the terminal's width."""
+    return " ".join(text.split())
+
+
+class PtyConsole:
+    """A process (a `vil gcs` console) whose terminal is a pseudo-terminal of `rows` x `columns`:
+    Textual's real driver draws into it, a thread collects what is drawn, keys are typed into it.
+
+    `stdout`: a file for the process's stdout (what it prints after the console closes) instead of
+    the terminal. `keep_bytes`: keep only the last that many bytes drawn (a long mission's drawing,
+    kept for a failure message); then `mark` and `text(since)` count within what is kept."""
+
+    def __init__(self, argv: list[str], cwd: Path, env: dict[str, str], rows: int = 46, columns: int = 150,
+                 stdout: Path | None = None, keep_bytes: int | None = None) -> None:
+        self.line = shlex.join(argv)
+        self.stdout = stdout
+        master, slave = pty.openpty()
+        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", rows, columns, 0, 0))
+        with contextlib.ExitStack() as files:
+            out = files.enter_context(stdout.open("wb")) if stdout is not None else slave
+            self.popen = subprocess.Popen(argv, cwd=cwd, env={**env, "TERM": "xterm-256color"}, stdin=slave,
+                                          stdout=out, stderr=slave, start_new_session=True)
+        os.close(slave)
+        self.master = master
+        self.raw = bytearray()
+        self._keep = keep_bytes
+        self._lock = threading.Lock()
+        threading.Thread(target=self._drain, daemon=True).start()
+
+    def _drain(self) -> None:
+        while True:
+            try:
+                data = os.read(self.master, 1 << 16)
+            except OSError:  # the process is gone
+                return
+            if not data:
+                return
+            with self._lock:
+                self.raw.extend(data)
+                if self._keep is not None and len(self.raw) > self._keep:
+                    del self.raw[: len(self.raw) - self._keep]
+
+    def mark(self) -> int:
+        with self._lock:
+            return len(self.raw)
+
+    def text(self, since: int = 0) -> str:
+        """What was drawn from byte `since` on, escape sequences taken out (the words of the screen)."""
+        with self._lock:
+            data = bytes(self.raw[since:])
+        return ESCAPES.sub(b" ", data).decode("utf-8", "replace")
+
+    def alive(self) -> None:
+        assert self.popen.poll() is None, f"{self.line!r} exited {self.popen.returncode}: {self.text()[-2000:]!r}"
+
+    def wait_until(self, what: str, condition: Callable[[], object], timeout_s: float = 60.0,
+                   period_s: float = 0.05) -> None:
+        """Poll `condition` until it holds, the console still running; fails at `timeout_s` naming `what`."""
+        deadline = time.monotonic() + timeout_s
+        while not condition():
+            self.alive()
+            assert time.monotonic() < deadline, f"{self.line!r}: no {what} in {timeout_s:g} s: {self.text()[-2000:]!r}"
+            time.sleep(period_s)
+
+    def wait(self, *phrases: str, since: int = 0, timeout_s: float = 60.0) -> str:
+        """Wait until every phrase is on screen (blanks compared as one space); the words drawn."""
+        drawn = ""
+
+        def on_screen() -> bool:
+            nonlocal drawn
+            drawn = words(self.text(since))
+            return all(words(p) in drawn for p in phrases)
+
+        self.wait_until(f"{list(phrases)} on screen", on_screen, timeout_s)
+        return drawn
+
+    def press(self, keys: str | bytes) -> int:
+        """Type `keys`; the mark of what is drawn after them."""
+        mark = self.mark()
+        os.write(self.master, keys.encode() if isinstance(keys, str) else keys)
+        return mark
+
+    def quit(self, timeout_s: float = 20.0) -> int:
+        """q, and y if the console asks first (aMussels at the surface); the exit status."""
+        mark = self.press("q")
+        deadline = time.monotonic() + timeout_s
+        asked = False
+        while self.popen.poll() is None:
+            if not asked and "Quit?" in self.text(mark):
+                self.press("y")
+                asked = True
+            assert time.monotonic() < deadline, f"{self.line!r} did not quit: {self.text(mark)[-2000:]!r}"
+            time.sleep(0.05)
+        return int(self.popen.returncode)
+
+    def kill(self) -> None:
+        """SIGKILL to its process group (a crash), and reap it."""
+        if self.popen.poll() is None:
+            os.killpg(self.popen.pid, signal.SIGKILL)
+        self.popen.wait(10)
+
+    def close(self) -> None:
+        self.kill()
+        with contextlib.suppress(OSError):
+            os.close(self.master)

@@ -160,10 +160,7 @@ def run_gcs_resume(w: Work) -> None:
     folder = w.path / "runs" / "console-pool12-run1"
     crashed = w.console(f"{GCS_SITL} {CRASH_SPEED}")
     try:
-        deadline = time.monotonic() + 120
-        while not _charging(folder / CHECKPOINT):
-            assert crashed.popen.poll() is None and time.monotonic() < deadline, crashed.text()[-2000:]
-            time.sleep(0.05)
+        crashed.wait_until("checkpoint in a charging wait", lambda: _charging(folder / CHECKPOINT), timeout_s=120)
         crashed.kill()
     finally:
         crashed.close()
@@ -174,10 +171,8 @@ def run_gcs_resume(w: Work) -> None:
     console = w.console(w.line(GCS_RESUME))
     try:
         console.wait("Map", "embedded SITL")
-        deadline = time.monotonic() + 90
-        while not _released(folder / "events.jsonl", docked):
-            assert console.popen.poll() is None and time.monotonic() < deadline, console.text()[-2000:]
-            time.sleep(0.1)
+        console.wait_until("release of the docked", lambda: _released(folder / "events.jsonl", docked), timeout_s=90,
+                           period_s=0.1)
         assert console.quit() == 0, console.text()[-2000:]
     finally:
         console.close()

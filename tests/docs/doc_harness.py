@@ -13,16 +13,13 @@ from __future__ import annotations
 import contextlib
 import fcntl
 import os
-import pty
 import re
 import shlex
 import signal
 import socket
-import struct
 import subprocess
 import sys
 import tempfile
-import termios
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -30,17 +27,14 @@ from pathlib import Path
 from typing import Any, Literal
 
 import pytest
+from testkit import ESCAPES as ESCAPES  # the doc rooms read these two from here
+from testkit import PtyConsole
+from testkit import words as words
 
 ROOT = Path(__file__).resolve().parents[2]
 VENV = Path(sys.prefix)
 LINKED = ("missions", "bench", "docs", "Makefile", "pyproject.toml", "requirements.lock")
-ESCAPES = re.compile(rb"\x1b\[[0-9;?<>=]*[ -/]*[@-~]|\x1b\][^\x07\x1b]*(?:\x07|\x1b\\)|\x1b[()][0-9A-Za-z]|\x1b[=>78]")
 PORT_WAIT_S = 300.0  # another test (or another engineer's run) may hold a doc port that long
-
-
-def words(text: str) -> str:
-    """`text` with every run of blanks one space: rich wraps its lines at the terminal's width."""
-    return " ".join(text.split())
 
 
 class Work:
@@ -90,8 +84,9 @@ class Work:
     def start(self, line: str) -> Background:
         return Background(self, line)
 
-    def console(self, line: str, rows: int = 46, columns: int = 150) -> Console:
-        return Console(self, line, rows, columns)
+    def console(self, line: str, rows: int = 46, columns: int = 150) -> PtyConsole:
+        """A console example on a pseudo-terminal, as an operator runs it: read what it draws, press keys."""
+        return PtyConsole(shlex.split(line), self.path, self.env, rows, columns)
 
 
 class Background:
@@ -140,85 +135,6 @@ class Background:
         if self.popen.stdout is not None:
             self.popen.stdout.close()
         return int(self.popen.returncode)
-
-
-class Console:
-    """A console example on a pseudo-terminal, as an operator runs it: read what it draws, press keys."""
-
-    def __init__(self, work: Work, line: str, rows: int, columns: int) -> None:
-        self.line = line
-        master, slave = pty.openpty()
-        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", rows, columns, 0, 0))
-        self.popen = subprocess.Popen(shlex.split(line), cwd=work.path, env={**work.env, "TERM": "xterm-256color"},
-                                      stdin=slave, stdout=slave, stderr=slave, start_new_session=True)
-        os.close(slave)
-        self.master = master
-        self.raw = bytearray()
-        self._lock = threading.Lock()
-        threading.Thread(target=self._drain, daemon=True).start()
-
-    def _drain(self) -> None:
-        while True:
-            try:
-                data = os.read(self.master, 1 << 16)
-            except OSError:  # the process is gone
-                return
-            if not data:
-                return
-            with self._lock:
-                self.raw.extend(data)
-
-    def mark(self) -> int:
-        with self._lock:
-            return len(self.raw)
-
-    def text(self, since: int = 0) -> str:
-        """What was drawn from byte `since` on, escape sequences taken out (the words of the screen)."""
-        with self._lock:
-            data = bytes(self.raw[since:])
-        return ESCAPES.sub(b" ", data).decode("utf-8", "replace")
-
-    def wait(self, *phrases: str, since: int = 0, timeout_s: float = 60.0) -> str:
-        """Wait until every phrase is on screen (blanks compared as one space); the words drawn."""
-        deadline = time.monotonic() + timeout_s
-        while True:
-            text = words(self.text(since))
-            missing = [p for p in phrases if words(p) not in text]
-            if not missing:
-                return text
-            assert self.popen.poll() is None, f"{self.line!r} exited {self.popen.returncode}: {text[-2000:]!r}"
-            assert time.monotonic() < deadline, f"{self.line!r}: {missing} not on screen in {timeout_s:g} s: " \
-                                                f"{text[-2000:]!r}"
-            time.sleep(0.05)
-
-    def press(self, keys: str) -> int:
-        """Type `keys`; the mark of what is drawn after them."""
-        mark = self.mark()
-        os.write(self.master, keys.encode())
-        return mark
-
-    def quit(self, timeout_s: float = 20.0) -> int:
-        """q, and y if the console asks first (aMussels at the surface); the exit status."""
-        mark = self.press("q")
-        deadline = time.monotonic() + timeout_s
-        asked = False
-        while self.popen.poll() is None:
-            if not asked and "Quit?" in self.text(mark):
-                self.press("y")
-                asked = True
-            assert time.monotonic() < deadline, f"{self.line!r} did not quit: {self.text(mark)[-2000:]!r}"
-            time.sleep(0.05)
-        return int(self.popen.returncode)
-
-    def kill(self) -> None:
-        if self.popen.poll() is None:
-            os.killpg(self.popen.pid, signal.SIGKILL)
-        self.popen.wait(10)
-
-    def close(self) -> None:
-        self.kill()
-        with contextlib.suppress(OSError):
-            os.close(self.master)
 
 
 @contextlib.contextmanager

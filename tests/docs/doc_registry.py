@@ -166,6 +166,14 @@ REGISTRY: dict[str, Entry] = {
                          long_only=CLUSTER_LONG),
     swp.WORKER: Entry("sweeps", swp.run_cluster, full=False, ci="dask worker tcp://127.0.0.1:8786 --nthreads 1",
                       why="HOST: this machine", long_only=CLUSTER_LONG),
+    # docs/acoustic.md
+    run.ACOUSTIC_FIGURES: Entry("runs", run.run_acoustic_figures, full=False,
+                                ci="python -m gcs.acoustic.figures --figure acoustic-delivery.png",
+                                why="the figure written beside the run, not over the doc's (the command as written "
+                                    "made docs/acoustic-delivery.png)"),
+    run.VIL_MODEM: Entry("runs", run.run_vil_modem),
+    run.FUZZ_MODEM: Entry("runs", run.run_fuzz_modem, ci=run.FUZZ_MODEM + " -n 2000",
+                          why="120,000 inputs are minutes of CPU; 2,000 print the same counts by reason"),
 }
 
 

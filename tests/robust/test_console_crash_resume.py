@@ -12,22 +12,17 @@ every aMussel is on the seabed or on a slot, none lost.
 
 from __future__ import annotations
 
-import fcntl
 import json
 import os
-import pty
 import signal
-import struct
 import subprocess
 import sys
-import termios
-import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
 import pytest
-from testkit import read_jsonl
+from testkit import PtyConsole, read_jsonl
 
 from gcs.mission.control import Phase
 from gcs.records import checkpoint
@@ -46,63 +41,23 @@ WALL_TIMEOUT_S = 120.0
 KILL_AFTER_S = 450.0  # mission time: the second charging cycle, with a history before it
 
 
-class Console:
-    """`vil gcs ARGS` on a pseudo-terminal of 150 x 46 whose screen output is read and dropped."""
-
-    def __init__(self, cwd: Path, *args: str) -> None:
-        master, slave = pty.openpty()
-        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 46, 150, 0, 0))
-        env = {**os.environ, "TERM": "xterm-256color", "PYTHONPATH": str(ROOT)}
-        self.stdout = cwd / f"stdout-{time.monotonic_ns()}.txt"
-        with self.stdout.open("wb") as out:  # the one line `vil gcs` prints after the console closes
-            self.proc = subprocess.Popen([*VIL, *GCS, *args], cwd=cwd, stdin=slave, stdout=out, stderr=slave,
-                                         env=env, start_new_session=True)
-        os.close(slave)
-        self.master = master
-        self.tail = bytearray()  # the last screen bytes, for a failure message
-        threading.Thread(target=self._drain, daemon=True).start()
-
-    def _drain(self) -> None:
-        while True:
-            try:
-                data = os.read(self.master, 1 << 16)
-            except OSError:  # the process is gone
-                return
-            if not data:
-                return
-            self.tail = (self.tail + data)[-4000:]
-
-    def alive(self) -> None:
-        assert self.proc.poll() is None, f"vil gcs exited {self.proc.returncode}: {bytes(self.tail)[-800:]!r}"
-
-    def press(self, key: bytes) -> None:
-        os.write(self.master, key)
-
-    def close(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.kill()
-        self.proc.wait(10)
-        os.close(self.master)
+def console(cwd: Path, *args: str) -> PtyConsole:
+    """`vil gcs ARGS` on a pseudo-terminal of 150 x 46 whose drawing is read and dropped (the last bytes
+    kept for a failure message); its stdout, the one line `vil gcs` prints after the console closes, in
+    a file of its own (`.stdout`)."""
+    return PtyConsole([*VIL, *GCS, *args], cwd, {**os.environ, "PYTHONPATH": str(ROOT)},
+                      stdout=cwd / f"stdout-{time.monotonic_ns()}.txt", keep_bytes=4000)
 
 
-def _wait(what: str, condition: Any, console: Console) -> None:
-    deadline = time.monotonic() + WALL_TIMEOUT_S
-    while not condition():
-        console.alive()
-        assert time.monotonic() < deadline, f"no {what} within {WALL_TIMEOUT_S} s"
-        time.sleep(0.02)
-
-
-def _killed_once(cwd: Path, what: str, condition: Any, *args: str) -> None:
+def _killed_once(cwd: Path, what: str, condition: Callable[[], bool], *args: str) -> None:
     """A console `vil gcs ARGS` killed with SIGKILL once `condition()` holds."""
-    first = Console(cwd, *args)
+    first = console(cwd, *args)
     try:
-        _wait(what, condition, first)
-        os.kill(first.proc.pid, signal.SIGKILL)
-        first.proc.wait(10)
+        first.wait_until(what, condition, WALL_TIMEOUT_S, period_s=0.02)
+        first.kill()
     finally:
         first.close()
-    assert first.proc.returncode == -signal.SIGKILL
+    assert first.popen.returncode == -signal.SIGKILL
 
 
 def test_sigkill_of_the_console_with_amussels_docked_then_resume(tmp_path: Path) -> None:
@@ -124,17 +79,17 @@ def test_sigkill_of_the_console_with_amussels_docked_then_resume(tmp_path: Path)
     before = (run / "events.jsonl").read_bytes()
     apad_before = read_jsonl(run / "apad1.events.jsonl")
 
-    second = Console(tmp_path, "--resume")  # finds runs/console-pool12-run1 by its checkpoint
+    second = console(tmp_path, "--resume")  # finds runs/console-pool12-run1 by its checkpoint
     try:
         # The mission ended, its results written, nothing left to resume.
-        _wait("mission end", lambda: b'"mission_end"' in (run / "events.jsonl").read_bytes()
-              and (run / "result.json").exists() and not ckpt.exists(), second)
-        second.press(b"q")
-        second.proc.wait(WALL_TIMEOUT_S)
+        second.wait_until("mission end", lambda: b'"mission_end"' in (run / "events.jsonl").read_bytes()
+                          and (run / "result.json").exists() and not ckpt.exists(), WALL_TIMEOUT_S, period_s=0.02)
+        second.press("q")
+        second.popen.wait(WALL_TIMEOUT_S)
     finally:
         second.close()
-    assert second.proc.returncode == 0, bytes(second.tail)[-800:]
-    assert f"logs in {RUN}" in second.stdout.read_text()
+    assert second.popen.returncode == 0, second.text()[-800:]
+    assert second.stdout is not None and f"logs in {RUN}" in second.stdout.read_text()
     assert not any(ckpt.with_suffix(x).exists() for x in (checkpoint.STEPS_SUFFIX, checkpoint.TRACES_SUFFIX))
 
     # The same folder goes on from the checkpoint: what was logged up to it is kept as it was.
@@ -249,15 +204,15 @@ def test_sigkill_of_a_two_apad_console_then_resume(tmp_path: Path) -> None:
     at_s = saved.time_us / 1e6
     before = (run / "events.jsonl").read_bytes()
 
-    second = Console(tmp_path, *scenario, "--resume")
+    second = console(tmp_path, *scenario, "--resume")
     try:
-        _wait("mission end", lambda: (run / "events.jsonl").read_bytes().count(b'"mission_end"') == 2
-              and not ckpt.exists(), second)
-        second.press(b"q")
-        second.proc.wait(WALL_TIMEOUT_S)
+        second.wait_until("mission end", lambda: (run / "events.jsonl").read_bytes().count(b'"mission_end"') == 2
+                          and not ckpt.exists(), WALL_TIMEOUT_S, period_s=0.02)
+        second.press("q")
+        second.popen.wait(WALL_TIMEOUT_S)
     finally:
         second.close()
-    assert second.proc.returncode == 0, bytes(second.tail)[-800:]
+    assert second.popen.returncode == 0, second.text()[-800:]
     assert not ckpt.exists()
     after = (run / "events.jsonl").read_bytes()
     assert after[: saved.events_bytes] == before[: saved.events_bytes]
