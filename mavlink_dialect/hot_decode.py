@@ -74,12 +74,14 @@ def decode_datagrams(
     """`decode_datagram` over several datagrams at once (one receive's worth): one set of arrays.
     `keep_raw` also returns the valid hot frames' bytes (`HotFrames.raw`), for a .tlog."""
     grams = [bytes(g) for g in datagrams]
+    msg_id = spec.msg_id.to_bytes(3, "little")
+    if grams and all(_one_other_frame(g, msg_id) for g in grams):
+        return Split(_empty(spec, [] if keep_raw else None), grams, 0)  # a heartbeat, a command: nothing to walk
     data = grams[0] if len(grams) == 1 else b"".join(grams)
     starts: list[int] = []
     ends: list[int] = []
     others: list[bytes] = []
     bad, base = 0, 0
-    msg_id = spec.msg_id.to_bytes(3, "little")
     for gram in grams:  # frames never cross a datagram's end
         bad += _walk(data, base, base + len(gram), msg_id, starts, ends, others)
         base += len(gram)
@@ -223,6 +225,14 @@ def _read_only(frames: HotFrames) -> None:
         return  # `_empty`'s: read-only already
     for column in (*frames.fields.values(), frames.src_system, frames.src_component, frames.seq):
         column.flags.writeable = False
+
+
+def _one_other_frame(gram: bytes, msg_id: bytes) -> bool:
+    """Whether a datagram is one whole MAVLink 2 frame that is not a hot one: what `_walk` would hand on
+    whole to `others` (most datagrams an aPad receives: a heartbeat, a command), told from its header."""
+    return (len(gram) > 2 and gram[0] == MAGIC_V2
+            and OVERHEAD + gram[1] + (SIGNATURE if gram[2] & mavlink.MAVLINK_IFLAG_SIGNED else 0) == len(gram)
+            and not (gram[2] == 0 and gram[7:10] == msg_id))
 
 
 def _walk(
