@@ -38,10 +38,12 @@ def trip_need_wh(knows: FleetKnowledge, route: list[int]) -> float:
     last = stops[-1] if stops else here
     home_m = float(distance_m(last.lat, last.lon, home[0], home[1]))
     metres = 2.0 * out_m + home_m
+    if not route:  # idle (priced at every poll of the wait): the way home and the hotel load alone
+        return budget.trip_wh(metres, metres / knows.settings.apad_speed_mps + IDLE_LOOKAHEAD_S, 0.0)
     view = knows.outlook()
     batteries = np.array([knows.battery(m) for m in route])
     missing = float(np.maximum(view.charged_frac - batteries, 0.0).sum())
-    charging_s = float(view.charge_time_s(batteries).max()) if route else IDLE_LOOKAHEAD_S
+    charging_s = float(view.charge_time_s(batteries).max())
     seconds = metres / knows.settings.apad_speed_mps + 2 * len(route) * view.stop_s + charging_s
     return budget.trip_wh(metres, seconds, missing)
 
