@@ -5,7 +5,9 @@ which every message the GCS saw is stamped (aMussel statuses, aPad telemetry, th
 commands), and `events.jsonl` with the loop's phases. Replaying reads the .tlog, in time order,
 through the live link's own readers (`gcs.link.telemetry`) into a `VehicleRegistry`, feeds the
 events to the same `MissionView` the live console uses (it reads that registry), and keeps one
-`Snapshot` per second of mission time, so seeking is an index lookup.
+`Snapshot` per second of mission time, so seeking is an index lookup. A long run keeps one per
+`sample_period_s` (at most about `MAX_FRAMES` of them: a week's run one per 31 s), and a run that
+says which aMussels it had (result.json) is read as a stream, never held whole in memory.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ from __future__ import annotations
 import bisect
 import json
 import math
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -33,6 +35,13 @@ from missiontime import us_to_s
 from mussel_sim.placement import load_area
 
 REPO_MISSIONS = MISSIONS_DIR
+MAX_FRAMES = 20_000  # snapshots a replay keeps: one per second up to 5.5 h of mission, coarser beyond
+
+
+def sample_period_s(span_s: float) -> float:
+    """Seconds between a replay's snapshots for a run of `span_s`: 1, or a whole number of seconds
+    that keeps them within `MAX_FRAMES`."""
+    return float(max(1, math.ceil(span_s / MAX_FRAMES)))
 
 
 class ReplayError(ValueError):
@@ -153,11 +162,24 @@ class Replay:
 def load_replay(path: str | Path, scenario: str | Path | None = None) -> Replay:
     files = run_files(path)
     found = find_scenario(files, scenario)
-    stream = list(read_tlog(files.tlog))
-    if not stream:
-        raise ReplayError(f"{files.tlog}: empty log")
-    t0_us = stream[0][0]
-    apad_id, ids = _apad_and_mussels(stream)
+    told = _told_mussels(files.result)
+    stream: Iterable[tuple[int, Any]]
+    if found is not None and told is not None:  # what the replay needs up front is known: read as a stream
+        stream, ids, apad_id = read_tlog(files.tlog), told, found.apad.system_id
+        span_s = float(str(files.result.get("duration_s", found.mission.duration_s)))
+        first = tlog.first_stamp_us(files.tlog)
+        if first is None:
+            raise ReplayError(f"{files.tlog}: empty log")
+        t0_us = first
+    else:  # an older or a console's folder: the log itself says who was there
+        held = list(read_tlog(files.tlog))
+        if not held:
+            raise ReplayError(f"{files.tlog}: empty log")
+        t0_us = held[0][0]
+        apad_id, ids = _apad_and_mussels(held)
+        span_s = us_to_s(held[-1][0] - t0_us)
+        stream = held
+    period_s = sample_period_s(span_s)
     registry = VehicleRegistry()
     if found is not None:
         try:
@@ -169,7 +191,7 @@ def load_replay(path: str | Path, scenario: str | Path | None = None) -> Replay:
                              apad_ids=[a.system_id for a in found.apads],
                              sinking_counts_active=found.mission.sinking_counts_active)
     else:
-        model = MissionView(registry, apad_id, 0.8, us_to_s(stream[-1][0] - t0_us), str(files.folder), ids)
+        model = MissionView(registry, apad_id, 0.8, span_s, str(files.folder), ids)
     events = read_events(files.events)
     frames: list[Snapshot] = []
     next_sample_s = 0.0
@@ -183,21 +205,32 @@ def load_replay(path: str | Path, scenario: str | Path | None = None) -> Replay:
                 e += 1
             model.sample(next_sample_s)
             frames.append(model.snapshot(next_sample_s))
-            next_sample_s += 1.0
+            next_sample_s += period_s
 
+    last_us = t0_us
     for stamp, msg in stream:
+        last_us = stamp
         t_s = us_to_s(stamp - t0_us)
         if t_s >= next_sample_s:
             sample_until(t_s - 1e-9)
         record = telemetry.read(msg)  # what the live link read from the same message
         if record is not None and not isinstance(record, telemetry.Rejected | telemetry.CommandAck):
             registry.apply(msg.get_srcSystem(), record, stamp - t0_us)
-    end_s = stream[-1][0] - t0_us
+    end_s = last_us - t0_us
     sample_until(us_to_s(end_s))
     for ev in events[e:]:
         model.event(ev)
     frames.append(model.snapshot(us_to_s(end_s)))
     return Replay(frames, str(files.folder))
+
+
+def _told_mussels(result: dict[str, object]) -> np.ndarray | None:
+    """The aMussel ids a run's result.json lists (sorted), None if it lists none."""
+    mussels = result.get("mussels")
+    if not isinstance(mussels, list) or not mussels:
+        return None
+    ids = [m["id"] for m in mussels if isinstance(m, dict) and type(m.get("id")) is int]
+    return np.array(sorted(ids), np.int64) if len(ids) == len(mussels) else None
 
 
 def _apad_and_mussels(stream: list[tuple[int, mavlink.MAVLink_message]]) -> tuple[int, np.ndarray]:

@@ -16,6 +16,7 @@ from rich.console import Console
 from gcs.mission.headless import run_mission
 from gcs.mission.results import RunResult, time_table
 from gcs.mission.scenario import load_scenario
+from gcs.records import replay
 from gcs.records.report_data import load_replayed_run
 from gcs.records.report_load import load_run
 from mussel_sim.vocabulary import MusselState
@@ -99,3 +100,19 @@ def test_a_report_from_traces_shows_what_the_replay_shows(run: tuple[RunResult, 
     common = np.intersect1d(a.t_s, b.t_s)
     assert common.size >= 590
     np.testing.assert_array_equal(a.lat_deg[np.isin(a.t_s, common)], b.lat_deg[np.isin(b.t_s, common)])
+
+
+def test_a_replay_keeps_a_bounded_number_of_snapshots(run: tuple[RunResult, Path],
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    _, out = run
+    assert [replay.sample_period_s(s) for s in (600.0, 20_000.0, 20_001.0, 7 * 86_400.0)] == [1.0, 1.0, 2.0, 31.0]
+    whole = replay.load_replay(out)
+    assert len(whole.frames) == 602  # one a second from 0 to 600 s, and the end
+    monkeypatch.setattr(replay, "MAX_FRAMES", 100)  # as a week's run would be sampled: coarser, bounded
+    thin = replay.load_replay(out)
+    times = np.array([f.t_s for f in thin.frames[:-1]])
+    assert len(thin.frames) <= 102 and np.all(np.diff(times) == 6.0)
+    for f in thin.frames[:-1:10]:  # each snapshot is the whole replay's at the same instant
+        same = whole.at(f.t_s)
+        np.testing.assert_array_equal(f.battery_frac, same.battery_frac)
+        np.testing.assert_array_equal(f.state, same.state)
