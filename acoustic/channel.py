@@ -73,6 +73,7 @@ class Medium:
         self.positions_m = np.array(positions_m, dtype=np.float64).reshape(-1, 3)
         self._on_water: list[Transmission] = []
         self._undecided: dict[int, NDArray[np.bool_]] = {}  # tx_id -> (n_nodes,) receivers still to decide
+        self._next_end: dict[int, float] = {}  # tx_id -> the earliest end among its undecided receptions
         self._next_id = 0
         self.counts: dict[str, int] = {o.value: 0 for o in Outcome}
 
@@ -100,6 +101,7 @@ class Medium:
         self._on_water.append(tx)
         if hears.any():
             self._undecided[tx.tx_id] = hears
+            self._next_end[tx.tx_id] = float(np.min(tx.arrival_s[hears])) + tx.airtime_s
         return tx
 
     def busy_until_s(self, node: int) -> float:
@@ -109,25 +111,23 @@ class Medium:
 
     def next_decision_s(self) -> float | None:
         """The earliest instant at which `settle` would decide a reception, or None."""
-        times = [float(np.min(t.arrival_s[m] + t.airtime_s)) for t in self._on_water
-                 if (m := self._undecided.get(t.tx_id)) is not None and m.any()]
-        return min(times, default=None)
+        return min(self._next_end.values(), default=None)
 
     def settle(self, now_s: float) -> list[Reception]:
         """Every reception that has ended by `now_s`, decided; ordered by end time, packet, receiver."""
         decided: list[Reception] = []
         for tx in self._on_water:
-            pending = self._undecided.get(tx.tx_id)
-            if pending is None:
+            if self._next_end.get(tx.tx_id, np.inf) > now_s:
                 continue
+            pending = self._undecided[tx.tx_id]
             end = tx.arrival_s + tx.airtime_s
             due = pending & (end <= now_s)
-            if not due.any():
-                continue
             decided.extend(self._decide(tx, np.flatnonzero(due)))
             pending &= ~due
-            if not pending.any():
-                del self._undecided[tx.tx_id]
+            if pending.any():
+                self._next_end[tx.tx_id] = float(np.min(end[pending]))
+            else:
+                del self._undecided[tx.tx_id], self._next_end[tx.tx_id]
         decided.sort(key=lambda r: (r.end_s, r.transmission.tx_id, r.receiver))
         self._prune(now_s)
         return decided

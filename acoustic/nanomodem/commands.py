@@ -8,7 +8,7 @@
 
 Data may hold any byte ($, #, CR, LF too): its length is given. The unit drops a command whose
 bytes come more than about 2 ms apart and answers `E`; `CommandParser` does the same, given each
-chunk's arrival time. A byte outside a command is dropped and counted (`stray_byte`), unanswered.
+chunk's arrival time. Bytes outside a command are dropped and counted (`stray_byte`), unanswered.
 """
 
 from __future__ import annotations
@@ -97,9 +97,7 @@ class CommandParser:
 
     def feed(self, data: bytes, t_s: float) -> list[Command | Rejected]:
         """A chunk that arrived at `t_s` (its bytes back to back, faster than 9600 baud is fine)."""
-        out = self.expire(t_s)
-        for byte in data:
-            out += self._matcher.push(byte)
+        out = self.expire(t_s) + self._matcher.feed(data)
         if data:
             self._last_s = t_s
         return out

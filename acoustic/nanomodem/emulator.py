@@ -166,7 +166,7 @@ class ModemEmulator:
 
     def _command(self, item: Command | Rejected, t_s: float) -> None:
         if isinstance(item, Rejected):
-            self._count(item.reason)
+            self.counts[item.reason] = self.counts.get(item.reason, 0) + item.weight
             if item.reason != STRAY:
                 self._reply(Error())
             return

@@ -8,13 +8,14 @@ template that got furthest, and the byte that broke it starts afresh if a templa
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Generic, TypeVar
 
 T = TypeVar("T")
 
-STRAY = "stray_byte"  # a byte outside any message: dropped, counted
+STRAY = "stray_byte"  # bytes outside any message: dropped, counted a byte each (`weight`)
 BAD_DIGIT = "bad_digit"
 
 
@@ -51,6 +52,11 @@ class Template(Generic[T]):
 class Rejected:
     reason: str
     raw: bytes
+
+    @property
+    def weight(self) -> int:
+        """What it counts for: a run of stray bytes a byte each, anything else once."""
+        return len(self.raw) if self.reason == STRAY else 1
 
 
 class _Cursor(Generic[T]):
@@ -112,6 +118,7 @@ class Matcher(Generic[T]):
             self._by_first[first.text[0]] = (*self._by_first.get(first.text[0], ()), t)
         self._live: list[_Cursor[T]] = []
         self._raw = bytearray()
+        self._starts = re.compile(b"[" + b"".join(re.escape(bytes([b])) for b in self._by_first) + b"]")
 
     @property
     def busy(self) -> bool:
@@ -123,6 +130,23 @@ class Matcher(Generic[T]):
         raw = bytes(self._raw)
         self._live, self._raw = [], bytearray()
         return raw
+
+    def feed(self, data: bytes) -> list[T | Rejected]:
+        """Bytes arrived together: what they finished; a run of bytes that begins nothing is one
+        `Rejected` (STRAY) found at once, not byte by byte (garbage is most of a hostile stream)."""
+        out: list[T | Rejected] = []
+        i, n = 0, len(data)
+        while i < n:
+            if not self._live:
+                found = self._starts.search(data, i)
+                j = found.start() if found else n
+                if j > i:
+                    out.append(Rejected(STRAY, data[i:j]))
+                    i = j
+                    continue
+            out += self.push(data[i])
+            i += 1
+        return out
 
     def push(self, byte: int) -> list[T | Rejected]:
         """One byte: what it finished (a message, a rejection; a rejection and then what the breaking

@@ -152,12 +152,11 @@ class ReplyParser:
 
     def feed(self, data: bytes) -> list[Reply]:
         out: list[Reply] = []
-        for byte in data:
-            for item in self._matcher.push(byte):
-                if isinstance(item, Rejected):
-                    self.dropped[item.reason] = self.dropped.get(item.reason, 0) + 1
-                else:
-                    out.append(item)
+        for item in self._matcher.feed(data):
+            if isinstance(item, Rejected):
+                self.dropped[item.reason] = self.dropped.get(item.reason, 0) + item.weight
+            else:
+                out.append(item)
         return out
 
     def cut(self, reason: str) -> None:

@@ -92,7 +92,7 @@ class SerialFuzz:
         self.t_s += float(self.rng.uniform(0.0, 0.004))
         for item in self.commands.feed(data, self.t_s):
             if not isinstance(item, Command):
-                self.command_counts[item.reason] = self.command_counts.get(item.reason, 0) + 1
+                self.command_counts[item.reason] = self.command_counts.get(item.reason, 0) + item.weight
         self.replies.feed(data)
         self.emulator.advance(self.t_s)
         self.emulator.from_host(data, self.t_s)

@@ -49,8 +49,7 @@ def test_invalid_commands_are_rejected_by_reason() -> None:
 
 def test_stray_bytes_are_dropped_and_a_command_after_them_parses() -> None:
     got = CommandParser().feed(b"xyz\r\n$?", 0.0)
-    assert [g.reason for g in got[:-1] if isinstance(g, Rejected)] == ["stray_byte"] * 5
-    assert got[-1] == Command(Kind.STATUS)
+    assert got == [Rejected("stray_byte", b"xyz\r\n"), Command(Kind.STATUS)] and got[0].weight == 5
 
 
 def test_a_gap_of_more_than_2_ms_between_bytes_rejects_the_command() -> None:
@@ -63,10 +62,9 @@ def test_a_gap_of_more_than_2_ms_between_bytes_rejects_the_command() -> None:
     # bytes 1 ms apart (9600 baud) are fine; a late byte after a gap is stray, and starts nothing
     assert p.feed(b"$P", 2.0) + p.feed(b"0", 2.001) + p.feed(b"05", 2.002) == [Command(Kind.PING, 5)]
     late = p.feed(b"$P0", 3.0) + p.feed(b"05", 3.01)
-    assert late == [Rejected("gap", b"$P0"), Rejected("stray_byte", b"0"), Rejected("stray_byte", b"5")]
+    assert late == [Rejected("gap", b"$P0"), Rejected("stray_byte", b"05")]
     # data bytes too: a slow payload is a gap
-    assert p.feed(b"$B04ab", 4.0) + p.feed(b"cd", 4.5) == [Rejected("gap", b"$B04ab"), Rejected("stray_byte", b"c"),
-                                                            Rejected("stray_byte", b"d")]
+    assert p.feed(b"$B04ab", 4.0) + p.feed(b"cd", 4.5) == [Rejected("gap", b"$B04ab"), Rejected("stray_byte", b"cd")]
 
 
 def test_a_payload_holding_dollar_hash_and_crlf_is_data() -> None:
