@@ -302,3 +302,58 @@ def run_pool12_name(w: Work) -> None:
 def run_bay24_name(w: Work) -> None:
     """the same on bay24."""
     _strategies_on(w, BAY24_NAME, "bay24")
+
+
+# docs/acoustic.md
+ACOUSTIC_FIGURES = "python -m gcs.acoustic.figures --figure docs/acoustic-delivery.png"
+VIL_MODEM = "vil modem --nodes 5@300,0,5 9@2400,0,5"
+FUZZ_MODEM = ".venv/bin/python bench/fuzz_modem.py"
+
+
+def run_acoustic_figures(w: Work) -> None:
+    """the figure is a PNG; the delivery ranges it prints and the TDMA frames of pool12, bay24 and bay120
+    are the page's, figure for figure."""
+    line = w.line(ACOUSTIC_FIGURES)
+    out = words(w.sh(line, timeout_s=600).stdout)
+    assert (w.path / line.split("--figure ")[1].split()[0]).read_bytes()[:4] == b"\x89PNG"
+    page = words(_doc("docs/acoustic.md"))
+    reach = re.findall(r"(\d+)-byte packets: delivered with p >= 0.9 to ([\d,]+) m, p >= 0.1 to ([\d,]+) m", out)
+    assert [n for n, _, _ in reach] == ["16", "64"], out
+    for _, far90, far10 in reach:
+        assert f"{far90} m" in page and f"{far10} m" in page, (far90, far10)
+    rows = re.findall(r"^\| (pool12|bay24|bay120) +\|(.*)\|$", _doc("docs/acoustic.md"), re.MULTILINE)
+    assert [name for name, _ in rows] == ["pool12", "bay24", "bay120"]
+    for name, cells in rows:
+        figures = " │ ".join(c.strip() for c in cells.split("|"))
+        assert f"│ {name} │ {figures} │" in out, (name, figures, out)
+
+
+def run_vil_modem(w: Work) -> None:
+    """the first line is the pty; through it (pyserial, the GCS's driver) unit 5 answers a ping with 300 m
+    and unit 9, 2.4 km away, with #TO; SIGTERM ends it with its counts."""
+    from acoustic.nanomodem.driver import ModemDriver, Outcome
+    from acoustic.nanomodem.ports import SerialPort
+    from acoustic.nanomodem.replies import Range
+    from missiontime.clocks import WallClock
+
+    modem = w.start(w.line(VIL_MODEM))
+    try:
+        device = modem.wait_output(r"^(/dev/\S+)$", timeout_s=60.0).group(1)
+        driver = ModemDriver(SerialPort(device), WallClock())
+        near = driver.ping(5)
+        assert near.ok and isinstance(near.reply, Range) and abs(near.reply.range_m(1500.0) - 300.0) < 0.1
+        assert driver.ping(9).outcome is Outcome.TIMEOUT
+        driver.port.close()
+    finally:
+        code = modem.stop()
+    assert code == 0 and "vil modem: stopped; " in modem.output and "timeout 1" in modem.output, modem.output
+
+
+def run_fuzz_modem(w: Work) -> None:
+    """random and mutated serial inputs through the parsers and the emulator: 0 uncaught exceptions, the
+    drops counted by reason (full: 120,000 inputs)."""
+    out = words(w.sh(w.line(FUZZ_MODEM), timeout_s=3600).stdout)
+    assert "half random, half mutated" in out and "uncaught exceptions: 0" in out, out
+    assert "command parser: stray_byte" in out and "reply parser (driver): stray_byte" in out, out
+    if w.full:
+        assert "120,000 inputs" in out, out
