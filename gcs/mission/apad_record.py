@@ -67,20 +67,18 @@ class ApadRecord:
     max_rows: int = DEFAULT_MAX_TRACK_ROWS
     complete: bool = True  # False: the track starts at a restore, not at the mission's start
     day_energy: list[NDArray[np.float64]] = field(default_factory=list)  # per day end: (m, 3) counters, Wh
-    _track: ThinnedSeries | None = None  # t_s, then lat, lon, cost per aPad
-    _k: int = 0
+    _track: ThinnedSeries = field(init=False)  # t_s, then lat, lon, cost per aPad
+    _k: int = field(init=False, default=0)  # samples offered
 
     def __post_init__(self) -> None:
         self._track = ThinnedSeries(1 + 3 * len(self.apad_ids), self.max_rows)
 
     def sample(self, t_s: float, lat: list[float], lon: list[float], cost_m: list[float]) -> None:
-        assert self._track is not None
         self._track.offer(self._k, [t_s, *lat, *lon, *cost_m])
         self._k += 1
 
     def track(self) -> dict[str, NDArray[np.float64]]:
         """apad_t_s `(k,)` (mission seconds), apad_lat_deg, apad_lon_deg, apad_cost_m `(k, m)`."""
-        assert self._track is not None
         a, m = self._track.array(), len(self.apad_ids)
         return {"apad_t_s": a[:, 0], "apad_lat_deg": a[:, 1: 1 + m], "apad_lon_deg": a[:, 1 + m: 1 + 2 * m],
                 "apad_cost_m": a[:, 1 + 2 * m:]}
