@@ -220,7 +220,7 @@ class ApadActions:
 
     def wait_until(self, done: Callable[[], bool], timeout_s: float | None = None, interruptible: bool = True) -> bool:
         deadline = None if timeout_s is None else self.clock.time() + timeout_s
-        if self.status.phase in HOLDING_PHASES and not done():
+        if self.status.phase in HOLDING_PHASES and self.link_up() and not done():
             self.pace.hold()  # it holds in place until `done`: slow telemetry meanwhile
         while not done():
             if deadline is not None and self.clock.time() >= deadline:
@@ -301,5 +301,5 @@ class ApadActions:
             self._phase_since_s = now
             self.status.phase = phase
             self._log("phase", phase=str(phase))
-        if phase not in HOLDING_PHASES:
+        if phase not in HOLDING_PHASES and self.link_up():  # a silent aPad would not answer: asked at the next change
             self.pace.move()  # fast telemetry from the first command of a phase that acts
