@@ -111,7 +111,7 @@ _COMMANDS = st.one_of(
 )
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=150, deadline=None)
 @given(st.lists(_COMMANDS, min_size=1, max_size=6), st.data())
 def test_any_commands_split_anywhere_within_the_gap_parse_the_same(commands: list[Command],
                                                                    data: st.DataObject) -> None:
@@ -137,7 +137,7 @@ _REPLY = st.one_of(
 )
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=150, deadline=None)
 @given(st.lists(_REPLY, min_size=1, max_size=6))
 def test_any_replies_round_trip_through_the_reply_parser(replies: list[object]) -> None:
     parser = ReplyParser()

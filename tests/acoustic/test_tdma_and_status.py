@@ -81,7 +81,7 @@ def test_wild_values_clip_ids_out_of_range_are_refused_bad_payloads_are_named() 
     assert version.value.reason == "version"
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=150, deadline=None)
 @given(st.binary(min_size=SIZE - 1, max_size=SIZE - 1))
 def test_any_version_1_payload_round_trips_exactly(rest: bytes) -> None:
     data = b"\x01" + rest
@@ -91,7 +91,7 @@ def test_any_version_1_payload_round_trips_exactly(rest: bytes) -> None:
 _FINITE = st.floats(allow_nan=False, allow_infinity=False, min_value=-1e9, max_value=1e9)
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=150, deadline=None)
 @given(st.integers(0, 65535), st.integers(0, 255), st.integers(0, 255), st.lists(_FINITE, min_size=9, max_size=9))
 def test_any_report_packs_and_unpacks_within_a_quantum(mid: int, seq: int, state: int, values: list[float]) -> None:
     report = StatusReport(mid, seq, state, *values)
