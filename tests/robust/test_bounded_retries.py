@@ -79,7 +79,8 @@ def test_a_current_that_carries_amussels_outside_the_geofence_ends_the_run_with_
 
 
 def test_a_link_that_dies_for_good_stops_new_work_and_the_mission_still_ends(tmp_path: Path) -> None:
-    s = load_scenario("pool12")
+    # 15 of pool12's 40 minutes: the link dies at 500 s; what follows is the same silence to the end.
+    s = load_scenario("pool12").with_overrides(duration_s=900.0)
     faults = LinkFaults(outages_s=((500.0, s.mission.duration_s + 60.0),), seed=0)
     r = run_mission(s, tmp_path, options=LinkOptions(faults=faults))
     assert r.end_reason == "mission time"
