@@ -121,11 +121,20 @@ class FleetKnowledge:
     def pool_needed(self, min_pool: int) -> int:
         """Candidates to wait for before a collection: the scenario's `min_pool` is for the whole fleet;
         with several aPads each waits for its share's part of it (`min_pool` x share / fleet, at least
-        one), or an aPad with a share of 6 would wait for 4 of its 6 as one aPad waits for 4 of 12."""
+        one), or an aPad with a share of 6 would wait for 4 of its 6 as one aPad waits for 4 of 12.
+        Never more than this aPad's aMussels on the seabed (at least one): a fleet smaller than
+        `min_pool`, or one that depletion has thinned below it, would otherwise never be collected while
+        the rest of it depleted too (issue 20: two always-on aMussels, or pool12 after a home charge)."""
         if self.shares is None or not self.shares.owner:
-            return min_pool
-        share = sum(1 for owner in self.shares.owner.values() if owner == self.apad_id)
-        return max(1, math.ceil(min_pool * share / len(self.shares.owner)))
+            need = min_pool
+        else:
+            share = sum(1 for owner in self.shares.owner.values() if owner == self.apad_id)
+            need = max(1, math.ceil(min_pool * share / len(self.shares.owner)))
+        heard = [m for m in self.homes if m in self.api.mussels and self.serves(m)]
+        if not heard:  # nothing heard yet: nothing to count
+            return need
+        seabed = sum(1 for m in heard if self.state(m) == MusselState.ACTIVE)
+        return max(1, min(need, seabed))
 
     def too_late_to_call_up(self) -> bool:
         return self.settings.mission.duration_s - self.clock.time() < self.settings.call_up_margin_s

@@ -58,3 +58,13 @@ def test_keep_alive_puts_the_fleet_to_sleep_before_a_home_charge_and_loses_none(
     assert all(m["profile"].startswith("always_on+order:") for m in mussels)  # the fleet applied them
     assert sum(m["samples_scheduled"] for m in mussels) > 0  # asleep, each wake is a sample scheduled
     assert sleep_orders_on_the_wire(tmp_path / "cautious" / "gcs.tlog") == []
+
+
+def test_a_fleet_smaller_than_min_pool_is_collected(tmp_path: Path) -> None:
+    """Two aMussels and min_pool 4: the loop waited for four candidates that could never be, and both
+    depleted uncollected (the capacity study's smallest fleet). It waits for the aMussels it has."""
+    path = scenario_variant("bay-capacity", tmp_path / "two.toml", {
+        "count = 8": "count = 2", 'duration = "40m"': 'duration = "8m"', "start_battery = [0.6, 1.0]":
+        "start_battery = [0.6, 0.7]", 'collect_strategy = "greedy"': 'collect_strategy = "cautious"'})
+    result = run_mission(load_scenario(path), tmp_path / "run").to_json()
+    assert sorted(m["id"] for m in result["mussels"] if m["dockings"]) == [1, 2]
