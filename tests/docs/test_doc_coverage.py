@@ -61,6 +61,10 @@ def test_a_long_only_example_still_names_what_there_is(command: str, tmp_path: P
             pytest.fail(f"{line!r} no longer parses (exit {exc.code})")
     elif program(line) == "dask":
         assert (Path(sys.executable).parent / "dask").is_file()
+    elif argv[1] == "-m":  # python -m MODULE: the module is there
+        import importlib.util
+
+        assert program(line) in ("python", ".venv/bin/python") and importlib.util.find_spec(argv[2]), line
     else:
         assert program(line) == ".venv/bin/python" and (ROOT / argv[1]).is_file(), line
 

@@ -60,3 +60,19 @@ def test_a_tiny_capacity_sweep_gives_its_table_and_figure(tmp_path: Path) -> Non
     assert main([str(tmp_path / "nothing")]) == 2  # no sweep there: one line, exit 2
     frame = pd.read_parquet(out / "results.parquet")
     assert set(frame["fleet.count"]) == {2, 6} and set(frame["fleet.profile"]) == {"always_on", "hourly_wake"}
+
+
+def test_the_largest_fleet_kept_alive_is_the_largest_size_every_seed_kept() -> None:
+    def mission(count: int, seed: int, alive: bool, strategy: str = "keep_alive") -> dict[str, object]:
+        return {"profile": "always_on", "count": count, "strategy": strategy, "seed": seed, "alive": alive,
+                "depleted": 0 if alive else 1, "uptime_avg": 80.0, "uptime_min": 70.0, "samples_taken": 5,
+                "samples_scheduled": 10, "dockings_per_day": 8.0 * count, "rounds_per_day": 2.0 * count,
+                "home_charges": 1, "days": 0.25, "end": "mission time"}
+
+    rows = pd.DataFrame([mission(2, 1, True), mission(2, 2, True), mission(4, 1, True), mission(4, 2, False),
+                         mission(2, 1, False, "cautious"), mission(4, 1, False, "cautious")])
+    table = capacity_table(rows).set_index("strategy")
+    assert table.loc["keep_alive", "largest kept alive"] == "2"  # 4 lost one in seed 2
+    assert table.loc["keep_alive", "dockings / day"] == 16.0 and table.loc["keep_alive", "samples taken %"] == 50.0
+    assert table.loc["cautious", "largest kept alive"] == "< 2"
+    assert table.loc["cautious", "sizes swept"] == "2 4"
