@@ -92,6 +92,16 @@ class Result:
         return pd.DataFrame(rows).set_index("sysid") if rows else pd.DataFrame()
 
     @cached_property
+    def days(self) -> pd.DataFrame:
+        """One row per simulated day (index: day, 1 = the first; each 86,400 s / theta of mission time):
+        from_s, to_s, uptime_pct, alive, depleted, and per aPad N `charges_N` and `passed_wh_N`;
+        empty for a run that kept none (older runs)."""
+        rows = [{k: v for k, v in d.items() if not isinstance(v, dict)}
+                | {f"{k}_{a}": x for k in ("charges", "passed_wh") for a, x in d.get(k, {}).items()}
+                for d in self.raw.days]
+        return pd.DataFrame(rows).set_index("day") if rows else pd.DataFrame()
+
+    @cached_property
     def active(self) -> pd.DataFrame:
         """Active aMussels at each fleet step: columns `t_s` (mission seconds) and `active`."""
         with np.load(RunFolder(self.folder).traces) as traces:

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from rich.console import Console
 
+import vil
 from gcs.mission.headless import run_mission
 from gcs.mission.results import RunResult, time_table
 from gcs.mission.scenario import load_scenario
@@ -60,6 +61,9 @@ def test_per_day_figures_are_the_steps_of_each_day(run: tuple[RunResult, Path]) 
     passed = sum(r["passed_wh"]["1"] for r in result.days)
     assert passed == pytest.approx(result.apads[0]["passed_wh"], abs=0.01) and passed > 0
     assert json.loads((out / "result.json").read_text())["days"] == result.days
+    days = vil.load(out).days  # the Python API's table of them
+    assert list(days.index) == [1, 2, 3, 4, 5] and list(days["charges_1"]) == [r["charges"]["1"] for r in result.days]
+    assert days["uptime_pct"].tolist() == [r["uptime_pct"] for r in result.days]
 
 
 def test_state_shares_sum_to_the_time_run(run: tuple[RunResult, Path]) -> None:
