@@ -1,29 +1,69 @@
-"""The emulator on an in-process pipe, stepped by a mission clock's scheduler (lockstep runs, tests).
+"""The emulator on an in-process pipe, run by a mission clock (lockstep runs, tests).
 
-`attach` registers one periodic task: it hands the emulator what the driver wrote (arrived at the
-task's instant), runs it to that instant and writes its answers back. The driver on the pipe's other
-end, on the same clock, waits with `clock.sleep`, which runs the task: no thread, no pty, and the
-same seed gives the same bytes.
+`attach` makes the emulator a receive poller of the clock's scheduler (what the driver writes rings
+the scheduler's doorbell, so it is handed over at the instant it was written, and nothing is polled
+otherwise) and a task rescheduled to the emulator's next instant of its own (a reception's end, a
+ping's timeout, a command's gap). The driver on the pipe's other end, on the same clock, waits with
+`clock.sleep`, which runs both: no thread, no pty, no idle ticking, and the same seed gives the same
+bytes.
 """
 
 from __future__ import annotations
 
 from acoustic.nanomodem.emulator import ModemEmulator
-from acoustic.nanomodem.ports import BytePort
-from missiontime.clocks import Scheduler, Task, us_to_s
+from acoustic.nanomodem.ports import PipeEnd
+from missiontime.clocks import Clock, Doorbell, Task, seconds_to_us, us_to_s
 
-STEP_S = 0.005  # the driver's own poll: a command written in one piece arrives in one piece
+IDLE_S = 3600.0  # the task's period while the emulator has nothing due (it is rescheduled when it has)
 
 
-def attach(core: ModemEmulator, port: BytePort, scheduler: Scheduler, step_s: float = STEP_S) -> Task:
-    def step(now_us: int) -> None:
-        now = us_to_s(now_us)
-        out = core.advance(now)
-        data = port.read()
-        if data:
-            core.from_host(data, now)
-            out += core.advance(now)
+class Attached:
+    """The emulator's side of the pipe, on a clock."""
+
+    def __init__(self, core: ModemEmulator, port: PipeEnd, clock: Clock) -> None:
+        self.core, self.port, self.clock = core, port, clock
+        self.task: Task = clock.scheduler.every(IDLE_S, self._due, "nanomodem emulator", start_us=clock.now_us)
+        clock.scheduler.add_poller(self)
+
+    def ring_on(self, bell: Doorbell) -> bool:
+        self.port.bell = bell
+        return True
+
+    def fileno(self) -> int | None:
+        return None
+
+    def poll(self) -> bool:
+        data = self.port.read()
+        if not data:
+            return False
+        now = us_to_s(self.clock.now_us)
+        out = self.core.advance(now)
+        self.core.from_host(data, now)
+        self._send(out + self.core.advance(now))
+        return True
+
+    def remote_send(self, address: int, data: bytes, dest: int | None = None) -> None:
+        """Remote unit `address` sends now (a broadcast, or a unicast to `dest`): the emulator's
+        `remote_send`, with its next instant rescheduled."""
+        self.core.remote_send(address, us_to_s(self.clock.now_us), data, dest)
+        self._send(b"")
+
+    def _due(self, now_us: int) -> None:
+        self._send(self.core.advance(us_to_s(now_us)))
+
+    def _send(self, out: bytes) -> None:
         if out:
-            port.write(out)
+            self.port.write(out)
+        due = self.core.next_due_s()
+        sched = self.clock.scheduler
+        if due is None:
+            sched.reschedule(self.task, active=False)
+        else:
+            due_us = seconds_to_us(due)
+            if us_to_s(due_us) < due:  # rounded down: at that microsecond it would not yet be due, and spin
+                due_us += 1
+            sched.reschedule(self.task, next_us=max(due_us, self.clock.now_us), active=True)
 
-    return scheduler.every(step_s, step, "nanomodem emulator")
+
+def attach(core: ModemEmulator, port: PipeEnd, clock: Clock) -> Attached:
+    return Attached(core, port, clock)

@@ -12,6 +12,8 @@ from typing import Protocol
 
 import serial
 
+from missiontime.clocks import Doorbell
+
 BAUD = 9600  # 8N1, no flow control
 
 
@@ -58,17 +60,21 @@ class SerialPort:
 
 
 class PipeEnd:
-    """One end of an in-process byte pipe; `pipe()` makes the pair."""
+    """One end of an in-process byte pipe; `pipe()` makes the pair. An end given a `bell` (a mission
+    scheduler's `Doorbell`) has it rung by every write into it: the scheduler polls its reader only then."""
 
     def __init__(self) -> None:
         self._inbox: deque[bytes] = deque()
         self.peer: PipeEnd | None = None
         self.closed = False
+        self.bell: Doorbell | None = None
 
     def write(self, data: bytes) -> None:
         if self.closed or self.peer is None or self.peer.closed:
             raise PortClosed("pipe closed")
         self.peer._inbox.append(bytes(data))  # noqa: SLF001 - the pair is one object in two halves
+        if self.peer.bell is not None:
+            self.peer.bell.rings += 1
 
     def read(self) -> bytes:
         if self.closed:

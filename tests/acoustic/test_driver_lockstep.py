@@ -9,7 +9,7 @@ import pytest
 from acoustic.airtime import RANGE_TICK_S
 from acoustic.nanomodem.driver import ModemDriver, Outcome
 from acoustic.nanomodem.emulator import ModemEmulator, RemoteUnit
-from acoustic.nanomodem.lockstep import attach
+from acoustic.nanomodem.lockstep import Attached, attach
 from acoustic.nanomodem.ports import pipe
 from acoustic.nanomodem.replies import AddressSet, Quality, Range, Received, Status
 from acoustic.params import AcousticParams
@@ -19,11 +19,15 @@ NEAR, FAR = RemoteUnit(5, (300.0, 0.0, 5.0), supply_v=11.5), RemoteUnit(9, (5000
 
 
 def _rig(seed: int = 1) -> tuple[ModemDriver, ModemEmulator, VirtualClock]:
+    driver, attached, clock = _attached(seed)
+    return driver, attached.core, clock
+
+
+def _attached(seed: int = 1) -> tuple[ModemDriver, Attached, VirtualClock]:
     clock = VirtualClock()
     host, modem = pipe()
     core = ModemEmulator(AcousticParams(), (NEAR, FAR), np.random.default_rng(seed))
-    attach(core, modem, clock.scheduler)
-    return ModemDriver(host, clock), core, clock
+    return ModemDriver(host, clock), attach(core, modem, clock), clock
 
 
 def test_status_address_and_quality() -> None:
@@ -48,7 +52,8 @@ def test_ping_gives_the_range_and_an_unreachable_unit_times_out_after_4_s() -> N
 
 
 def test_unicast_with_ack_voltage_echo_and_packets_heard() -> None:
-    driver, core, clock = _rig()
+    driver, attached, clock = _attached()
+    core = attached.core
     assert driver.unicast_ack(5, b"surface!").ok
     assert [(a, f.data) for _, a, f in core.heard.entries] == [(5, b"surface!")]
     volts = driver.voltage(5)
@@ -58,7 +63,7 @@ def test_unicast_with_ack_voltage_echo_and_packets_heard() -> None:
     assert driver.broadcast(b"hello all").ok and driver.unicast(5, b"hi").ok
     assert driver.test(5).ok
     clock.sleep(3.0)
-    core.remote_send(5, clock.time(), b"status 31 bytes")
+    attached.remote_send(5, b"status 31 bytes")
     clock.sleep(2.0)
     assert driver.received() == [Received(b"$#\r\n"), Received(b"status 31 bytes", 5)]
     assert driver.dropped == {}
@@ -102,3 +107,15 @@ def test_the_emulator_runs_to_any_instant_through_a_slow_command_and_a_timeout()
     assert core.advance(due) == b"E\r\n" and core.next_due_s() is None  # at its deadline exactly
     core.from_host(b"$P009", 2.0)
     assert core.advance(5.999) == b"$P009\r\n" and core.advance(6.0) == b"#TO\r\n"
+
+
+def test_an_idle_emulator_costs_the_clock_nothing() -> None:
+    """No traffic: the emulator's task is not ticking (a lockstep mission of hours pays nothing for it)."""
+    driver, attached, clock = _attached()
+    assert driver.ping(5).ok
+    clock.sleep(1.0)
+    assert not attached.task.active  # nothing due: off the queue until a byte or a packet needs it
+    calls = []
+    clock.scheduler.every(600.0, lambda now_us: calls.append(now_us), "a slow task", start_us=clock.now_us)
+    clock.sleep(3600.0)
+    assert len(calls) == 7 and not attached.task.active and driver.status().ok

@@ -144,7 +144,7 @@ def test_a_pipe_that_closes_ends_every_wait_as_closed() -> None:
     clock = VirtualClock()
     host, modem = pipe()
     core = ModemEmulator(AcousticParams(), (NEAR,), np.random.default_rng(1))
-    attach(core, modem, clock.scheduler)
+    attach(core, modem, clock)
     driver = ModemDriver(host, clock)
     assert driver.status().ok
     modem.write(b"#R005T0")  # half a reply, then the other end goes
