@@ -47,6 +47,7 @@ def mission_row(record: dict[str, Any]) -> dict[str, Any]:
         "rounds_per_day": result["cycles"] / days,
         "home_charges": sum(a.get("home_charges", 0) for a in apads),
         "days": days,
+        "sim_days": days * result["theta"],  # the aMussels' days (theta 30: a mission day is 30)
         "end": result["end_reason"],
     }
 
@@ -106,7 +107,9 @@ def figure(rows: pd.DataFrame, path: Path) -> None:
             axes[1][col].plot(means.index, means["dockings_per_day"], marker="o", label=strategy)
         counts = sorted(mine["count"].unique())
         axes[0][col].plot(counts, counts, color="0.7", linestyle=":", label="the whole fleet")
-        axes[0][col].set_title(f"{profile}: one aPad, {mine['days'].max():.0f} day(s) of mission time")
+        hours, sim_days = 24 * float(mine["days"].max()), float(mine["sim_days"].max())
+        axes[0][col].set_title(f"{profile}: one aPad, {hours:g} h ({sim_days:g} sim. days)")
+        axes[1][col].set_xticks(counts)
         axes[0][col].set_ylabel("aMussels depleted")
         axes[1][col].set_ylabel("dockings (charges) per day")
         axes[1][col].set_xlabel("aMussels in the fleet")
@@ -143,7 +146,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"capacity: {exc}", file=sys.stderr)
         return 2
     print(markdown(capacity_table(rows)))
-    print(markdown(rows.drop(columns=["days"])))
+    print(markdown(rows.drop(columns=["days", "sim_days"])))
     if args.figure:
         figure(rows, args.figure)
         print(f"\nfigure: {args.figure}")
