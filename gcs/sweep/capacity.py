@@ -5,7 +5,7 @@
 Reads the sweep's cell files (DIR/cells/*.json: a sweep still running, or resumed, reports what it has),
 one row per mission: its profile and fleet size, strategy and seed; whether every aMussel lived through
 it (none depleted at any time), how many depleted, uptime, samples taken against scheduled, the aPad's
-dockings (one charge each) and rounds per day of mission time, and its home charges. The table gives,
+dockings (one charge each) and rounds per day of mission time, and its hours home at the charger. The table gives,
 per profile and strategy, the largest fleet swept that every seed kept alive, and what the aPad did for it.
 """
 
@@ -45,7 +45,7 @@ def mission_row(record: dict[str, Any]) -> dict[str, Any]:
         "samples_scheduled": sum(m.get("samples_scheduled", 0) for m in mussels),
         "dockings_per_day": dockings / days,
         "rounds_per_day": result["cycles"] / days,
-        "home_charges": sum(a.get("home_charges", 0) for a in apads),
+        "home_h": round(sum(a.get("phase_s", {}).get("home charge", 0.0) for a in apads) / 3600.0, 2),  # charging
         "days": days,
         "sim_days": days * result["theta"],  # the aMussels' days (theta 30: a mission day is 30)
         "end": result["end_reason"],
@@ -70,7 +70,7 @@ def capacity_table(rows: pd.DataFrame) -> pd.DataFrame:
         by_count = group.groupby("count").agg(
             alive=("alive", "all"), depleted=("depleted", "mean"), uptime_avg=("uptime_avg", "mean"),
             uptime_min=("uptime_min", "mean"), dockings_per_day=("dockings_per_day", "mean"),
-            rounds_per_day=("rounds_per_day", "mean"), home_charges=("home_charges", "mean"),
+            rounds_per_day=("rounds_per_day", "mean"), home_h=("home_h", "mean"),
             taken=("samples_taken", "sum"), scheduled=("samples_scheduled", "sum"), seeds=("seed", "nunique"))
         kept = by_count.index[by_count["alive"]]
         at = int(kept.max()) if len(kept) else int(by_count.index.min())
@@ -81,7 +81,7 @@ def capacity_table(rows: pd.DataFrame) -> pd.DataFrame:
             "sizes swept": " ".join(str(int(c)) for c in by_count.index),
             "dockings / day": round(float(r["dockings_per_day"]), 1),
             "rounds / day": round(float(r["rounds_per_day"]), 1),
-            "home charges": round(float(r["home_charges"]), 1),
+            "hours home": round(float(r["home_h"]), 1),
             "uptime avg %": round(float(r["uptime_avg"]), 1), "uptime min %": round(float(r["uptime_min"]), 1),
             "samples taken %": round(100.0 * float(r["taken"]) / float(r["scheduled"]), 1) if r["scheduled"] else None,
             "seeds": int(r["seeds"]),

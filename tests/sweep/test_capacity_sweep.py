@@ -67,7 +67,7 @@ def test_the_largest_fleet_kept_alive_is_the_largest_size_every_seed_kept() -> N
         return {"profile": "always_on", "count": count, "strategy": strategy, "seed": seed, "alive": alive,
                 "depleted": 0 if alive else 1, "uptime_avg": 80.0, "uptime_min": 70.0, "samples_taken": 5,
                 "samples_scheduled": 10, "dockings_per_day": 8.0 * count, "rounds_per_day": 2.0 * count,
-                "home_charges": 1, "days": 0.25, "sim_days": 7.5, "end": "mission time"}
+                "home_h": 1.0, "days": 0.25, "sim_days": 7.5, "end": "mission time"}
 
     rows = pd.DataFrame([mission(2, 1, True), mission(2, 2, True), mission(4, 1, True), mission(4, 2, False),
                          mission(2, 1, False, "cautious"), mission(4, 1, False, "cautious")])
