@@ -32,7 +32,7 @@ from mavlink_dialect import AddressError, Transport, mavlink, open_transport, si
 from mavlink_dialect.signing import SigningKeyError, load_key
 from mavlink_dialect.signing_state import SAVE_PERIOD_S, SigningKeeper
 from missiontime import Scheduler, WallClock
-from missiontime.durations import WEEK_S, parse_duration_s
+from missiontime.durations import MAX_MISSION_S, parse_duration_s
 from mussel_sim.geo import LocalFrame
 
 DEFAULT_LISTEN = "udp:127.0.0.1:14550"
@@ -94,7 +94,7 @@ def _sysid(text: str) -> int:
 
 def _duration(text: str) -> float:
     try:
-        return parse_duration_s(text, WEEK_S)  # longer: leave --duration out and stop it with Ctrl-C
+        return parse_duration_s(text, MAX_MISSION_S)  # longer: leave --duration out and stop it with Ctrl-C
     except ValueError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
 

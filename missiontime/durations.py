@@ -10,12 +10,12 @@ from __future__ import annotations
 import math
 import re
 
-WEEK_S = 7 * 86400.0  # a week at sea; longer is a typo that would run for hours of CPU
+MAX_MISSION_S = 90 * 86400.0  # a season at sea; longer is a typo (a week of pool12 is ~40 min of CPU)
 UNIT_S = {"ms": 1e-3, "s": 1.0, "m": 60.0, "min": 60.0, "h": 3600.0, "d": 86400.0}  # d: long missions
 _DURATION = re.compile(r"^\s*(\d+(?:\.\d*)?|\.\d+)\s*([a-z]*)\s*$")
 
 
-def parse_duration_s(text: object, max_s: float = WEEK_S, allow_zero: bool = False) -> float:
+def parse_duration_s(text: object, max_s: float = MAX_MISSION_S, allow_zero: bool = False) -> float:
     """Seconds from "90s", "40min", "40m", "1.5h" or "200ms", in (0, max_s] ([0, max_s] with
     `allow_zero`); ValueError with one line saying what to write instead."""
     if isinstance(text, int | float) and not isinstance(text, bool) and math.isfinite(text):
@@ -40,5 +40,5 @@ def parse_duration_s(text: object, max_s: float = WEEK_S, allow_zero: bool = Fal
 
 
 def describe_s(seconds: float) -> str:
-    """A limit in words: "a week", "5 s"."""
-    return "a week" if seconds == WEEK_S else f"{seconds:g} s"
+    """A limit in words: "90 days", "5 s"."""
+    return "90 days" if seconds == MAX_MISSION_S else f"{seconds:g} s"

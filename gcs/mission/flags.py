@@ -62,7 +62,7 @@ def duration_up_to(max_s: float) -> Callable[[str], float]:
 
 
 def mission_time(text: str) -> float:
-    """A moment of the mission, as the time since its start with a unit ("90s", "12min"), up to a week."""
+    """A moment of the mission, as the time since its start with a unit ("90s", "12min"), up to 90 days."""
     return _seconds(text, MAX_DURATION_S, allow_zero=True)
 
 

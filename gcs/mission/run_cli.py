@@ -90,7 +90,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--draw-fleet", action="store_true",
                         help="draw the fleet from the seed instead of the scenario's saved start configuration")
     parser.add_argument("--duration", type=flags.duration,
-                        help="mission time with its unit, up to a week: 90s, 40min, 1h, 7d (default: the scenario's)")
+                        help="mission time with its unit, up to 90 days: 90s, 40min, 1h, 7d (default: the scenario's)")
     parser.add_argument("--theta", type=flags.number_in(*THETA_RANGE),
                         help=f"aMussel time scale in [{THETA_RANGE[0]:g}, {THETA_RANGE[1]:g}] "
                              "(default: the scenario's, 30)")

@@ -19,13 +19,13 @@ from gcs.mission.scenario_acoustic import read_acoustic
 from gcs.mission.scenario_fields import REQUIRED, Derived, Fields, FieldTable, ScenarioError
 from gcs.mission.scenario_fields import out_of_range as out_of_range
 from gcs.mission.strategies import COLLECT, REDEPLOY, RedeployStrategy, StrategyError, load_strategy
-from missiontime.durations import WEEK_S
+from missiontime.durations import MAX_MISSION_S
 from missiontime.durations import parse_duration_s as parse_duration_s
 from mussel_sim.battery import CHARGE_PROFILES, DISCHARGE_PROFILES
 from mussel_sim.behaviour import BEHAVIOURS, DEFAULT_BEHAVIOUR, SLEEP_CHARGE
 
 MISSIONS_DIR = Path(__file__).resolve().parents[2] / "missions"
-MAX_DURATION_S = WEEK_S  # a week at sea; longer is a typo that would run for hours of CPU
+MAX_DURATION_S = MAX_MISSION_S
 THETA_RANGE = (1e-3, 1e4)  # aMussel time scale, for the file and `--theta`
 SEED_MAX = 2**63 - 1  # seeds are int64 in results and folder names
 MAX_CURRENT_MPS = 5.0  # per component: more is not a sea we work in (as `vil sitl --current`)

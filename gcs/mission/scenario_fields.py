@@ -68,7 +68,7 @@ class Fields(Protocol):
         ...
 
     def duration(self, key: str, default: Any = None, *, about: str = "") -> float:
-        """Seconds, from a string with its unit ("90s", "40min", "1.5h"), up to a week."""
+        """Seconds, from a string with its unit ("90s", "40min", "1.5h", "7d"), up to 90 days."""
         ...
 
     def file(self, key: str, default: Any = None, *, about: str = "") -> Path | None:

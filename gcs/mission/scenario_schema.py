@@ -4,7 +4,7 @@
 choices, default, required, what it means) and answers with a value the reader accepts, so
 `scenario.read_scenario` runs through once and the schema says what it asks for, nothing else.
 What a schema cannot say stays with the reader alone: that files exist, min <= max, distinct aPad ids,
-latitudes within +-90, finite numbers, durations up to a week; `vil scenario check` runs both.
+latitudes within +-90, finite numbers, durations up to 90 days; `vil scenario check` runs both.
 
 The schema ships as gcs/mission/scenario.schema.json (JSON Schema draft-07, within what Taplo's draft-4
 support reads too); each shipped scenario names it on its first line, `#:schema ../gcs/mission/...`,
@@ -34,7 +34,7 @@ from missiontime.durations import UNIT_S, parse_duration_s
 SCHEMA_PATH = Path(__file__).with_name("scenario.schema.json")
 SCHEMA_DIRECTIVE = "#:schema"  # a TOML file's first line names its schema so (Taplo, Tombi)
 DRAFT = "http://json-schema.org/draft-07/schema#"
-# A number and a unit, as missiontime.durations reads them (zero and more than a week: the reader refuses).
+# A number and a unit, as missiontime.durations reads them (zero and more than 90 days: the reader refuses).
 _UNITS = "|".join(sorted(UNIT_S, key=len, reverse=True))
 DURATION_PATTERN = rf"^\s*(\d+(\.\d*)?|\.\d+)\s*({_UNITS})\s*$"
 Schema = dict[str, Any]

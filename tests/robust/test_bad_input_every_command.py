@@ -62,7 +62,7 @@ def busy_udp_port() -> Iterator[int]:
     ("run", "--loss", "nan", "nan is not a finite number"),
     ("run", "--theta", "inf", "inf is not a finite number"),
     ("run", "--theta", "1e9", "is outside [0.001, 10000.0]"),
-    ("run", "--duration", "1000000000h", "more than a week"),
+    ("run", "--duration", "1000000000h", "more than 90 days"),
     ("run", "--outage", "0s:inf", "START:END"),
     ("gcs", "--speed", "nan", "nan is not a finite number"),
     ("gcs", "--speed", "-1", "is outside [0.1, 1000.0]"),

@@ -39,7 +39,7 @@ def test_a_duration_with_its_unit_is_read_in_seconds(text: str, seconds: float) 
     (True, "is not a duration"),
     ("-5s", "-5s is not a positive duration"),
     ("0s", "0s is not a positive duration"),
-    ("169h", "169h is more than a week"), ("8d", "8d is more than a week"),
+    ("2161h", "2161h is more than 90 days"), ("91d", "91d is more than 90 days"),
 ])
 def test_a_duration_without_its_unit_or_out_of_range_is_refused_in_one_line(text: object, message: str) -> None:
     with pytest.raises(ValueError) as exc:

@@ -81,7 +81,7 @@ def write_variant(tmp_path: Path, old: str, new: str) -> Path:
         ("home = [43.9400000, 15.4398381]", "home = [nan, 15.44]", "apad.home: nan is not a finite number"),
         ('duration = "40m"', "duration = inf", "mission.duration: inf is not a duration"),
         ('duration = "40m"', "duration = 2400", 'mission.duration: 2400 has no unit: say "2400s", "2400min"'),
-        ('duration = "40m"', 'duration = "100000h"', "mission.duration: 100000h is more than a week"),
+        ('duration = "40m"', 'duration = "100000h"', "mission.duration: 100000h is more than 90 days"),
         ("seed = 1", "seed = -1", "scenario.seed: -1 is outside [0, "),
     ],
 )

@@ -23,7 +23,7 @@ SHIPPED = sorted(MISSIONS.glob("*.toml"))
 POOL12 = MISSIONS / "pool12.toml"
 SCHEMA = json.loads(SCHEMA_PATH.read_text())
 # What a JSON Schema cannot say, so the reader alone refuses: files that do not exist, durations of zero
-# or over a week, start_battery's min > max, latitudes beyond +-90, strategies (plugins: any string).
+# or over 90 days, start_battery's min > max, latitudes beyond +-90, strategies (plugins: any string).
 READER_ONLY = {"fleet.area", "fleet.start_config", "mission.duration", "fleet.start_battery", "apad.home",
                "mission.collect_strategy"}
 
