@@ -4,7 +4,7 @@ or wake back to always on; each decision is sent as the dialect's AMUSSEL_SLEEP_
 (`ApadApi.sleep_order`), logged (`sleep_order`) and planned with from then on (`FleetKnowledge.ordered`).
 
 Only aMussels always on by their scenario profile are ordered (a profile with a schedule of its own is
-left to it), and only those on the seabed (ACTIVE): one docked or on its way is charged or moving.
+left to it), and only those on the seabed or sinking to it: one docked or rising is being charged.
 """
 
 from __future__ import annotations
@@ -47,7 +47,10 @@ def reschedule(crew: Crew, start_s: float = 0.0, why: str = "round") -> int:
 def schedule_input(crew: Crew, start_s: float) -> ScheduleInput | None:
     """The share's aMussels on the seabed, as the loop knows them; None if there are none."""
     knows = crew.knows
-    ids = [m for m in knows.api.mussels.select((MusselState.ACTIVE,)) if m in knows.homes and knows.serves(m)]
+    # One still sinking from the last redeployment is ordered too: it is on the seabed in seconds, and a
+    # home charge that starts right after a round would leave it always on for hours (seen: it depleted).
+    deployed = knows.api.mussels.select((MusselState.ACTIVE, MusselState.SINKING))
+    ids = [m for m in deployed if m in knows.homes and knows.serves(m)]
     slots = len(knows.api.slots(knows.apad_id))
     if not ids or not slots:  # nothing to order, or the aPad's slots not heard yet (the mission's first instant)
         return None

@@ -51,6 +51,8 @@ SWEEP_LONG = ("a local Dask cluster, its missions and the report: 7-15 s of CPU 
               "default run")
 CLUSTER_LONG = ("a scheduler, a worker and a client start for 8 s of CPU; `dask scheduler`, `dask worker` and "
                 "`vil sweep --scheduler` are tests/sweep/test_sweep_cluster.py's too, in the default run")
+CAPACITY_LONG = ("a local Dask cluster and four missions (8-15 s of CPU); the same path, a tiny capacity sweep, "
+                 "its table and figure, is tests/sweep/test_capacity_sweep.py's in the default run")
 DEV_MAKE = "`-o .venv/.installed`: a test never rebuilds the shared venv (it is rebuilt when pyproject.toml changes)"
 
 REGISTRY: dict[str, Entry] = {
@@ -166,6 +168,18 @@ REGISTRY: dict[str, Entry] = {
                          long_only=CLUSTER_LONG),
     swp.WORKER: Entry("sweeps", swp.run_cluster, full=False, ci="dask worker tcp://127.0.0.1:8786 --nthreads 1",
                       why="HOST: this machine", long_only=CLUSTER_LONG),
+    # docs/capacity.md
+    swp.CAPACITY_SWEEP: Entry("sweeps", swp.run_capacity, full=False,
+                              ci=f"vil sweep {swp.CAPACITY_TINY} --out capacity-tiny --workers 1",
+                              why="12 missions of 24 h are hours of CPU: the same shape, one size per profile, "
+                                  "3 minutes each", long_only=CAPACITY_LONG),
+    swp.CAPACITY_6H: Entry("sweeps", swp.run_capacity, full=False,
+                           ci=f"vil sweep {swp.CAPACITY_TINY} --out capacity-tiny --workers 1",
+                           why="12 missions of 6 h (an hour of CPU): as the 24-h one's", long_only=CAPACITY_LONG),
+    swp.CAPACITY_REPORT: Entry("sweeps", swp.run_capacity, full=False,
+                               ci="python -m gcs.sweep.capacity capacity-tiny --figure capacity.png",
+                               why="DIR: the tiny sweep above; the figure written beside it, not over the doc's",
+                               long_only=CAPACITY_LONG),
     # docs/acoustic.md
     run.ACOUSTIC_FIGURES: Entry("runs", run.run_acoustic_figures, full=False,
                                 ci="python -m gcs.acoustic.figures --figure acoustic-delivery.png",

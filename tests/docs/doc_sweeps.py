@@ -121,3 +121,38 @@ def run_slack_sweep(w: Work) -> None:
     assert len(rows) == 4
     got = [words(line) for line in printed.splitlines() if line.strip().startswith("pool12")]
     assert got == rows, printed
+
+
+CAPACITY_SWEEP = "vil sweep missions/sweeps/capacity.toml --out sweeps/capacity --workers 2"
+CAPACITY_6H = "vil sweep missions/sweeps/capacity-6h.toml --out sweeps/capacity-6h --workers 2"
+CAPACITY_REPORT = "python -m gcs.sweep.capacity sweeps/capacity-6h --figure docs/capacity.png"
+CAPACITY_TINY = "capacity-tiny.toml"
+
+
+def write_capacity_tiny(w: Work) -> None:
+    """The shipped capacity spec's shape (bay-capacity, [[grid]] per profile, both strategies) on 3-minute
+    missions, one size per profile: the CI variant of both capacity sweeps."""
+    spec = (w.path / "missions/sweeps/capacity-6h.toml").read_text()
+    spec = spec.replace('mission.duration = "6h"', 'mission.duration = "3m"')
+    spec = re.sub(r"fleet\.count = \[2, 4\]", "fleet.count = [2]", spec)
+    spec = re.sub(r"fleet\.count = \[24, 48\]", "fleet.count = [6]", spec)
+    (w.path / CAPACITY_TINY).write_text(spec.replace('"bay-capacity"', f'"{w.path}/missions/bay-capacity.toml"'))
+
+
+def run_capacity(w: Work) -> None:
+    """docs/capacity.md's study: the 24-h and 6-h specs hold the same grid (profiles, sizes, strategies),
+    a sweep of their shape runs on a local Dask cluster, and the capacity report prints the table and
+    writes the figure from its cells."""
+    from gcs.sweep.spec import load_spec
+
+    day, six = (load_spec(w.path / f"missions/sweeps/{name}.toml") for name in ("capacity", "capacity-6h"))
+    assert day.points == six.points and day.strategies == six.strategies and day.seeds == six.seeds
+    assert (day.fixed, six.fixed) == ({"mission.duration": "24h"}, {"mission.duration": "6h"})
+    write_capacity_tiny(w)
+    for command in (CAPACITY_SWEEP, CAPACITY_6H):
+        w.sh(w.line(command), timeout_s=3600)
+    report = w.line(CAPACITY_REPORT)
+    printed = words(w.sh(report, timeout_s=600).stdout)
+    assert "largest kept alive" in printed and "keep_alive" in printed and "hourly_wake" in printed, printed
+    figure = w.path / report.split("--figure ")[1].split()[0]
+    assert figure.read_bytes()[:4] == b"\x89PNG"
