@@ -12,8 +12,11 @@ Pure models (no I/O, no clock reads; time is passed in, randomness is a seeded n
 - status_packet.py a submerged aMussel's status report in <= 64 bytes (struct)
 
 The serial modem (`acoustic.nanomodem`): the protocol (parser of commands, formatter and parser of
-replies), the emulator's pure core over a `Medium`, its edge on a pty (`vil modem`), and the GCS's
-driver over a byte port (pyserial, or an in-process pipe for lockstep runs).
+replies) and the emulator's core over a `Medium`, pure like the models above; and its two edges, the
+only I/O of this package: `ports.py` (a byte port: pyserial, or an in-process pipe for lockstep runs,
+under the GCS's driver) and `serve.py` (the emulator on a pty or serial device: `vil modem`, on the
+wall clock).
 
-Imports: numpy, and `missiontime` (the driver's bounded waits take a Clock); never `gcs`.
+Imports: numpy, pyserial (ports.py only), and `missiontime` (the driver's bounded waits take a
+Clock); never `gcs`.
 """

@@ -95,10 +95,12 @@ def run(args: argparse.Namespace) -> int:
         units += parse_nodes(args.nodes)
         if not 0 <= args.address <= MAX_ADDRESS:
             raise ValueError(f"--address: {args.address} is outside 0..{MAX_ADDRESS}")
+        if args.address in [u.address for u in units]:  # a remote unit would answer what is addressed to this one
+            raise ValueError(f"--address: {args.address:03d} is also a remote unit's address")
         core = ModemEmulator(params, units, np.random.default_rng(seed if args.seed is None else args.seed),
                              address=args.address, position_m=position, supply_v=args.supply,
                              gap_s=parse_duration_s(args.gap), ping_timeout_s=parse_duration_s(args.ping_timeout))
-    except (ValueError, ScenarioError) as exc:
+    except (ValueError, ScenarioError, OSError) as exc:  # OSError: a device or file that cannot be read
         print(f"vil modem: {exc}", file=sys.stderr)
         return 2
     where = ", ".join(f"{u.address:03d} at {np.hypot(*u.position_m[:2]):.0f} m" for u in units) or "none"

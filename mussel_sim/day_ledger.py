@@ -42,6 +42,10 @@ class DayLedger:
         """The day a step ending at `time_us` counts in."""
         return max(time_us - self.start_us - 1, 0) // self.day_us
 
+    def days_of(self, times_us: NDArray[np.int64]) -> NDArray[np.int64]:
+        """`day_of` of many instants (an event at a day's boundary counts in the day it ends)."""
+        return np.maximum(np.asarray(times_us, np.int64) - self.start_us - 1, 0) // self.day_us
+
     def add(self, time_us: int, active: int, alive: int, newly_depleted: int) -> None:
         """Count one step that ended at `time_us` with these counts."""
         d = self.day_of(time_us)

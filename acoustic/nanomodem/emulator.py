@@ -192,7 +192,10 @@ class ModemEmulator:
                           Kind.ECHO: FrameKind.ECHO}[kind]
             tx = self._send(LOCAL, t_s, Frame(frame_kind, self.address, a, item.data))
             if frame_kind in ANSWERS and a is not None:
-                self._waits.append(_Wait(ANSWERS[frame_kind], a, tx.start_s, tx.airtime_s, t_s + self.ping_timeout_s))
+                # The unit's 4 s run from its own transmission: a request queued behind packets already
+                # on the water must not time out before it is sent.
+                self._waits.append(_Wait(ANSWERS[frame_kind], a, tx.start_s, tx.airtime_s,
+                                         tx.start_s + self.ping_timeout_s))
 
     # ---- the water side
     def _step(self, t_s: float) -> None:

@@ -31,8 +31,8 @@ def day_rows(days: DayLedger, n_mussels: int, dockings: Mapping[int, Sequence[fl
     depleted (first time that day), and per aPad (by system id, as text: JSON keys) charges and
     passed_wh. `dockings`: each aPad's docking times (mission s); `energy`: `(days, m, 3)` Wh per day."""
     uptime = days.uptime_pct(n_mussels)
-    charges = {a: np.bincount(np.floor_divide(np.round(np.asarray(ts, np.float64) * US_PER_S).astype(np.int64)
-                                              - days.start_us, days.day_us).clip(0),
+    # A docking counts in the day as a step ending at its instant does (one rule: DayLedger.days_of).
+    charges = {a: np.bincount(days.days_of(np.round(np.asarray(ts, np.float64) * US_PER_S).astype(np.int64)),
                               minlength=len(days.steps)) if len(ts) else np.zeros(len(days.steps), np.int64)
                for a, ts in dockings.items()}
     passed = ENERGY_KEYS.index("passed_wh")

@@ -159,6 +159,11 @@ class FleetKnowledge:
         """What it does deployed, as known: its scenario profile or the last sleep order sent to it."""
         return self.duties.get(mussel_id, self._default_duty)
 
+    def profile_duty(self, mussel_id: int) -> Duty:
+        """What its scenario profile makes it do, whatever was ordered since (a real aMussel, not in the
+        scenario's fleet, takes the scenario's default)."""
+        return self.settings.duties.get(mussel_id, self._default_duty)
+
     def ordered(self, mussel_id: int, duty: Duty) -> None:
         """A sleep order was sent: plan with it from now on."""
         self.duties[mussel_id] = duty

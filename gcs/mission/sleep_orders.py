@@ -35,13 +35,16 @@ def reschedule(crew: Crew, start_s: float = 0.0, why: str = "round") -> int:
         return 0
     decisions = scheduler(inp)
     knows, act = crew.knows, crew.act
+    sent = 0
     for mussel_id, wake in sorted(decisions.items()):
         duty = ALWAYS_ON if wake else ASLEEP
-        act.command(act.api.sleep_order, mussel_id, duty.interval_s, duty.awake_s, knows.apad_id)
+        if not act.command(act.api.sleep_order, mussel_id, duty.interval_s, duty.awake_s, knows.apad_id):
+            continue  # not sent (a gave_up event says so): planned as before, asked again next time
         knows.ordered(mussel_id, duty)
+        sent += 1
         crew.log("sleep_order", mussel=mussel_id, interval_s=duty.interval_s, awake_s=duty.awake_s,
                  battery=round(knows.battery(mussel_id), 3), why=why)
-    return len(decisions)
+    return sent
 
 
 def schedule_input(crew: Crew, start_s: float) -> ScheduleInput | None:
@@ -56,7 +59,7 @@ def schedule_input(crew: Crew, start_s: float) -> ScheduleInput | None:
         return None
     theta = knows.settings.mission.theta
     views = [knows.api.mussels[m] for m in ids]
-    profile = [knows.settings.duties.get(m, knows.duty(m)) for m in ids]
+    profile = [knows.profile_duty(m) for m in ids]
     return ScheduleInput(
         mussel_ids=np.array(ids, np.int64),
         lat_deg=np.array([v.location.lat for v in views]),

@@ -109,6 +109,22 @@ def test_the_emulator_runs_to_any_instant_through_a_slow_command_and_a_timeout()
     assert core.advance(5.999) == b"$P009\r\n" and core.advance(6.0) == b"#TO\r\n"
 
 
+def test_a_ping_queued_behind_broadcasts_times_out_from_its_own_transmission() -> None:
+    """Four 64-byte broadcasts (4.4 s on the water) then a ping to a unit 300 m away: the ping goes out
+    when the transmitter is free, and its range comes back (a deadline from the command's arrival
+    answered #TO before the ping was even sent)."""
+    core = ModemEmulator(AcousticParams(), (NEAR, FAR), np.random.default_rng(1))
+    for i in range(4):
+        core.from_host(b"$B64" + bytes([65 + i]) * 64, 0.0)
+    core.from_host(b"$P005", 0.0)
+    out, t = b"", 0.0
+    while (due := core.next_due_s()) is not None and t < 30.0:
+        t = due
+        out += core.advance(t)
+    assert b"#TO" not in out and b"#R005T" in out, out
+    assert core.counts.get("timeout", 0) == 0
+
+
 def test_an_idle_emulator_costs_the_clock_nothing() -> None:
     """No traffic: the emulator's task is not ticking (a lockstep mission of hours pays nothing for it)."""
     driver, attached, clock = _attached()

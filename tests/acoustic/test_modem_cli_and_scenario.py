@@ -35,6 +35,20 @@ def test_nodes_and_their_errors_are_one_line(capsys: pytest.CaptureFixture[str])
     assert "must differ" in capsys.readouterr().err
     assert main(["modem", "--scenario", "no-such-scenario"]) == 2
     assert "no such scenario file" in capsys.readouterr().err
+    assert main(["modem", "--address", "5", "--nodes", "5@1,2,3"]) == 2  # it would answer for this unit
+    assert "also a remote unit's address" in capsys.readouterr().err
+
+
+def test_a_scenario_whose_area_file_is_gone_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    text = (MISSIONS_DIR / "pool12.toml").read_text()
+    (tmp_path / "areas").mkdir()
+    (tmp_path / "areas" / "pool.geojson").mkdir()  # there, but unreadable: an OSError
+    (tmp_path / "starts").mkdir()
+    scenario = tmp_path / "gone.toml"
+    scenario.write_text(text.replace('start_config = "starts/pool12.geojson"', "").replace("#:schema", "# "))
+    assert main(["modem", "--scenario", str(scenario)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("vil modem: ") and err.count("\n") == 1 and "Traceback" not in err
 
 
 def test_a_scenarios_aMussels_are_the_remote_units_around_the_apad() -> None:

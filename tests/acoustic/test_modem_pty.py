@@ -80,9 +80,9 @@ def test_the_units_protocol_byte_for_byte(modem: tuple[str, subprocess.Popen[str
         _expect(port, b"E\r\n")
         port.write(b"$?")  # the late "05" was dropped, not taken as a command
         _expect(port, b"#A007V52429\r\n")
+        t0 = time.monotonic()  # before the write: a stall of this process can only lengthen what it sees
         port.write(b"$P009")  # 5 km: nobody answers
         _expect(port, b"$P009\r\n")
-        t0 = time.monotonic()
         _expect(port, b"#TO\r\n", bound_s=30.0)
         assert time.monotonic() - t0 >= 3.9  # the unit's own 4 s (a lower bound: it cannot come early)
 

@@ -143,6 +143,13 @@ def test_console_groups_of_days_cover_every_day_once(n_days: int, max_rows: int,
     assert [d for s in spans for d in s] == list(range(n_days))
 
 
+def test_an_event_at_a_day_boundary_counts_in_the_day_a_step_ending_there_does() -> None:
+    """Dockings (days.py) and steps (the ledger) share one rule: an instant on a boundary ends its day."""
+    ledger = DayLedger(day_us=2_880_000_000)  # theta 30
+    at = np.array([0, 1, 2_880_000_000, 2_880_000_001, 5_760_000_000], np.int64)
+    assert ledger.days_of(at).tolist() == [ledger.day_of(int(t)) for t in at] == [0, 0, 0, 1, 1]
+
+
 def test_a_ledger_with_steps_longer_than_a_day_leaves_no_day_out() -> None:
     ledger = DayLedger(day_us=1_000_000)
     ledger.add(3_000_000, active=2, alive=4, newly_depleted=1)  # a 3-s step over three 1-s days
