@@ -34,9 +34,6 @@ from pathlib import Path
 from typing import Any
 
 from apad_sitl import messages as msgs
-from apad_sitl import primitives as prim
-from apad_sitl import rest as rest_mod
-from apad_sitl import vehicle as veh
 from apad_sitl.commands import CommandTable
 from apad_sitl.dege7 import DegE7
 from apad_sitl.docking import CheckedStatuses, Docking, MusselFixTable, checked_statuses
@@ -44,6 +41,7 @@ from apad_sitl.energy import EnergyMeter
 from apad_sitl.energy_counters import EnergyCounters
 from apad_sitl.geofence import Geofence
 from apad_sitl.host import MessageHandler, invalid_reason, unsupported_reason
+from apad_sitl.hull_step import step_hull
 from apad_sitl.logs import VehicleLog
 from apad_sitl.mission_protocol import MissionProtocol
 from apad_sitl.modes import Modes, mode_name
@@ -122,7 +120,6 @@ class SitlVehicle:
         self.dropped: Counter[str] = Counter()  # received messages dropped, by reason
 
         self._last_physics_us: int | None = None
-        self._rest_on: tuple[Any, ...] = ()  # what the hull's rest holds for: primitive, params, armed, current
         self._scheduler: Scheduler | None = None
         self._physics_task: Task | None = None
         self._handlers: dict[int, MessageHandler] = {}
@@ -378,24 +375,7 @@ class SitlVehicle:
         apad = self.apad
         if apad.params.fs_gcs_enable:
             self.modes.check_failsafe()
-        p, primitive, rest = apad.params, apad.primitive, apad.rest
-        if rest is not None:
-            if self._rest_on == (primitive, p, apad.armed, self.current_mps) and rest.dt_s == dt_s:
-                rest.steps += 1  # nothing that moves the hull changed: one more step in closed form
-                return
-            apad.state = apad.state  # something did: the rest's state, stepped again from here
-        before = apad.state
-        setpoint = prim.velocity_setpoint(primitive, before, p) if apad.armed else (0.0, 0.0)
-        apad.state = state = veh.step(before, setpoint, p, self.current_mps, dt_s)
-        self.energy.step(dt_s)
-        apad.set_primitive(prim.step(primitive, state.x_m, state.y_m, self.mussels, p, dt_s))
-        # A fixed point (holding at the hold point in slack water, no latch timer running, not
-        # charging at home): rest until the primitive, the parameters, arming or the current change,
-        # or a battery draw writes the state (apad_sitl.rest).
-        if (apad.primitive is primitive and apad.state is state and rest_mod.at_rest(before, state)
-                and not self.energy.could_charge()):
-            apad.rest = rest_mod.Rest(state, p, dt_s)
-            self._rest_on = (primitive, p, apad.armed, self.current_mps)
+        step_hull(apad, self.energy, self.mussels, self.current_mps, dt_s)
 
     # ------------------------------------------------------------------ what the parts share
 

@@ -37,11 +37,12 @@ class Rest:
     `steps` counts the physics steps of `dt_s` taken since; `state()` is the hull after them.
     """
 
-    __slots__ = ("_cache", "_drain_v", "dt_s", "origin", "steps")
+    __slots__ = ("_cache", "_drain_v", "dt_s", "key", "origin", "steps")
 
-    def __init__(self, origin: VehicleState, params: ApadParams, dt_s: float) -> None:
+    def __init__(self, origin: VehicleState, params: ApadParams, dt_s: float, key: tuple[object, ...] = ()) -> None:
         self.origin = origin
         self.dt_s = dt_s
+        self.key = key  # what it holds for (the core's primitive, parameters, arming, current): a change ends it
         self.steps = 0
         self._drain_v = drain_v(params, origin.thrust_mps2, dt_s)
         self._cache = (0, origin)

@@ -1,0 +1,37 @@
+"""The aPad's physics task, one tick: a step of the hull and its primitive, or one more step of its rest.
+
+The vehicle core (endpoint.py) calls `step_hull` at the physics rate with the parts it owns; the
+models stay pure (vehicle, primitives, rest), and the energy meter takes its share of each step.
+"""
+
+from __future__ import annotations
+
+from apad_sitl import primitives as prim
+from apad_sitl import rest as rest_mod
+from apad_sitl import vehicle as veh
+from apad_sitl.docking import MusselFixTable
+from apad_sitl.energy import EnergyMeter
+from apad_sitl.state import ApadState
+
+
+def step_hull(apad: ApadState, energy: EnergyMeter, mussels: MusselFixTable,
+              current_mps: tuple[float, float], dt_s: float) -> None:
+    """Advance the hull `dt_s`: in closed form while its rest holds, else stepped (and maybe at rest)."""
+    p, primitive, rest = apad.params, apad.primitive, apad.rest
+    key = (primitive, p, apad.armed, current_mps)
+    if rest is not None:
+        if rest.key == key and rest.dt_s == dt_s:
+            rest.steps += 1  # nothing that moves the hull changed: one more step in closed form
+            return
+        apad.state = apad.state  # something did: the rest's state, stepped again from here
+    before = apad.state
+    setpoint = prim.velocity_setpoint(primitive, before, p) if apad.armed else (0.0, 0.0)
+    apad.state = state = veh.step(before, setpoint, p, current_mps, dt_s)
+    energy.step(dt_s)
+    apad.set_primitive(prim.step(primitive, state.x_m, state.y_m, mussels, p, dt_s))
+    # A fixed point (holding at the hold point in slack water, no latch timer running, not
+    # charging at home): rest until the primitive, the parameters, arming or the current change,
+    # or a battery draw writes the state (apad_sitl.rest).
+    if (apad.primitive is primitive and apad.state is state and rest_mod.at_rest(before, state)
+            and not energy.could_charge()):
+        apad.rest = rest_mod.Rest(state, p, dt_s, key)
