@@ -62,14 +62,19 @@ class Result:
         return self.outcome is Outcome.REPLIED
 
 
+QUEUE_MAX = 4096  # replies and packets kept unread (hours of a busy channel at 9600 baud)
+
+
 class ModemDriver:
     def __init__(self, port: BytePort, clock: Clock, sound_speed_mps: float = 1500.0) -> None:
         self.port, self.clock, self.sound_speed_mps = port, clock, sound_speed_mps
         self.parser = ReplyParser()
-        self.inbox: deque[Received] = deque()
+        # Bounded: a driver nobody reads keeps the newest; what fell off is counted (`dropped`).
+        self.inbox: deque[Received] = deque(maxlen=QUEUE_MAX)
         self.unexpected = 0
+        self.overflowed = 0
         self.closed_reason: str | None = None
-        self._replies: deque[Reply] = deque()
+        self._replies: deque[Reply] = deque(maxlen=QUEUE_MAX)
 
     @property
     def dropped(self) -> dict[str, int]:
@@ -77,6 +82,8 @@ class ModemDriver:
         counts = dict(self.parser.dropped)
         if self.unexpected:
             counts["unexpected_reply"] = self.unexpected
+        if self.overflowed:
+            counts["queue_full"] = self.overflowed
         return counts
 
     # ---- the lines
@@ -90,8 +97,10 @@ class ModemDriver:
             self._closed(str(exc))
             return
         for reply in self.parser.feed(data):
+            self.overflowed += len(self._replies) == QUEUE_MAX
             self._replies.append(reply)
             if isinstance(reply, Received):
+                self.overflowed += len(self.inbox) == QUEUE_MAX
                 self.inbox.append(reply)  # a wait that takes it (a voltage answer) takes it from here
 
     def send(self, command: Command) -> bool:
@@ -114,7 +123,7 @@ class ModemDriver:
             while self._replies:
                 reply = self._replies.popleft()
                 if accept(reply):
-                    if isinstance(reply, Received):
+                    if isinstance(reply, Received) and reply in self.inbox:
                         self.inbox.remove(reply)
                     return Result(Outcome.REPLIED, reply)
                 if isinstance(reply, Error):

@@ -135,3 +135,14 @@ def test_an_idle_emulator_costs_the_clock_nothing() -> None:
     clock.scheduler.every(600.0, lambda now_us: calls.append(now_us), "a slow task", start_us=clock.now_us)
     clock.sleep(3600.0)
     assert len(calls) == 7 and not attached.task.active and driver.status().ok
+
+
+def test_packets_nobody_reads_are_kept_to_a_bound_and_the_overflow_counted() -> None:
+    from acoustic.nanomodem.driver import QUEUE_MAX
+
+    host, modem = pipe()
+    driver = ModemDriver(host, VirtualClock())
+    modem.write(b"#B00503abc\r\n" * (QUEUE_MAX + 10))
+    driver.poll()
+    assert len(driver.inbox) == QUEUE_MAX and driver.dropped["queue_full"] >= 10
+    assert driver.received()[-1].data == b"abc"
