@@ -8,7 +8,8 @@ run is deterministic from the Generator it was given. A reception is lost:
 - HALF_DUPLEX: the receiver was itself transmitting while the packet arrived;
 - COLLISION: another packet, strong enough there (`interference_snr_db`), overlapped it at the
   receiver (both are lost, as in UnetStack's simple channel: no capture);
-- PACKET_ERROR: the draw against `per.success_probability` at its mean SNR and payload size failed.
+- PACKET_ERROR: the draw against `per.success_probability` at its mean SNR and payload size failed
+  (read from its table: `per.success_lookup`).
 
 A node that hears a packet below `interference_snr_db` does not hear it at all (no reception).
 Pure: no clock, no I/O; time is passed in.
@@ -24,7 +25,7 @@ from numpy.typing import NDArray
 
 from acoustic.airtime import airtime_s
 from acoustic.params import AcousticParams
-from acoustic.per import success_probability
+from acoustic.per import success_lookup
 from acoustic.propagation import delay_s, ranges_m, snr_db
 
 
@@ -48,6 +49,7 @@ class Transmission:
     range_m: NDArray[np.float64] = field(repr=False, compare=False)  # (n_nodes,) at transmit time
     arrival_s: NDArray[np.float64] = field(repr=False, compare=False)  # (n_nodes,) start of arrival
     snr_db: NDArray[np.float64] = field(repr=False, compare=False)  # (n_nodes,) mean band SNR
+    p_ok: NDArray[np.float64] = field(repr=False, compare=False)  # (n_nodes,) P(decoded) at that SNR
 
     @property
     def end_s(self) -> float:
@@ -73,7 +75,11 @@ class Medium:
         self.positions_m = np.array(positions_m, dtype=np.float64).reshape(-1, 3)
         self._on_water: list[Transmission] = []
         self._undecided: dict[int, NDArray[np.bool_]] = {}  # tx_id -> (n_nodes,) receivers still to decide
-        self._next_end: dict[int, float] = {}  # tx_id -> the earliest end among its undecided receptions
+        self._first_end: dict[int, float] = {}  # tx_id -> the earliest end among its undecided receptions
+        # tx_id -> (n_nodes,) the receivers whose reception must be decided as it ends (`transmit`'s
+        # `listeners`), and the earliest end among those undecided (absent: none left)
+        self._urgent: dict[int, NDArray[np.bool_]] = {}
+        self._next_end: dict[int, float] = {}
         self._next_id = 0
         self.counts: dict[str, int] = {o.value: 0 for o in Outcome}
 
@@ -88,20 +94,31 @@ class Medium:
             raise ValueError(f"expected positions of shape {self.positions_m.shape}, got {positions.shape}")
         self.positions_m = positions.copy()
 
-    def transmit(self, sender: int, start_s: float, payload_bytes: int, data: object = None) -> Transmission:
-        """Put a packet on the water from node `sender` at `start_s`."""
+    def transmit(self, sender: int, start_s: float, payload_bytes: int, data: object = None,
+                 listeners: list[int] | None = None) -> Transmission:
+        """Put a packet on the water from node `sender` at `start_s`. `listeners`: the nodes that act
+        on it (its addressee); only their receptions are decided as they end (`next_decision_s`), the
+        others' at the next `settle` after theirs end (the same outcome, told later). None: every node."""
         if not 0 <= sender < self.n_nodes:
             raise ValueError(f"no node {sender} (nodes 0..{self.n_nodes - 1})")
         r = ranges_m(self.positions_m[sender], self.positions_m)
+        snr = snr_db(r, self.params)
         tx = Transmission(self._next_id, sender, start_s, airtime_s(payload_bytes), payload_bytes, data,
-                          r, start_s + delay_s(r, self.params), snr_db(r, self.params))
+                          r, start_s + delay_s(r, self.params), snr, success_lookup(snr, payload_bytes, self.params))
         self._next_id += 1
         hears = tx.snr_db >= self.params.interference_snr_db
         hears[sender] = False
         self._on_water.append(tx)
         if hears.any():
             self._undecided[tx.tx_id] = hears
-            self._next_end[tx.tx_id] = float(np.min(tx.arrival_s[hears])) + tx.airtime_s
+            self._first_end[tx.tx_id] = float(np.min(tx.arrival_s[hears])) + tx.airtime_s
+            urgent = hears.copy()
+            if listeners is not None:
+                urgent[:] = False
+                urgent[listeners] = hears[listeners]
+            self._urgent[tx.tx_id] = urgent
+            if urgent.any():
+                self._next_end[tx.tx_id] = float(np.min(tx.arrival_s[urgent])) + tx.airtime_s
         return tx
 
     def busy_until_s(self, node: int) -> float:
@@ -110,24 +127,29 @@ class Medium:
         return max(ends, default=-np.inf)
 
     def next_decision_s(self) -> float | None:
-        """The earliest instant at which `settle` would decide a reception, or None."""
+        """The earliest instant at which `settle` would decide a listener's reception, or None."""
         return min(self._next_end.values(), default=None)
 
     def settle(self, now_s: float) -> list[Reception]:
         """Every reception that has ended by `now_s`, decided; ordered by end time, packet, receiver."""
         decided: list[Reception] = []
         for tx in self._on_water:
-            if self._next_end.get(tx.tx_id, np.inf) > now_s:
+            if self._first_end.get(tx.tx_id, np.inf) > now_s:
                 continue
-            pending = self._undecided[tx.tx_id]
+            pending, urgent = self._undecided[tx.tx_id], self._urgent[tx.tx_id]
             end = tx.arrival_s + tx.airtime_s
             due = pending & (end <= now_s)
             decided.extend(self._decide(tx, np.flatnonzero(due)))
             pending &= ~due
-            if pending.any():
-                self._next_end[tx.tx_id] = float(np.min(end[pending]))
+            urgent &= ~due
+            if urgent.any():
+                self._next_end[tx.tx_id] = float(np.min(end[urgent]))
             else:
-                del self._undecided[tx.tx_id], self._next_end[tx.tx_id]
+                self._next_end.pop(tx.tx_id, None)
+            if pending.any():
+                self._first_end[tx.tx_id] = float(np.min(end[pending]))
+            else:
+                del self._undecided[tx.tx_id], self._first_end[tx.tx_id], self._urgent[tx.tx_id]
         decided.sort(key=lambda r: (r.end_s, r.transmission.tx_id, r.receiver))
         self._prune(now_s)
         return decided
@@ -146,7 +168,7 @@ class Medium:
             o_start = other.arrival_s[receivers]
             strong = other.snr_db[receivers] >= self.params.interference_snr_db
             collision |= ~own & strong & (o_start < end) & (o_start + other.airtime_s > start)
-        p_ok = success_probability(tx.snr_db[receivers], tx.payload_bytes, self.params)
+        p_ok = tx.p_ok[receivers]
         draws = np.asarray(self.rng.random(receivers.shape[0]))  # one per reception, in receiver order: deterministic
         out: list[Reception] = []
         for k, node in enumerate(receivers.tolist()):

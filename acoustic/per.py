@@ -82,3 +82,19 @@ def expected_byte_errors(snr_db: float, payload_bytes: int, params: AcousticPara
     ebn0 = 10.0 ** ((snr_db + params.processing_gain_db - params.implementation_loss_db) / 10.0)
     byte_error = -np.expm1(8.0 * np.log1p(-bfsk_bit_error(ebn0)))
     return float(byte_error * (max(payload_bytes, PING_BYTES) + FEC_BYTES))
+
+
+# The channel decides thousands of receptions a mission: it reads success from a table per payload size,
+# tabulated once on this SNR grid (dB) and interpolated linearly (within 1e-4 of the exact curve).
+SNR_GRID_DB = np.arange(-40.0, 60.0 + 1e-9, 0.05)
+
+
+@lru_cache(maxsize=130)
+def _success_table(payload_bytes: int, params: AcousticParams) -> NDArray[np.float64]:
+    return success_probability(SNR_GRID_DB, payload_bytes, params)
+
+
+def success_lookup(snr_db: ArrayLike, payload_bytes: int, params: AcousticParams) -> NDArray[np.float64]:
+    """`success_probability` of one payload size at many SNRs, from its table (clamped at the grid's ends)."""
+    table = _success_table(max(int(payload_bytes), PING_BYTES), params)
+    return np.interp(np.asarray(snr_db, dtype=np.float64), SNR_GRID_DB, table)

@@ -62,6 +62,7 @@ LATCHES = frozenset(mavlink.enums["DOCK_LATCH_STATE"]) - {max(mavlink.enums["DOC
 COMMANDS = frozenset(int(c) for c in MusselCommand)
 N_SLOTS = 4  # an aPad's docking slots (apad_sitl.vocabulary.N_SLOTS; the fleet does not import the aPad)
 MAX_LAT_E7, MAX_LON_E7 = 90 * 10**7, 180 * 10**7
+SURFACE_DEPTH_M = 0.01  # this shallow an aMussel is at the surface, in WiFi's reach (floating and docked: 0 m)
 
 
 # Where a co-located router takes whole batches: (message id, frames, columns by wire field name).
@@ -88,6 +89,10 @@ class CommsConfig:
     apad_ids: frozenset[int] | None = None  # systems whose positions and slots are an aPad's; None: any
     commanders: frozenset[int] | None = None  # systems whose AMUSSEL_COMMAND is obeyed (a GCS); None: any
     report_refusals: bool = True  # STATUSTEXT for surface commands refused for safety
+    # Acoustic scenarios: only aMussels at the surface speak over MAVLink (WiFi); the others are heard
+    # through their TDMA slots (`mussel_sim.modems`) or, depleted under water, not at all. False: every
+    # aMussel over MAVLink, as in the paper's WiFi-only experiment.
+    wifi_at_surface_only: bool = False
 
 
 class FleetRunner:
@@ -148,6 +153,7 @@ class FleetRunner:
         self._dock: dict[int, tuple[int, int]] = {}
         self._release: list[int] = []
         self._sleep: list[tuple[int, float, float]] = []
+        self._wake: list[int] = []
         self._published_us: dict[int, int] = {}  # message id -> mission time of its last publish
 
     # --- periodic tasks ----------------------------------------------------------------------------
@@ -223,10 +229,25 @@ class FleetRunner:
         })
 
     def _speaking(self, spec: hot.HotSpec, now_us: int) -> NDArray[np.intp] | None:
-        """The rows of the state that publish `spec` now (None: all): a sleeping aMussel only after a wake."""
+        """The rows of the state that publish `spec` now (None: all): a sleeping aMussel only after a
+        wake; in an acoustic scenario only those at the surface (`CommsConfig.wifi_at_surface_only`)."""
         rows = publish_rows(self.state, self.params.theta, self._published_us.get(spec.msg_id), now_us)
         self._published_us[spec.msg_id] = now_us
-        return rows
+        if not self.config.wifi_at_surface_only:
+            return rows
+        at_surface = np.flatnonzero(self.state.depth_m <= SURFACE_DEPTH_M)
+        return at_surface if rows is None else np.intersect1d(rows, at_surface)
+
+    def heard_acoustically(self, mussel_id: int, command: MusselCommand | None) -> None:
+        """An aMussel's modem heard the GCS: a `command` for it (a call-up: SURFACE), or, with None,
+        the wake-up ping. Taken at the next step like a command over MAVLink; an id not ours is counted."""
+        if mussel_id not in self._ids:
+            self.dropped["invalid:acoustic:mussel_id"] += 1
+            return
+        if command is None:
+            self._wake.append(mussel_id)
+        else:
+            (self._surface if command == MusselCommand.SURFACE else self._sink).append(mussel_id)
 
     def _send_batch(self, spec: hot.HotSpec, columns: dict[str, Any]) -> None:
         """One message per aMussel, packed as a batch: byte for byte what one-by-one encoding makes."""
@@ -353,8 +374,9 @@ class FleetRunner:
             dock=[(m, a, s) for m, (a, s) in self._dock.items()],
             release=self._release,
             sleep=self._sleep,
+            wake=self._wake,
         )
-        self._surface, self._sink, self._dock, self._release, self._sleep = [], [], {}, [], []
+        self._surface, self._sink, self._dock, self._release, self._sleep, self._wake = [], [], {}, [], [], []
         return inputs
 
     def _report(self, events: StepEvents) -> None:

@@ -75,6 +75,7 @@ class ModemDriver:
         self.overflowed = 0
         self.closed_reason: str | None = None
         self._replies: deque[Reply] = deque(maxlen=QUEUE_MAX)
+        self._waiting = False  # a wait is reading replies (packets heard go to it as well as the inbox)
 
     @property
     def dropped(self) -> dict[str, int]:
@@ -97,11 +98,13 @@ class ModemDriver:
             self._closed(str(exc))
             return
         for reply in self.parser.feed(data):
-            self.overflowed += len(self._replies) == QUEUE_MAX
-            self._replies.append(reply)
             if isinstance(reply, Received):
                 self.overflowed += len(self.inbox) == QUEUE_MAX
                 self.inbox.append(reply)  # a wait that takes it (a voltage answer) takes it from here
+                if not self._waiting:  # heard between waits: a packet for the inbox only
+                    continue
+            self.overflowed += len(self._replies) == QUEUE_MAX
+            self._replies.append(reply)
 
     def send(self, command: Command) -> bool:
         """Write one command whole (its bytes back to back, as the unit needs); False if the port has gone."""
@@ -117,7 +120,13 @@ class ModemDriver:
 
     def wait_for(self, accept: Callable[[Reply], bool], bound_s: float) -> Result:
         """The first reply `accept` takes (or E, or #TO), within `bound_s` of the clock."""
-        deadline = self.clock.time() + bound_s
+        self._waiting = True
+        try:
+            return self._wait(accept, self.clock.time() + bound_s)
+        finally:
+            self._waiting = False
+
+    def _wait(self, accept: Callable[[Reply], bool], deadline: float) -> Result:
         while True:
             self.poll()
             while self._replies:

@@ -16,6 +16,8 @@ queue more than `MAX_QUEUED_S` of packets behind the one on the water is answere
 
 from __future__ import annotations
 
+from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
 
@@ -92,11 +94,15 @@ class _Wait:
     deadline_s: float
 
 
+HEARD_KEPT = 1024  # the newest frames the remote units heard, kept for tests and the records
+
+
 @dataclass
 class HeardLog:
-    """What the remote units heard (time, address, frame), for tests and the records."""
+    """What the remote units heard (time, address, frame): the newest HEARD_KEPT, and how many in all."""
 
-    entries: list[tuple[float, int, Frame]] = field(default_factory=list)
+    entries: deque[tuple[float, int, Frame]] = field(default_factory=lambda: deque(maxlen=HEARD_KEPT))
+    total: int = 0
 
 
 def supply_ticks(volts: float) -> int:
@@ -113,11 +119,14 @@ class ModemEmulator:
         if len(set(addresses)) != len(addresses) or any(not 0 <= a <= MAX_ADDRESS for a in addresses):
             raise ValueError(f"remote addresses must differ and be 0..{MAX_ADDRESS}, got {addresses}")
         self.params, self.remotes = params, remotes
+        self._nodes = {r.address: i + 1 for i, r in enumerate(remotes)}  # address -> node index in the medium
         self.address, self.supply_v, self.ping_timeout_s = address, supply_v, ping_timeout_s
         positions = np.array([position_m, *(r.position_m for r in remotes)], dtype=np.float64)
         self.medium = Medium(params, positions, rng)
         self.parser = CommandParser(gap_s)
         self.heard = HeardLog()
+        # What a remote unit heard addressed to it (or to all) is also handed here: (end s, address, frame).
+        self.on_remote_heard: Callable[[float, int, Frame], None] | None = None
         self.counts: dict[str, int] = {}
         self._waits: list[_Wait] = []
         self._quality: int | None = None
@@ -155,14 +164,23 @@ class ModemEmulator:
         self._out += reply.encode()
 
     def _node_of(self, address: int) -> int:
-        for i, r in enumerate(self.remotes):
-            if r.address == address:
-                return i + 1
-        raise KeyError(f"no remote unit {address}")
+        node = self._nodes.get(address)
+        if node is None:
+            raise KeyError(f"no remote unit {address}")
+        return node
 
     def _send(self, node: int, t_s: float, frame: Frame) -> Transmission:
         start = max(t_s, self.medium.busy_until_s(node))
-        return self.medium.transmit(node, start, len(frame.data), frame)
+        return self.medium.transmit(node, start, len(frame.data), frame, self._listeners(frame))
+
+    def _listeners(self, frame: Frame) -> list[int] | None:
+        """The nodes that act on `frame` on time: all for a broadcast, else its addressee (if any unit has it)."""
+        if frame.dest is None:
+            return None
+        if frame.dest == self.address:
+            return [LOCAL]
+        node = self._nodes.get(frame.dest)
+        return [] if node is None else [node]
 
     def _command(self, item: Command | Rejected, t_s: float) -> None:
         if isinstance(item, Rejected):
@@ -253,6 +271,9 @@ class ModemEmulator:
         if frame.dest is not None and frame.dest != unit.address:
             return
         self.heard.entries.append((r.end_s, unit.address, frame))
+        self.heard.total += 1
+        if self.on_remote_heard is not None:
+            self.on_remote_heard(r.end_s, unit.address, frame)
         self._answer(node, unit.address, frame, r)
 
     def _answer(self, node: int, address: int, frame: Frame, r: Reception) -> None:

@@ -76,6 +76,11 @@ class PipeEnd:
         if self.peer.bell is not None:
             self.peer.bell.rings += 1
 
+    @property
+    def waiting(self) -> bool:
+        """Whether bytes wait to be read (or the other end has closed: a read would say so)."""
+        return bool(self._inbox) or (self.peer is not None and self.peer.closed)
+
     def read(self) -> bytes:
         if self.closed:
             raise PortClosed("pipe closed")

@@ -289,8 +289,13 @@ class ApadActions:
         if distance > self.settings.acoustic_range_m:
             self.knows.release(mussel_id)
             return False
-        self.command(self.api.command_mussel, mussel_id, MusselCommand.SURFACE, self.apad_id)
-        self._log("call_up", mussel=mussel_id, distance_m=round(distance, 2))
+        acoustic = self.knows.acoustic
+        if acoustic is None:
+            self.command(self.api.command_mussel, mussel_id, MusselCommand.SURFACE, self.apad_id)
+            self._log("call_up", mussel=mussel_id, distance_m=round(distance, 2))
+        else:  # over the water, acknowledged, retried; a sleeper pinged awake first
+            acked = acoustic.uplink.call_up(mussel_id, self.knows.wake_in_s(mussel_id) > 0, self.apad_id)
+            self._log("call_up", mussel=mussel_id, distance_m=round(distance, 2), acoustic=True, acked=acked)
         return True
 
     def set_phase(self, phase: Phase) -> None:

@@ -10,19 +10,24 @@ commands nothing: the aPad's actions (`gcs.mission.actions`) and the loop's phas
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 from apad_sitl.vocabulary import Latch
+from gcs.acoustic.knowledge import age_s, believed_battery
 from gcs.api import ApadApi, Location
 from gcs.link.telemetry import SlotView
 from gcs.mission.control import LoopLog, LoopSettings
 from gcs.mission.duty import Duty
-from gcs.mission.real_fleet import RealFleet
+from gcs.mission.real_fleet import MAX_REPORT_AGE_S, RealFleet
 from gcs.mission.strategies import Outlook, traits
 from gcs.mission.swarm import FleetShares, orphans
 from missiontime import Clock
 from mussel_sim.battery import charge_profile, discharge_profile, sim_minutes
 from mussel_sim.geo import distance_m
 from mussel_sim.vocabulary import MusselState
+
+if TYPE_CHECKING:
+    from gcs.acoustic.network import AcousticNetwork
 
 # An aMussel is collectable only if its battery lasts until the aPad can dock it: the trip there (at
 # the aPad's speed, this much slower for acceleration and the last metres) or, if it can only be
@@ -54,10 +59,12 @@ class FleetKnowledge:
     def __init__(
         self, api: ApadApi, clock: Clock, settings: LoopSettings, homes: dict[int, Location], apad_id: int,
         log: LoopLog, shares: FleetShares | None = None, real: RealFleet | None = None,
+        acoustic: AcousticNetwork | None = None,
     ) -> None:
         """`homes`: where each aMussel goes back to (filled in for real ones as they are first heard);
         `shares`: with several aPads, the one record of who serves which aMussel; `real`: estimates of
-        real aMussels between their sparse reports."""
+        real aMussels between their sparse reports; `acoustic`: the acoustic network, through which
+        submerged aMussels are heard (in their TDMA slots) and called up."""
         self.api = api
         self.clock = clock
         self.settings = settings
@@ -65,6 +72,7 @@ class FleetKnowledge:
         self.apad_id = apad_id
         self.shares = shares
         self.real = real
+        self.acoustic = acoustic
         self.unreachable: set[int] = set()
         self.duties: dict[int, Duty] = dict(settings.duties)  # each aMussel's, and the sleep orders sent since
         self._default_duty = Duty(discharge_profile(settings.mussel_discharge).rate_per_min)
@@ -77,7 +85,11 @@ class FleetKnowledge:
         the aPad may go to (one outside the geofence, e.g. carried off by a current while it
         floated, is left out with one `unreachable` event instead of being tried again and again)."""
         threshold = self.settings.mission.pool_threshold
-        ids = self.api.mussels.select((MusselState.ACTIVE,), battery_below=threshold)
+        if self.acoustic is None:
+            ids = self.api.mussels.select((MusselState.ACTIVE,), battery_below=threshold)
+        else:  # heard now and then: the estimate decides, and one silent too long is not planned for
+            ids = [m for m in self.api.mussels.select((MusselState.ACTIVE,))
+                   if self.battery(m) < threshold and self.heard_alive(m)]
         if self.real is not None:  # a real one's last report may be old: its estimate decides
             real = set(self.real.ids())
             ids = sorted({m for m in ids if m not in real} | set(self.real.below(threshold, self.clock.now_us)))
@@ -133,8 +145,17 @@ class FleetKnowledge:
         heard = [m for m in self.homes if m in self.api.mussels and self.serves(m)]
         if not heard:  # nothing heard yet: nothing to count
             return need
-        seabed = sum(1 for m in heard if self.state(m) == MusselState.ACTIVE)
+        seabed = sum(1 for m in heard if self.state(m) == MusselState.ACTIVE and self.heard_alive(m))
         return max(1, min(need, seabed))
+
+    def heard_alive(self, mussel_id: int) -> bool:
+        """Whether the aMussel may still be alive as far as the GCS can know: always, where every aMussel
+        reports every second; in an acoustic scenario, heard within MAX_REPORT_AGE_S and not believed
+        empty (a depleted aMussel under water falls silent: its estimate and its silence tell)."""
+        if self.acoustic is None:
+            return True
+        heard_s = age_s(self.api.mussels[mussel_id], self.clock.now_us)
+        return self.battery(mussel_id) > 0.0 and heard_s <= MAX_REPORT_AGE_S
 
     def too_late_to_call_up(self) -> bool:
         return self.settings.mission.duration_s - self.clock.time() < self.settings.call_up_margin_s
@@ -200,8 +221,11 @@ class FleetKnowledge:
         return self.api.mussels[mussel_id].state
 
     def battery(self, mussel_id: int) -> float:
-        """As last reported; for a real aMussel out of the water, estimated since (`RealFleet`)."""
+        """As last reported; for a real aMussel out of the water, estimated since (`RealFleet`); in an
+        acoustic scenario, for one under water, run down since its last report (`believed_battery`)."""
         view = self.api.mussels[mussel_id]
+        if self.acoustic is not None and view.simulated:
+            return believed_battery(view, self.clock.now_us, self.drain_per_s(mussel_id))
         if self.real is not None and not view.simulated and mussel_id in self.real.heard_us:
             on_slot = mussel_id in self.docked().values()
             return self.real.estimate(mussel_id, self.clock.now_us, on_slot).battery_frac

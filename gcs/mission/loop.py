@@ -15,6 +15,7 @@ it never ends mid-dock.
 
 from __future__ import annotations
 
+from gcs.acoustic.network import AcousticNetwork
 from gcs.api import ApadApi, Location
 from gcs.mission.actions import ApadActions
 from gcs.mission.control import EndReason, LoopControl, LoopLog, LoopSettings, LoopStatus, MissionEnded, Phase
@@ -45,6 +46,7 @@ class EnergySharingLoop:
         shares: FleetShares | None = None,
         real: RealFleet | None = None,
         status: LoopStatus | None = None,
+        acoustic: AcousticNetwork | None = None,
     ) -> None:
         """`shares`: with several aPads, the one record of who serves which aMussel
         (`gcs.mission.swarm`); this loop then plans, calls up and fetches only within its aPad's
@@ -53,7 +55,7 @@ class EnergySharingLoop:
         self.control = control or LoopControl()
         self.status = status or LoopStatus(strategy=settings.mission.collect_strategy)
         log = LoopLog(events or EventLog(), clock, apad_id if shares is not None else None)
-        self.knows = FleetKnowledge(api, clock, settings, homes, apad_id, log, shares, real)
+        self.knows = FleetKnowledge(api, clock, settings, homes, apad_id, log, shares, real, acoustic)
         self.act = ApadActions(self.knows, self.control, self.status, log)
         self.crew = Crew(self.knows, self.act, self.status, self.control, log)
 

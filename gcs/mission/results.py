@@ -76,6 +76,9 @@ class RunResult:
     # Per simulated day (86,400 s / theta of mission time; `gcs.mission.days.day_rows`), every day
     sim_day_s: float = 0.0
     days: list[dict[str, Any]] = field(default_factory=list)
+    # An acoustic scenario's channel: the TDMA frame and slot table, reports sent and heard, call-ups,
+    # drops by reason, and belief against truth (`gcs.acoustic.network.AcousticNetwork.summary`); {}: WiFi only
+    acoustic: dict[str, Any] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, Any]:
         return asdict(self)
@@ -126,9 +129,23 @@ def happened_lines(results: list[RunResult]) -> list[str]:
                            ("strategy_failures", "planning step the strategy failed (cautious planned it)")):
             if h.get(key):
                 parts.append(f"{words} x{h[key]}")
+        if r.acoustic:
+            parts.append(acoustic_words(r.acoustic))
         if parts:
             lines.append(f"{r.scenario} {r.strategy} s{r.seed}: " + "; ".join(parts))
     return lines
+
+
+def acoustic_words(a: dict[str, Any]) -> str:
+    """An acoustic run in one clause: frame, reports heard of sent, knowledge age, estimate error, call-ups."""
+    counts, fleet, k = a.get("counts", {}), a.get("fleet", {}), a.get("knowledge", {})
+    sent, heard = fleet.get("reports_sent", 0), counts.get("reports_heard", 0)
+    calls = counts.get("call_ups_acked", 0) + counts.get("call_ups_unacked", 0)
+    return (f"acoustic: TDMA frame {a.get('frame_s', 0):.2f} s, {heard:,} of {sent:,} reports heard, knowledge "
+            f"{k.get('age_median_s', 0):.1f} s old (median; max {k.get('age_max_s', 0):.0f} s), battery estimate "
+            f"off by {100 * k.get('battery_error_mean', 0):.2f} % (max {100 * k.get('battery_error_max', 0):.2f} %), "
+            f"call-ups acknowledged {counts.get('call_ups_acked', 0)} of {calls} "
+            f"({counts.get('call_up_retries', 0)} retries)")
 
 
 def apads_table(results: list[RunResult]) -> Table | None:

@@ -15,6 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from apad_sitl.endpoint import SitlVehicle
+from gcs.acoustic.frames import area_range_m
+from gcs.acoustic.network import AcousticNetwork
 from gcs.api import ApadApi, Location
 from gcs.link.faultproxy import FaultProxy, LinkFaults
 from gcs.link.router import Link
@@ -98,6 +100,7 @@ class World:
     geofence_deg: list[tuple[float, float]] = field(default_factory=list)  # (lat, lon) ring; empty: none
     folder: RunFolder | None = None  # where the logs go; None: no logs
     options: LinkOptions = field(default_factory=lambda: LinkOptions())  # how the aPads are reached
+    acoustic: AcousticNetwork | None = None  # [acoustic] enabled: the channel, the modems, belief vs truth
 
     @property
     def vehicle(self) -> SitlVehicle | None:
@@ -141,8 +144,11 @@ class World:
         )
         clock = clock or self.clock
         api = self.api if clock is self.clock else self.api.on_clock(clock)
-        return EnergySharingLoop(api, clock, settings, self.homes, a.system_id, self.events, control, shares,
-                                 self.real, status)
+        loop = EnergySharingLoop(api, clock, settings, self.homes, a.system_id, self.events, control, shares,
+                                 self.real, status, self.acoustic)
+        if self.acoustic is not None:
+            self.acoustic.belief = loop.knows.battery  # belief against truth, as this loop plans with it
+        return loop
 
     def mute_logs(self, muted: bool) -> None:
         """Stop (or restart) writing the logs: a resumed lockstep mission replays up to its checkpoint
@@ -214,7 +220,8 @@ def build_world(
         state, params, rng, frame,
         Codec(FLEET_SYSTEM_ID, FLEET_COMPONENT_ID), port.send_bytes, sensor_field(scenario, area, frame),
         CommsConfig(status_rate_hz=scenario.fleet.status_rate_hz, sensors_rate_hz=scenario.fleet.sensors_rate_hz,
-                    apad_ids=apad_ids, commanders=frozenset({link.codec.system_id})),
+                    apad_ids=apad_ids, commanders=frozenset({link.codec.system_id}),
+                    wifi_at_surface_only=scenario.acoustic.enabled),
         recorder=Recorder(state.ids, sinking_counts_active=scenario.mission.sinking_counts_active,
                           start_us=state.time_us, day_us=day_us(scenario.mission.theta)),
         local=port.send_local, local_batch=port.send_batch,
@@ -231,6 +238,8 @@ def build_world(
     world = World(scenario, clock, link, api, fleet, frame, config, homes, events, geofence_deg=fence, folder=folder,
                   options=options)
     world.mute_logs(muted_logs)
+    if scenario.acoustic.enabled:
+        world.acoustic = AcousticNetwork.build(clock, fleet, link.registry, events, scenario, area_range_m(scenario))
     world.real = RealFleet(link.registry.mussels, link.registry.mussel_heard_us,
                            discharge_profile(scenario.fleet.discharge), charge_profile(scenario.fleet.charge),
                            scenario.mission.theta)

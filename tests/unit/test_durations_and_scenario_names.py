@@ -100,7 +100,7 @@ def test_a_scenario_found_nowhere_is_one_line_listing_the_shipped_ones(in_tmp: P
         load_scenario("pool13")
     message = str(exc.value)
     assert message.startswith(f"pool13: no such scenario file, here or in {MISSIONS_DIR} (shipped: ")
-    assert "bay24, pool12, pool12x2" in message and "\n" not in message
+    assert "bay24, bay24-acoustic, pool12, pool12-acoustic, pool12x2" in message and "\n" not in message
 
 
 def test_the_seed_notice_says_exactly_what_a_seed_changes_over_a_saved_fleet() -> None:

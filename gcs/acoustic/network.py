@@ -1,0 +1,102 @@
+"""A lockstep mission's acoustic network, composed: the channel, the aMussels' modems, the GCS's modem.
+
+`AcousticNetwork.build` puts, on the mission clock:
+
+- the nanomodem emulator (`acoustic.nanomodem.emulator`): the GCS's unit at the first aPad's home,
+  one remote unit per aMussel (address = id), over a `Medium` seeded from the scenario's seed;
+- the GCS's driver on an in-process byte pipe to it: the same driver code that speaks to a real unit
+  through pyserial, reading the same bytes;
+- the aMussels' side (`mussel_sim.modems`): status reports in their TDMA slots, call-ups heard;
+- the GCS's side (`gcs.acoustic.uplink`): reports folded into what the GCS knows, call-ups sent;
+- a `KnowledgeLedger` sampled every `SAMPLE_S`: the planner's belief against the simulator's truth.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from acoustic.nanomodem.commands import MAX_ADDRESS
+from acoustic.nanomodem.driver import ModemDriver
+from acoustic.nanomodem.emulator import ModemEmulator, RemoteUnit
+from acoustic.nanomodem.lockstep import Attached, attach
+from acoustic.nanomodem.ports import pipe
+from acoustic.tdma import TdmaFrame, tdma_frame
+from gcs.acoustic.knowledge import KnowledgeLedger, age_s, believed_battery
+from gcs.acoustic.uplink import AcousticUplink
+from gcs.link.registry import VehicleRegistry
+from gcs.mission.scenario import Scenario
+from gcs.mission.scenario_models import planning_profile
+from gcs.records.events import EventLog
+from missiontime import Clock, Task
+from mussel_sim.battery import sim_minutes
+from mussel_sim.comms import FleetRunner
+from mussel_sim.modems import MusselModems
+
+GCS_ADDRESS = 0  # the GCS's unit; the aMussels' addresses are their ids (1..255)
+GCS_DEPTH_M = 0.5  # the surface computer's unit hangs just below the surface
+SAMPLE_S = 10.0  # belief against truth, sampled this often (mission seconds)
+CHANNEL_SEED = 21  # the channel's draws, apart from the fleet's and the placement's for the same seed
+
+
+class AcousticNetwork:
+    def __init__(self, emulator: Attached, modems: MusselModems, uplink: AcousticUplink, ledger: KnowledgeLedger,
+                 registry: VehicleRegistry, fleet: FleetRunner, default_drain_per_s: float) -> None:
+        self.emulator, self.modems, self.uplink, self.ledger = emulator, modems, uplink, ledger
+        self.registry, self.fleet = registry, fleet
+        # How the planner believes an aMussel's battery (its loop sets it: its own drains, sleep orders included).
+        self.belief: Callable[[int], float] | None = None
+        self._default_drain_per_s = default_drain_per_s
+        self._task: Task | None = None
+
+    @property
+    def tdma(self) -> TdmaFrame:
+        return self.modems.tdma
+
+    @classmethod
+    def build(cls, clock: Clock, fleet: FleetRunner, registry: VehicleRegistry, events: EventLog,
+              scenario: Scenario, area_range_m: float) -> AcousticNetwork:
+        """The network of `scenario` (its `[acoustic]` enabled) on `clock`, from mission time now."""
+        params = scenario.acoustic
+        ids = [int(m) for m in fleet.state.ids]  # sorted: the medium's nodes follow the fleet's rows
+        if ids and (ids[0] <= GCS_ADDRESS or ids[-1] > MAX_ADDRESS):
+            raise ValueError(f"acoustic scenarios need aMussel ids 1..{MAX_ADDRESS} (the nanomodem's addresses)")
+        home = scenario.apads[0]
+        x, y = fleet.frame.to_local(np.array([home.home_lat_deg]), np.array([home.home_lon_deg]))
+        gcs_at = (float(x[0]), float(y[0]), GCS_DEPTH_M)
+        s = fleet.state
+        remotes = tuple(RemoteUnit(m, (float(s.x_m[k]), float(s.y_m[k]), float(s.depth_m[k])))
+                        for k, m in enumerate(ids))
+        core = ModemEmulator(params, remotes, np.random.default_rng([scenario.seed, CHANNEL_SEED]),
+                             address=GCS_ADDRESS, position_m=gcs_at)
+        gcs_end, modem_end = pipe()
+        emulator = attach(core, modem_end, clock)
+        tdma = tdma_frame(ids, [a.system_id for a in scenario.apads], area_range_m, params)
+        modems = MusselModems(fleet, emulator, tdma, GCS_ADDRESS, gcs_at)
+        modems.register(clock.scheduler, clock.now_us)
+        uplink = AcousticUplink(ModemDriver(gcs_end, clock, params.sound_speed_mps), registry, clock, events, tdma)
+        uplink.register(clock.scheduler)
+        drain = planning_profile(scenario).discharge.rate_per_min * sim_minutes(scenario.mission.theta, 1.0)
+        network = cls(emulator, modems, uplink, KnowledgeLedger(fleet.state.ids), registry, fleet, drain)
+        network._task = clock.scheduler.every(SAMPLE_S, network.sample, "acoustic-knowledge", clock.now_us)
+        return network
+
+    def sample(self, now_us: int) -> None:
+        """Belief against truth now, for every aMussel of the fleet."""
+        s = self.fleet.state
+        ids = s.ids.tolist()
+        table = self.registry.mussels
+        known = np.array([m in table for m in ids], dtype=bool)
+        belief = np.array([self._believed(m, now_us) if k else 0.0 for m, k in zip(ids, known, strict=True)])
+        age = np.array([age_s(table[m], now_us) if k else 0.0 for m, k in zip(ids, known, strict=True)])
+        self.ledger.sample(known, belief, s.battery_frac, age)
+
+    def _believed(self, mussel_id: int, now_us: int) -> float:
+        if self.belief is not None:
+            return self.belief(mussel_id)
+        return believed_battery(self.registry.mussels[mussel_id], now_us, self._default_drain_per_s)
+
+    def summary(self) -> dict[str, object]:
+        return {**self.uplink.summary(), "fleet": dict(sorted(self.modems.counts.items())),
+                "channel": dict(self.emulator.core.medium.counts), "knowledge": self.ledger.summary().as_dict()}

@@ -1,0 +1,107 @@
+"""The simulated aMussels' nanomodems: a status report in each one's TDMA slot, call-ups heard.
+
+Acoustic scenarios only (`[acoustic] enabled`). Each aMussel is a remote unit of the nanomodem
+emulator (`acoustic.nanomodem`), its address its id; the GCS's unit is the emulator's local unit.
+
+- In its slot of the TDMA frame (`acoustic.tdma`) an aMussel in the water (ACTIVE, SURFACING,
+  SINKING) that has been awake since its previous slot sends its status report
+  (`acoustic.status_packet`, 31 bytes) to the GCS's unit as a unicast; the channel decides whether
+  it arrives. At the surface it speaks over WiFi (MAVLink) instead (`CommsConfig.wifi_at_surface_only`),
+  and a depleted one under water says nothing.
+- A call-up (an acknowledged unicast of `acoustic.orders.CALL_UP`) heard by an aMussel becomes a
+  SURFACE command at the fleet's next step; a ping heard wakes a sleeper (the wake-up ping), so a
+  call-up after it is taken at once. The fleet still lets it rise only with an aPad within acoustic
+  range: the permission the paper's aMussels wait for.
+
+The modems move with their aMussels: before each slot the medium takes the fleet's positions.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+
+import numpy as np
+
+from acoustic.nanomodem.emulator import Frame, FrameKind
+from acoustic.nanomodem.lockstep import Attached
+from acoustic.orders import CALL_UP
+from acoustic.status_packet import StatusReport, pack
+from acoustic.tdma import Owner, TdmaFrame
+from missiontime import US_PER_S, Scheduler, Task
+from mussel_sim.comms import FleetRunner
+from mussel_sim.fleet_sleep import publish_rows
+from mussel_sim.vocabulary import MusselCommand, MusselState
+
+# Heard in the water column or on the seabed: these report in their slot; at the surface they use WiFi,
+# and a depleted one is silent wherever it is (the GCS learns it by its silence and its estimate).
+UNDERWATER = (MusselState.ACTIVE, MusselState.SURFACING, MusselState.SINKING)
+
+
+class MusselModems:
+    """The fleet's side of the acoustic network, on the emulator `modem` (attached to the mission clock)."""
+
+    def __init__(self, fleet: FleetRunner, modem: Attached, tdma: TdmaFrame, gcs_address: int,
+                 gcs_position_m: tuple[float, float, float]) -> None:
+        self.fleet, self.modem, self.tdma = fleet, modem, tdma
+        self.gcs_address = gcs_address
+        self._gcs_position = np.array(gcs_position_m, dtype=np.float64)
+        self._seq: dict[int, int] = {}
+        self.counts: Counter[str] = Counter()  # reports sent, slots silent by reason, frames heard by kind
+        self._slot = 0
+        self._task: Task | None = None
+        modem.core.on_remote_heard = self._heard
+
+    def register(self, scheduler: Scheduler, start_us: int = 0) -> Task:
+        """A task at every slot's start, from mission time `start_us` (the frame repeats from there)."""
+        self._task = scheduler.every(self.tdma.slot_s, self._slot_task, "tdma-slot", start_us)
+        return self._task
+
+    def _slot_task(self, now_us: int) -> None:
+        slot = self.tdma.slots[self._slot % len(self.tdma.slots)]
+        self._slot += 1
+        if slot.owner is not Owner.AMUSSEL:
+            return  # the aPads' slots: they send nothing yet
+        s = self.fleet.state
+        k = int(np.searchsorted(s.ids, slot.node_id))
+        if k >= s.n or int(s.ids[k]) != slot.node_id:
+            self.counts["silent:not_in_fleet"] += 1
+            return
+        if MusselState(int(s.state[k])) not in UNDERWATER:
+            self.counts["silent:at_surface_or_depleted"] += 1
+            return
+        since_us = now_us - round(self.tdma.frame_s * US_PER_S)
+        rows = publish_rows(s, self.fleet.params.theta, since_us, now_us)
+        if rows is not None and k not in rows:
+            self.counts["silent:asleep"] += 1
+            return
+        self._follow_fleet()
+        self.modem.remote_send(slot.node_id, pack(self._report(k, now_us)), dest=self.gcs_address)
+        self.counts["reports_sent"] += 1
+
+    def _report(self, k: int, now_us: int) -> StatusReport:
+        s, fleet = self.fleet.state, self.fleet
+        mussel_id = int(s.ids[k])
+        seq = self._seq.get(mussel_id, -1) + 1 & 0xFF
+        self._seq[mussel_id] = seq
+        lat, lon = fleet.frame.to_geodetic(s.x_m[k:k + 1], s.y_m[k:k + 1])
+        r = fleet.sensors.sample(s.x_m[k:k + 1], s.y_m[k:k + 1], s.depth_m[k:k + 1], now_us / US_PER_S)
+        return StatusReport(
+            mussel_id=mussel_id, seq=seq, state=int(s.state[k]), battery_frac=float(s.battery_frac[k]),
+            fix_time_s=now_us / US_PER_S, lat_deg=float(lat[0]), lon_deg=float(lon[0]),
+            depth_m=float(s.depth_m[k]), dissolved_oxygen_mg_l=float(r.dissolved_oxygen_mg_l[0]),
+            temperature_degc=float(r.temperature_degc[0]), pressure_hpa=float(r.pressure_hpa[0]),
+            turbidity_ntu=float(r.turbidity_ntu[0]))
+
+    def _follow_fleet(self) -> None:
+        """The medium's nodes where the fleet is now: the GCS's unit, then each aMussel in id order."""
+        s = self.fleet.state
+        here = np.column_stack([s.x_m, s.y_m, s.depth_m])
+        self.modem.core.medium.move(np.vstack([self._gcs_position, here]))
+
+    def _heard(self, t_s: float, address: int, frame: Frame) -> None:
+        """What an aMussel's modem heard addressed to it: a call-up, or a ping that wakes it."""
+        self.counts[f"heard:{frame.kind.value}"] += 1
+        if frame.kind is FrameKind.PING:
+            self.fleet.heard_acoustically(address, None)
+        elif frame.kind is FrameKind.UNICAST_ACK and frame.data == CALL_UP:
+            self.fleet.heard_acoustically(address, MusselCommand.SURFACE)
