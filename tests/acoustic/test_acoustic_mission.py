@@ -1,0 +1,105 @@
+"""Acoustic missions end to end in lockstep: the real SITL aPad over real MAVLink bytes, the fleet's
+modems and the GCS's driver over the emulator's serial bytes, the channel deciding what arrives.
+
+What is held: the GCS hears a submerged aMussel only through its TDMA reports (no AMUSSEL_STATUS
+from under water in the GCS's .tlog), plans on what it heard (a sea where nothing carries gets no
+call-up at all, though the truth has aMussels to charge), and on a noisy channel call-ups are
+retried, reports lost and counted, knowledge ages, and still nothing is lost.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from gcs.acoustic.frames import scenario_frame
+from gcs.mission.headless import run_mission
+from gcs.mission.results import RunResult
+from gcs.mission.scenario import Scenario, load_scenario
+from gcs.records.replay import read_events, read_tlog
+from mavlink_dialect import mavlink
+from mussel_sim.comms import SURFACE_DEPTH_M
+from testkit import scenario_variant
+
+Run = tuple[Scenario, RunResult, Path]
+POOL = load_scenario("missions/pool12-acoustic.toml")
+
+
+def acoustic_run(tmp_path: Path, minutes: float, **channel: float) -> Run:
+    scenario = replace(POOL.with_overrides(duration_s=60.0 * minutes), acoustic=replace(POOL.acoustic, **channel))
+    result = run_mission(scenario, tmp_path / "run")
+    return scenario, result, Path(result.out_dir)
+
+
+@pytest.fixture(scope="module")
+def noisy(tmp_path_factory: pytest.TempPathFactory) -> Run:
+    # Ambient noise 54 dB over the default: about a third of the reports across the pool are lost.
+    return acoustic_run(tmp_path_factory.mktemp("noisy"), 20.0, noise_psd_db=104.0)
+
+
+def test_the_gcs_hears_submerged_amussels_only_through_their_tdma_reports(noisy: Run) -> None:
+    scenario, result, folder = noisy
+    statuses = [msg for _, msg in read_tlog(folder / "gcs.tlog")
+                if msg.get_msgId() == mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS]
+    assert statuses, "docked and floating aMussels still speak over WiFi"
+    assert max(m.depth for m in statuses) <= SURFACE_DEPTH_M
+    a = result.acoustic
+    frame = scenario_frame(scenario)
+    assert a["frame_s"] == pytest.approx(frame.frame_s, abs=1e-3)
+    assert len(a["slots"]) == len(frame.slots) == 13  # 12 aMussels and the aPad
+    assert 0 < a["counts"]["reports_heard"] < a["fleet"]["reports_sent"]  # heard, and lost on the water
+    assert a["channel"]["packet_error"] > 0
+
+
+def test_call_ups_are_retried_on_a_noisy_channel_and_nothing_is_lost(noisy: Run) -> None:
+    _, result, folder = noisy
+    counts = result.acoustic["counts"]
+    assert counts["call_up_retries"] > 0
+    assert counts["call_up_sent"] == counts["call_ups_acked"] + counts["call_up_retries"] + 3 * counts.get(
+        "call_ups_unacked", 0)
+    called = [e for e in read_events(folder / "events.jsonl") if e.kind == "call_up"]
+    assert called and all(e.fields["acoustic"] for e in called)
+    assert result.cycles >= 1 and not result.misplaced
+    assert all(m.state_s.get("depleted", 0.0) == 0.0 for m in result.mussels)
+
+
+def test_knowledge_ages_with_the_frame_and_the_estimate_tracks_the_truth(noisy: Run) -> None:
+    scenario, result, _ = noisy
+    k = result.acoustic["knowledge"]
+    frame_s = scenario_frame(scenario).frame_s
+    assert k["samples"] == pytest.approx(20 * 60 / 10, abs=2)
+    assert 0.0 < k["age_median_s"] < frame_s  # at the surface an aMussel is heard every second
+    assert k["age_max_s"] > frame_s  # a report lost: the next is a frame later
+    # Run down by eq. (1) between reports, the belief stays within a percent of the battery on average.
+    assert 0.0 < k["battery_error_mean"] < 0.01
+    assert {p["mussel_id"] for p in k["per_mussel"]} == set(range(1, 13))
+
+
+def test_a_sea_that_carries_nothing_gets_no_call_up_though_the_truth_has_amussels_to_charge(tmp_path: Path) -> None:
+    # A source level so low that no packet reaches anyone: the GCS never hears a submerged aMussel.
+    scenario, result, folder = acoustic_run(tmp_path, 10.0, source_level_db=60.0)
+    low = [m for m in result.mussels if m.start_battery < scenario.mission.pool_threshold]
+    assert len(low) >= scenario.mission.min_pool  # the paper's GCS would have set off at once
+    assert result.acoustic["counts"].get("reports_heard", 0) == 0
+    assert result.acoustic["channel"]["delivered"] == 0
+    assert not [e for e in read_events(folder / "events.jsonl") if e.kind == "call_up"]
+    assert result.cycles == 0 and result.cost_m == 0.0
+
+
+def test_a_sleeping_amussel_is_pinged_awake_before_its_call_up(tmp_path: Path) -> None:
+    # Eight aMussels on the hourly-wake profile in the bay: each is heard only after a wake, and the
+    # GCS pings one awake (the wake-up ping) before it calls it up.
+    path = scenario_variant("bay-capacity", tmp_path / "sleepers.toml", {
+        "count = 8": 'count = 8\nprofile = "hourly_wake"',
+        "start_battery = [0.6, 1.0]": "start_battery = [0.05, 0.2]",
+        'duration = "40m"': 'duration = "30m"',
+    })
+    scenario = load_scenario(path)
+    scenario = replace(scenario, acoustic=replace(scenario.acoustic, enabled=True))
+    result = run_mission(scenario, tmp_path / "run")
+    counts, fleet = result.acoustic["counts"], result.acoustic["fleet"]
+    assert fleet["silent:asleep"] > 0  # asleep in most of its slots
+    assert counts["wake_pings"] > 0 and fleet["heard:ping"] > 0
+    assert fleet["heard:unicast_ack"] > 0 and result.cycles >= 1 and not result.misplaced
