@@ -13,6 +13,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from testkit import scenario_variant
 
 from gcs.acoustic.frames import scenario_frame
 from gcs.mission.headless import run_mission
@@ -21,7 +22,6 @@ from gcs.mission.scenario import Scenario, load_scenario
 from gcs.records.replay import read_events, read_tlog
 from mavlink_dialect import mavlink
 from mussel_sim.comms import SURFACE_DEPTH_M
-from testkit import scenario_variant
 
 Run = tuple[Scenario, RunResult, Path]
 POOL = load_scenario("missions/pool12-acoustic.toml")
