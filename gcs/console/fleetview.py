@@ -1,4 +1,5 @@
-"""The fleet table: one row per aMussel (id, state, battery, uptime), scrolling under a fixed header.
+"""The fleet table: one row per aMussel (id, state, battery, uptime, how old that knowledge is),
+scrolling under a fixed header.
 
 A line-API view over the snapshot's arrays: only the rows on screen are formatted, each into
 three segments with cached styles, and a new snapshot repaints only the rows whose text
@@ -23,13 +24,15 @@ from textual.scroll_view import ScrollView
 from textual.strip import Strip
 
 from gcs.console.colours import MARKER_COLOURS
-from gcs.view.snapshot import Snapshot
+from gcs.view.snapshot import Snapshot, age_text
 from mussel_sim.vocabulary import MusselState
 
 STATE_NAMES = {int(s): s.name.lower() for s in MusselState}
-HEADER = f"{'id':>5}  {'state':<9} {'battery %':>9} {'uptime %':>9}"
+HEADER = f"{'id':>5}  {'state':<9} {'battery %':>9} {'uptime %':>9} {'heard':>5}"
 SWARM_HEADER = f"{HEADER} {'aPad':>5}"  # with several aPads: whose share each aMussel is
 _STATE_AT, _STATE_END = 7, 16  # where the state column sits in a row's text
+_HEARD_AT, _HEARD_END = 36, 42  # and the age of what is known of it (stale: coloured)
+STALE_COLOUR = "#ff8c00"
 
 
 class MusselMessage(Message):
@@ -115,8 +118,10 @@ class FleetTable(ScrollView, can_focus=True):
         state = int(snap.state[i])
         battery = snap.battery_frac[i]
         colour = MARKER_COLOURS[int(self._marker_class[i])]
+        age = float(snap.heard_age_s[i]) if i < snap.heard_age_s.size else float("nan")
         text = (f"{int(snap.mussel_ids[i]):>5}  {STATE_NAMES.get(state, '?'):<9} "
-                f"{'-' if np.isnan(battery) else f'{100 * battery:.1f}':>9} {snap.uptime_pct[i]:>9.1f}")
+                f"{'-' if np.isnan(battery) else f'{100 * battery:.1f}':>9} {snap.uptime_pct[i]:>9.1f}"
+                f" {age_text(age):>5}")
         if len(snap.apads) > 1:
             owner = int(snap.owner[i]) if i < snap.owner.size else 0
             text += f" {owner if owner else '-':>5}"
@@ -136,8 +141,10 @@ class FleetTable(ScrollView, can_focus=True):
         text, colour = row
         base = styles["cursor"] if i == self.cursor_row else styles["odd"] if i % 2 else styles["base"]
         text = text.ljust(width)[:width]
+        heard = _coloured(base, STALE_COLOUR) if text[_HEARD_AT:_HEARD_END].endswith("!") else base
         return Strip([Segment(text[:_STATE_AT], base), Segment(text[_STATE_AT:_STATE_END], _coloured(base, colour)),
-                      Segment(text[_STATE_END:], base)], width)
+                      Segment(text[_STATE_END:_HEARD_AT], base), Segment(text[_HEARD_AT:_HEARD_END], heard),
+                      Segment(text[_HEARD_END:], base)], width)
 
     def _row_styles(self) -> dict[str, Style]:
         if self._styles is None:

@@ -40,18 +40,21 @@ class Growing:
 
 @dataclass(frozen=True)
 class FleetColumns:
-    """The latest report of each aMussel, `(n,)` in a given id order; NaN / ACTIVE where never heard."""
+    """The latest report of each aMussel, `(n,)` in a given id order; NaN / ACTIVE / -1 where never heard."""
 
     lat_deg: NDArray[np.float64]
     lon_deg: NDArray[np.float64]
     battery_frac: NDArray[np.float64]
     state: NDArray[np.uint8]
+    report_us: NDArray[np.int64]  # when the report was made (a simulated aMussel's: our clock); -1: never
+    simulated: NDArray[np.bool_]
 
     @staticmethod
     def of(table: MusselTable, ids: NDArray[np.int64]) -> FleetColumns:
         n = ids.size
         lat, lon, battery = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
         state = np.full(n, MusselState.ACTIVE, np.uint8)
+        report_us, simulated = np.full(n, -1, np.int64), np.ones(n, bool)
         rows = table.rows(ids)
         heard = rows >= 0
         if heard.any():
@@ -60,4 +63,6 @@ class FleetColumns:
             lon[heard] = table.lon_e7[rows] / DEG_E7
             battery[heard] = table.battery_frac[rows]
             state[heard] = table.state[rows]
-        return FleetColumns(lat, lon, battery, state)
+            report_us[heard] = table.time_us[rows]
+            simulated[heard] = table.simulated[rows] != 0
+        return FleetColumns(lat, lon, battery, state, report_us, simulated)

@@ -115,6 +115,15 @@ class MissionView:
         self._fleet = (table.version, cols)
         return cols
 
+    def _heard_age_s(self, cols: FleetColumns, t_s: float) -> NDArray[np.float64]:
+        """Seconds since each report was made: a simulated aMussel's report carries our clock's time; a
+        real one's, its own, so its age counts from when we heard it (`mussel_heard_us`)."""
+        report_us = cols.report_us.astype(np.float64)
+        heard = self.registry.mussel_heard_us
+        for k in np.flatnonzero(~cols.simulated):
+            report_us[k] = heard.get(int(self.ids[k]), -1)
+        return np.where(report_us >= 0, np.maximum(t_s - report_us / 1e6, 0.0), np.nan)
+
     def event(self, ev: MissionEvent) -> None:
         f = ev.fields
         loop = self.loops.get(int(f.get("apad", self.apad_ids[0])))  # a swarm's loops name their aPad
@@ -178,6 +187,7 @@ class MissionView:
             lon_deg=cols.lon_deg,
             battery_frac=cols.battery_frac,
             state=cols.state,
+            heard_age_s=self._heard_age_s(cols, t_s),
             uptime_pct=np.asarray(uptime, np.float64).copy(),
             strategy=self.strategy,
             # History rows are written once and never again: views are as good as copies.

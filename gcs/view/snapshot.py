@@ -54,6 +54,23 @@ class ApadSnapshot:
     ended: str | None
 
 
+# Knowledge older than this is stale (its row marked): a surfaced aMussel reports every second, an
+# acoustic one in its TDMA slot once a frame (17 s in pool12-acoustic, 34 s in bay24-acoustic), so an
+# age past a minute means reports were lost or it has fallen silent.
+STALE_S = 60.0
+
+
+def age_text(age_s: float) -> str:
+    """How old a report is, in at most 5 characters: "-" never heard, "now", "17s", "12m", "3h", and a
+    trailing "!" once it is stale (`STALE_S`)."""
+    if age_s != age_s:  # NaN
+        return "-"
+    if age_s < 1.5:
+        return "now"
+    text = f"{age_s:.0f}s" if age_s < 600 else f"{age_s / 60:.0f}m" if age_s < 36_000 else f"{age_s / 3600:.0f}h"
+    return text + "!" if age_s > STALE_S else text
+
+
 @dataclass(frozen=True)
 class Snapshot:
     """One frame of the console. Arrays are copies `(n,)` ordered by aMussel id, or `(k,)` over samples."""
@@ -86,6 +103,8 @@ class Snapshot:
     outline_lat_deg: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     outline_lon_deg: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     owner: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, np.int64))  # (n,) aPad, 0: none
+    # (n,) mission seconds since each aMussel's last report was made, NaN: never heard (`STALE_S`)
+    heard_age_s: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
 
     # The selected aPad, as the one-aPad screens read it (one record per aPad: `apads`).
     @property
