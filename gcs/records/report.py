@@ -33,6 +33,7 @@ from gcs.records import report_days as days
 from gcs.records import report_figures as figs
 from gcs.records import report_maps as maps
 from gcs.records.replay import ReplayError
+from gcs.records.report_acoustic import acoustic_html
 from gcs.records.report_compare import write_comparison
 from gcs.records.report_data import RunData
 from gcs.records.report_geojson import write_geojson
@@ -97,7 +98,7 @@ def write_run_report(data: RunData, out: Path) -> list[Path]:
             shown.append(Figure(file, title, caption))
     written.append(write_geojson(data, out / "run.geojson"))
     per_day = days.days_table(data) if len(days.day_rows(data)) > 1 else ""
-    written.append(write_page(data, shown, out / "index.html", days_html=per_day))
+    written.append(write_page(data, shown, out / "index.html", days_html=per_day, acoustic_html=acoustic_html(data)))
     return written
 
 

@@ -88,13 +88,16 @@ INDEX_HEADERS = ("run", "avg uptime %", "max uptime %", "min uptime %", "cost m"
 
 
 def write_page(data: RunData, figures: Sequence[Figure], path: Path, geojson: str = "run.geojson",
-               days_html: str = "") -> Path:
-    """`days_html`: the per-day section's body (`gcs.records.report_days.days_table`), none if empty."""
+               days_html: str = "", acoustic_html: str = "") -> Path:
+    """`days_html`: the per-day section's body (`gcs.records.report_days.days_table`), none if empty;
+    `acoustic_html`: belief against truth (`gcs.records.report_acoustic`), none if empty."""
     sections = [
         f"<h1>{html.escape(data.title)}</h1>",
         "<nav>" + " ".join(f'<a href="#{a}">{t}</a>' for a, t in (("summary", "Summary"), ("amussels", "aMussels"),
                                                                    ("apads", "aPads"),
                                                                    *((("days", "Per day"),) if days_html else ()),
+                                                                   *((("knowledge", "Belief vs truth"),)
+                                                                     if acoustic_html else ()),
                                                                    ("figures", "Figures"),
                                                                    ("events", "Event timeline"))) + "</nav>",
         _facts(data),
@@ -106,6 +109,8 @@ def write_page(data: RunData, figures: Sequence[Figure], path: Path, geojson: st
         '<h2 id="amussels">aMussels</h2>', _mussel_table(data),
         '<h2 id="apads">aPads</h2>', _apad_table(data),
         *(('<h2 id="days">Per simulated day</h2>', days_html) if days_html else ()),
+        *(('<h2 id="knowledge">What the GCS knew: the acoustic channel, belief against truth</h2>', acoustic_html)
+          if acoustic_html else ()),
         '<h2 id="figures">Figures</h2>', figures_html(figures),
         '<h2 id="events">Event timeline</h2>', _timeline(data.events),
         "<h2>Files</h2>",

@@ -9,6 +9,7 @@ retried, reports lost and counted, knowledge ages, and still nothing is lost.
 
 from __future__ import annotations
 
+import re
 from dataclasses import replace
 from pathlib import Path
 
@@ -20,6 +21,7 @@ from gcs.mission.headless import run_mission
 from gcs.mission.results import RunResult
 from gcs.mission.scenario import Scenario, load_scenario
 from gcs.records.replay import read_events, read_tlog
+from gcs.records.report import write_report
 from mavlink_dialect import mavlink
 from mussel_sim.comms import SURFACE_DEPTH_M
 
@@ -103,3 +105,14 @@ def test_a_sleeping_amussel_is_pinged_awake_before_its_call_up(tmp_path: Path) -
     assert fleet["silent:asleep"] > 0  # asleep in most of its slots
     assert counts["wake_pings"] > 0 and fleet["heard:ping"] > 0
     assert fleet["heard:unicast_ack"] > 0 and result.cycles >= 1 and not result.misplaced
+
+
+def test_the_report_shows_belief_against_truth(noisy: Run, tmp_path: Path) -> None:
+    _, result, folder = noisy
+    write_report(folder, tmp_path / "report")
+    page = (tmp_path / "report" / "index.html").read_text()
+    section = page[page.index('id="knowledge"'):page.index('id="figures"')]
+    heard = result.acoustic["counts"]["reports_heard"]
+    assert f"{heard:,} of {result.acoustic['fleet']['reports_sent']:,} status reports heard" in section
+    rows = re.findall(r"<tr[^>]*><td class=\"text\">(\d+)</td>", section)
+    assert sorted(int(m) for m in rows) == list(range(1, 13))  # one row of belief against truth per aMussel
