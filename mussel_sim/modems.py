@@ -1,7 +1,9 @@
 """The simulated aMussels' nanomodems: a status report in each one's TDMA slot, call-ups heard.
 
 Acoustic scenarios only (`[acoustic] enabled`). Each aMussel is a remote unit of the nanomodem
-emulator (`acoustic.nanomodem`), its address its id; the GCS's unit is the emulator's local unit.
+emulator (`acoustic.nanomodem`), its address its id, reached through a `Sea`: the emulator in-process
+in lockstep, or `vil modem --sea` beside a GCS on a serial unit. The GCS's unit is the emulator's
+local unit; positions go to the sea in metres from it (x east, y north, z down).
 
 - In its slot of the TDMA frame (`acoustic.tdma`) an aMussel in the water (ACTIVE, SURFACING,
   SINKING) that has been awake since its previous slot sends its status report
@@ -13,7 +15,7 @@ emulator (`acoustic.nanomodem`), its address its id; the GCS's unit is the emula
   call-up after it is taken at once. The fleet still lets it rise only with an aPad within acoustic
   range: the permission the paper's aMussels wait for.
 
-The modems move with their aMussels: before each slot the medium takes the fleet's positions.
+The modems move with their aMussels: before each report the sea takes the fleet's positions.
 """
 
 from __future__ import annotations
@@ -22,8 +24,8 @@ from collections import Counter
 
 import numpy as np
 
-from acoustic.nanomodem.emulator import Frame, FrameKind
-from acoustic.nanomodem.lockstep import Attached
+from acoustic.nanomodem.emulator import FrameKind
+from acoustic.nanomodem.sea import Sea
 from acoustic.orders import CALL_UP
 from acoustic.status_packet import StatusReport, pack
 from acoustic.tdma import Owner, TdmaFrame
@@ -38,18 +40,19 @@ UNDERWATER = (MusselState.ACTIVE, MusselState.SURFACING, MusselState.SINKING)
 
 
 class MusselModems:
-    """The fleet's side of the acoustic network, on the emulator `modem` (attached to the mission clock)."""
+    """The fleet's side of the acoustic network, through `sea`; the GCS's unit sits at `gcs_xy_m` of the
+    fleet's frame."""
 
-    def __init__(self, fleet: FleetRunner, modem: Attached, tdma: TdmaFrame, gcs_address: int,
-                 gcs_position_m: tuple[float, float, float]) -> None:
-        self.fleet, self.modem, self.tdma = fleet, modem, tdma
+    def __init__(self, fleet: FleetRunner, sea: Sea, tdma: TdmaFrame, gcs_address: int,
+                 gcs_xy_m: tuple[float, float]) -> None:
+        self.fleet, self.sea, self.tdma = fleet, sea, tdma
         self.gcs_address = gcs_address
-        self._gcs_position = np.array(gcs_position_m, dtype=np.float64)
+        self._origin = np.array([gcs_xy_m[0], gcs_xy_m[1], 0.0])
         self._seq: dict[int, int] = {}
         self.counts: Counter[str] = Counter()  # reports sent, slots silent by reason, frames heard by kind
         self._slot = 0
         self._task: Task | None = None
-        modem.core.on_remote_heard = self._heard
+        sea.listen(self._heard)
 
     def register(self, scheduler: Scheduler, start_us: int = 0) -> Task:
         """A task at every slot's start, from mission time `start_us` (the frame repeats from there)."""
@@ -75,7 +78,7 @@ class MusselModems:
             self.counts["silent:asleep"] += 1
             return
         self._follow_fleet()
-        self.modem.remote_send(slot.node_id, pack(self._report(k, now_us)), dest=self.gcs_address)
+        self.sea.send(slot.node_id, pack(self._report(k, now_us)), self.gcs_address)
         self.counts["reports_sent"] += 1
 
     def _report(self, k: int, now_us: int) -> StatusReport:
@@ -93,15 +96,14 @@ class MusselModems:
             turbidity_ntu=float(r.turbidity_ntu[0]))
 
     def _follow_fleet(self) -> None:
-        """The medium's nodes where the fleet is now: the GCS's unit, then each aMussel in id order."""
+        """The sea's remote units where the fleet is now."""
         s = self.fleet.state
-        here = np.column_stack([s.x_m, s.y_m, s.depth_m])
-        self.modem.core.medium.move(np.vstack([self._gcs_position, here]))
+        self.sea.move(s.ids.tolist(), np.column_stack([s.x_m, s.y_m, s.depth_m]) - self._origin)
 
-    def _heard(self, t_s: float, address: int, frame: Frame) -> None:
+    def _heard(self, address: int, kind: FrameKind, data: bytes) -> None:
         """What an aMussel's modem heard addressed to it: a call-up, or a ping that wakes it."""
-        self.counts[f"heard:{frame.kind.value}"] += 1
-        if frame.kind is FrameKind.PING:
+        self.counts[f"heard:{kind.value}"] += 1
+        if kind is FrameKind.PING:
             self.fleet.heard_acoustically(address, None)
-        elif frame.kind is FrameKind.UNICAST_ACK and frame.data == CALL_UP:
+        elif kind is FrameKind.UNICAST_ACK and data == CALL_UP:
             self.fleet.heard_acoustically(address, MusselCommand.SURFACE)

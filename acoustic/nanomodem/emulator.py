@@ -157,6 +157,17 @@ class ModemEmulator:
         kind = FrameKind.BROADCAST if dest is None else FrameKind.UNICAST
         return self._send(node, t_s, Frame(kind, address, dest, data))
 
+    def move_remotes(self, addresses: list[int], positions_m: np.ndarray) -> None:
+        """Remote units to new positions (metres, the local unit's frame); an unknown address is counted."""
+        nodes = self.medium.positions_m.copy()
+        for address, position in zip(addresses, np.asarray(positions_m, dtype=np.float64).reshape(-1, 3), strict=True):
+            node = self._nodes.get(address)
+            if node is None:
+                self._count("move_unknown_unit")
+                continue
+            nodes[node] = position
+        self.medium.move(nodes)
+
     def _count(self, reason: str) -> None:
         self.counts[reason] = self.counts.get(reason, 0) + 1
 

@@ -10,8 +10,12 @@ bytes.
 
 from __future__ import annotations
 
+import numpy as np
+from numpy.typing import NDArray
+
 from acoustic.nanomodem.emulator import ModemEmulator
 from acoustic.nanomodem.ports import PipeEnd
+from acoustic.nanomodem.sea import Heard
 from missiontime.clocks import Clock, Doorbell, Task, seconds_to_us, us_to_s
 
 IDLE_S = 3600.0  # the task's period while the emulator has nothing due (it is rescheduled when it has)
@@ -47,6 +51,16 @@ class Attached:
         `remote_send`, with its next instant rescheduled."""
         self.core.remote_send(address, us_to_s(self.clock.now_us), data, dest)
         self._send(b"")
+
+    # ---- the `Sea` of the remote units (acoustic.nanomodem.sea), in-process
+    def send(self, address: int, data: bytes, dest: int | None) -> None:
+        self.remote_send(address, data, dest)
+
+    def move(self, addresses: list[int], positions_m: NDArray[np.float64]) -> None:
+        self.core.move_remotes(addresses, positions_m)
+
+    def listen(self, heard: Heard) -> None:
+        self.core.on_remote_heard = lambda _t_s, address, frame: heard(address, frame.kind, frame.data)
 
     def _due(self, now_us: int) -> None:
         self._send(self.core.advance(us_to_s(now_us)))

@@ -21,7 +21,8 @@ from acoustic.nanomodem.commands import MAX_ADDRESS
 from acoustic.nanomodem.driver import ModemDriver
 from acoustic.nanomodem.emulator import ModemEmulator, RemoteUnit
 from acoustic.nanomodem.lockstep import Attached, attach
-from acoustic.nanomodem.ports import pipe
+from acoustic.nanomodem.ports import BytePort, pipe
+from acoustic.nanomodem.sea import Sea
 from acoustic.tdma import TdmaFrame, tdma_frame
 from gcs.acoustic.knowledge import KnowledgeLedger, age_s, believed_battery
 from gcs.acoustic.uplink import AcousticUplink
@@ -41,7 +42,7 @@ CHANNEL_SEED = 21  # the channel's draws, apart from the fleet's and the placeme
 
 
 class AcousticNetwork:
-    def __init__(self, emulator: Attached, modems: MusselModems, uplink: AcousticUplink, ledger: KnowledgeLedger,
+    def __init__(self, emulator: Attached | None, modems: MusselModems, uplink: AcousticUplink, ledger: KnowledgeLedger,
                  registry: VehicleRegistry, fleet: FleetRunner, default_drain_per_s: float) -> None:
         self.emulator, self.modems, self.uplink, self.ledger = emulator, modems, uplink, ledger
         self.registry, self.fleet = registry, fleet
@@ -56,26 +57,34 @@ class AcousticNetwork:
 
     @classmethod
     def build(cls, clock: Clock, fleet: FleetRunner, registry: VehicleRegistry, events: EventLog,
-              scenario: Scenario, area_range_m: float) -> AcousticNetwork:
-        """The network of `scenario` (its `[acoustic]` enabled) on `clock`, from mission time now."""
+              scenario: Scenario, area_range_m: float, unit: tuple[BytePort, Sea] | None = None) -> AcousticNetwork:
+        """The network of `scenario` (its `[acoustic]` enabled) on `clock`, from mission time now. `unit`:
+        the GCS's modem on a serial port and the sea its remote units are on (`vil gcs --modem --sea`);
+        None: both emulated in-process (lockstep)."""
         params = scenario.acoustic
         ids = [int(m) for m in fleet.state.ids]  # sorted: the medium's nodes follow the fleet's rows
         if ids and (ids[0] <= GCS_ADDRESS or ids[-1] > MAX_ADDRESS):
             raise ValueError(f"acoustic scenarios need aMussel ids 1..{MAX_ADDRESS} (the nanomodem's addresses)")
         home = scenario.apads[0]
-        x, y = fleet.frame.to_local(np.array([home.home_lat_deg]), np.array([home.home_lon_deg]))
-        gcs_at = (float(x[0]), float(y[0]), GCS_DEPTH_M)
-        s = fleet.state
-        remotes = tuple(RemoteUnit(m, (float(s.x_m[k]), float(s.y_m[k]), float(s.depth_m[k])))
-                        for k, m in enumerate(ids))
-        core = ModemEmulator(params, remotes, np.random.default_rng([scenario.seed, CHANNEL_SEED]),
-                             address=GCS_ADDRESS, position_m=gcs_at)
-        gcs_end, modem_end = pipe()
-        emulator = attach(core, modem_end, clock)
+        hx, hy = (float(v[0]) for v in fleet.frame.to_local(np.array([home.home_lat_deg]),
+                                                             np.array([home.home_lon_deg])))
+        emulator: Attached | None = None
+        if unit is None:  # lockstep: the emulator in-process, its local unit the GCS's, on a byte pipe
+            s = fleet.state
+            remotes = tuple(RemoteUnit(m, (float(s.x_m[k]) - hx, float(s.y_m[k]) - hy, float(s.depth_m[k])))
+                            for k, m in enumerate(ids))
+            core = ModemEmulator(params, remotes, np.random.default_rng([scenario.seed, CHANNEL_SEED]),
+                                 address=GCS_ADDRESS, position_m=(0.0, 0.0, GCS_DEPTH_M))
+            gcs_end, modem_end = pipe()
+            emulator = attach(core, modem_end, clock)
+            port: BytePort = gcs_end
+            sea: Sea = emulator
+        else:
+            port, sea = unit
         tdma = tdma_frame(ids, [a.system_id for a in scenario.apads], area_range_m, params)
-        modems = MusselModems(fleet, emulator, tdma, GCS_ADDRESS, gcs_at)
+        modems = MusselModems(fleet, sea, tdma, GCS_ADDRESS, (hx, hy))
         modems.register(clock.scheduler, clock.now_us)
-        uplink = AcousticUplink(ModemDriver(gcs_end, clock, params.sound_speed_mps), registry, clock, events, tdma)
+        uplink = AcousticUplink(ModemDriver(port, clock, params.sound_speed_mps), registry, clock, events, tdma)
         uplink.register(clock.scheduler)
         drain = planning_profile(scenario).discharge.rate_per_min * sim_minutes(scenario.mission.theta, 1.0)
         network = cls(emulator, modems, uplink, KnowledgeLedger(fleet.state.ids), registry, fleet, drain)
@@ -98,5 +107,6 @@ class AcousticNetwork:
         return believed_battery(self.registry.mussels[mussel_id], now_us, self._default_drain_per_s)
 
     def summary(self) -> dict[str, object]:
+        channel = {} if self.emulator is None else dict(self.emulator.core.medium.counts)  # else: in `vil modem`
         return {**self.uplink.summary(), "fleet": dict(sorted(self.modems.counts.items())),
-                "channel": dict(self.emulator.core.medium.counts), "knowledge": self.ledger.summary().as_dict()}
+                "channel": channel, "knowledge": self.ledger.summary().as_dict()}
