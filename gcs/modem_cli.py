@@ -3,6 +3,8 @@
     vil modem --nodes 5@300,0,5 9@2400,0,5       # units 5 and 9 at 300 m and 2.4 km east, 5 m deep
     vil modem --scenario pool12-acoustic         # the scenario's aMussels at their start, this unit at the aPad's home
     vil modem --device /dev/ttyUSB1 --nodes 5@100,0,2
+    vil modem --scenario pool12-acoustic --sea udp:127.0.0.1:14660   # its aMussels simulated by a GCS:
+    vil gcs --sitl --scenario missions/pool12-acoustic.toml --modem /dev/pts/N --sea udp:127.0.0.1:14660
 
 The first line printed is the serial device it serves (a new pty: /dev/pts/N); open it at 9600 8N1
 and speak the unit's protocol (its user guide v3.2): `$Axxx` set the address, `$?` status with the
@@ -32,6 +34,7 @@ import numpy as np
 from acoustic.airtime import PING_TIMEOUT_S
 from acoustic.nanomodem.commands import GAP_S, MAX_ADDRESS
 from acoustic.nanomodem.emulator import ModemEmulator, RemoteUnit
+from acoustic.nanomodem.sea import parse_udp
 from acoustic.params import AcousticParams
 from missiontime.durations import parse_duration_s
 
@@ -45,6 +48,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="remote units: address @ metres east,north,down from this unit (:VOLTS optional)")
     parser.add_argument("--scenario", metavar="FILE", help="its [acoustic] table, its aMussels as remote units, "
                         "this unit at its first aPad's home (a file, or a name in missions/)")
+    parser.add_argument("--sea", metavar="udp:HOST:PORT", help="also listen here for simulated remote units "
+                        "(a GCS's simulated aMussels: `vil gcs --modem DEV --sea udp:HOST:PORT`): they send in "
+                        "the channel and hear what reaches them (acoustic/nanomodem/sea.py)")
     parser.add_argument("--address", type=int, default=0, help="this unit's address at start (0-255; $A changes it)")
     parser.add_argument("--supply", type=float, default=12.0, metavar="VOLTS", help="this unit's supply ($?)")
     parser.add_argument("--seed", type=int, default=None, help="the channel's seed (default: the scenario's, or 1)")
@@ -97,6 +103,7 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--address: {args.address} is outside 0..{MAX_ADDRESS}")
         if args.address in [u.address for u in units]:  # a remote unit would answer what is addressed to this one
             raise ValueError(f"--address: {args.address:03d} is also a remote unit's address")
+        sea = parse_udp(args.sea) if args.sea else None
         core = ModemEmulator(params, units, np.random.default_rng(seed if args.seed is None else args.seed),
                              address=args.address, position_m=position, supply_v=args.supply,
                              gap_s=parse_duration_s(args.gap), ping_timeout_s=parse_duration_s(args.ping_timeout))
@@ -106,7 +113,8 @@ def run(args: argparse.Namespace) -> int:
     where = ", ".join(f"{u.address:03d} at {np.hypot(*u.position_m[:2]):.0f} m" for u in units) or "none"
     try:
         return serve(core, args.device, sys.stdout,
-                     describe=f"vil modem: nanomodem v3, address {args.address:03d}; remote units: {where}")
+                     describe=f"vil modem: nanomodem v3, address {args.address:03d}; remote units: {where}"
+                     + (f"; their sea at udp:{sea[0]}:{sea[1]}" if sea else ""), sea=sea)
     except OSError as exc:
         print(f"vil modem: {args.device or 'pty'}: {exc}", file=sys.stderr)
         return 1

@@ -188,6 +188,23 @@ class SeaClient:
         self.sock.close()
 
 
+class SilentSea:
+    """No water for the simulated aMussels (`vil gcs --modem` without `--sea`): what they would send is
+    counted, and they hear nothing; only the units really on the water are heard."""
+
+    def __init__(self) -> None:
+        self.dropped: Counter[str] = Counter()
+
+    def send(self, address: int, data: bytes, dest: int | None) -> None:
+        self.dropped["no_sea"] += 1
+
+    def move(self, addresses: list[int], positions_m: NDArray[np.float64]) -> None:
+        pass
+
+    def listen(self, heard: Heard) -> None:
+        pass
+
+
 def parse_udp(address: str) -> tuple[str, int]:
     """`udp:HOST:PORT` as (host, port); ValueError (one line) otherwise."""
     parts = address.split(":")

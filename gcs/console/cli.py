@@ -23,6 +23,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from acoustic.nanomodem.sea import parse_udp
 from gcs.console.web import TOKEN_ENV, WebTokenError, read_web_token, serve_console, web_address
 from gcs.mission import flags
 from gcs.mission.scenario import MISSIONS_DIR, Scenario, ScenarioError, load_scenario, resolve_scenario
@@ -74,9 +75,32 @@ def add_gcs_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--web-token-file", type=Path, metavar="FILE",
                         help=f"with --web: the token is FILE's first line instead of a random one (default: "
                              f"${TOKEN_ENV} if set); a given token is asked for on loopback too")
+    parser.add_argument("--modem", metavar="DEVICE",
+                        help="the GCS's nanomodem on this serial device (a path or pyserial URL, 9600 8N1): a real "
+                             "unit, or `vil modem`'s pty; submerged aMussels are heard and called up through it "
+                             "(needs a scenario with [acoustic] enabled; docs/acoustic.md)")
+    parser.add_argument("--sea", metavar="udp:HOST:PORT",
+                        help="with --modem: where `vil modem --sea` listens for the simulated aMussels' modems; "
+                             "without it they are not on the water (only real aMussels are heard)")
     parser.add_argument("--bridge", metavar="ADDR",
                         help="listen here (udp:HOST:PORT or serial:DEV[:BAUD]) for real aMussels' AMUSSEL_STATUS "
                              "reports; they join the simulated fleet (the scenario's fleet.real_ids)")
+
+
+def modem_refusal(modem: str | None, sea: str | None, speed: float | None, acoustic: bool, name: str) -> str:
+    """Why --modem/--sea cannot be used as given, or "" (one line for the user)."""
+    if modem is None:
+        return "--sea needs --modem (the simulated aMussels share the water with the GCS's unit)" if sea else ""
+    if not acoustic:
+        return f"--modem needs a scenario with [acoustic] enabled ({name} has none: e.g. missions/pool12-acoustic.toml)"
+    if speed is not None:
+        return "--modem runs in real time: the unit on the serial port keeps the wall clock (drop --speed)"
+    if sea is not None:
+        try:
+            parse_udp(sea)
+        except ValueError as exc:
+            return f"--sea: {exc}"
+    return ""
 
 
 def run_gcs(args: argparse.Namespace) -> int:
@@ -98,6 +122,10 @@ def run_gcs(args: argparse.Namespace) -> int:
         return 2
     if args.speed is not None and not args.sitl:
         print("vil gcs: --speed needs --sitl (a real aPad runs in real time)", file=sys.stderr)
+        return 2
+    refused = modem_refusal(args.modem, args.sea, args.speed, scenario.acoustic.enabled, scenario.name)
+    if refused:
+        print(f"vil gcs: {refused}", file=sys.stderr)
         return 2
     if args.web is not None:  # checked as above; each browser session then runs the console itself
         host, port = args.web
@@ -133,6 +161,7 @@ def run_gcs(args: argparse.Namespace) -> int:
     config = ConsoleConfig(
         scenario, connect=args.connect, sitl=args.sitl_link if args.sitl else None, speed=args.speed,
         out_dir=out, start_paused=args.paused, signing_key=key, epoch_us=epoch_us, resume=resume, bridge=args.bridge,
+        modem=args.modem, sea=args.sea,
     )
     try:  # open everything now: what cannot be used is refused before the console starts
         world = open_world(config)

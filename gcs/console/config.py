@@ -33,6 +33,8 @@ class ConsoleConfig:
     epoch_us: int | None = None  # Unix time of mission time 0 in the logs (None: now)
     resume: ResumePoint | None = None  # continue this checkpoint's mission (`vil gcs --resume`)
     bridge: str | None = None  # where real aMussels report (`vil gcs --bridge`)
+    modem: str | None = None  # the GCS's nanomodem's serial device (`vil gcs --modem`)
+    sea: str | None = None  # udp:HOST:PORT of `vil modem --sea`, for the simulated aMussels' modems (`--sea`)
     fail_apads: tuple[tuple[int, float], ...] = ()  # (aPad, mission s): that embedded SITL aPad falls silent then
 
 
@@ -45,7 +47,7 @@ def open_world(config: ConsoleConfig) -> World:
     start_us = saved.time_us if saved is not None else 0
     clock: Clock = WallClock(start_us=start_us) if config.speed is None else PacedClock(config.speed, start_us=start_us)
     options = LinkOptions(connect=config.connect, sitl_medium=config.sitl or "memory", signing_key=config.signing_key,
-                          bridge=config.bridge, fail_apads=config.fail_apads)
+                          bridge=config.bridge, fail_apads=config.fail_apads, modem=config.modem, sea=config.sea)
     epoch_us = unix_time_us() if config.epoch_us is None else config.epoch_us
     return build_world(config.scenario, clock, config.out_dir, options, epoch_us=epoch_us,
                        mission_start_us=0 if saved is not None else None, append_logs=saved is not None)

@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from acoustic.nanomodem.ports import BytePort, SerialPort
+from acoustic.nanomodem.sea import Sea, SeaClient, SilentSea, parse_udp
 from apad_sitl.endpoint import SitlVehicle
 from gcs.acoustic.frames import area_range_m
 from gcs.acoustic.network import AcousticNetwork
@@ -81,6 +83,11 @@ class LinkOptions:
     bridge: str | None = None
     # Embedded aPads that go silent for good at a mission time: (system id, t_s) (`vil run --fail-apad`).
     fail_apads: tuple[tuple[int, float], ...] = ()
+    # An acoustic scenario's GCS nanomodem on this serial device (a real unit or `vil modem`'s pty), and
+    # where `vil modem --sea` carries the simulated aMussels' modems (udp:HOST:PORT; None: not on the water).
+    # No modem: both emulated in-process.
+    modem: str | None = None
+    sea: str | None = None
 
 
 @dataclass
@@ -239,7 +246,8 @@ def build_world(
                   options=options)
     world.mute_logs(muted_logs)
     if scenario.acoustic.enabled:
-        world.acoustic = AcousticNetwork.build(clock, fleet, link.registry, events, scenario, area_range_m(scenario))
+        world.acoustic = AcousticNetwork.build(clock, fleet, link.registry, events, scenario, area_range_m(scenario),
+                                               serial_unit(options, clock))
     world.real = RealFleet(link.registry.mussels, link.registry.mussel_heard_us,
                            discharge_profile(scenario.fleet.discharge), charge_profile(scenario.fleet.charge),
                            scenario.mission.theta)
@@ -258,6 +266,18 @@ def build_world(
         fleet.codec.enable_signing(options.signing_key, GCS_SIGNING_LINK_ID,
                                    lambda: signing.timestamp_ticks(epoch_us, clock.now_us))
     return world
+
+
+def serial_unit(options: LinkOptions, clock: Clock) -> tuple[BytePort, Sea] | None:
+    """The GCS's nanomodem on its serial device and the sea of the simulated aMussels' modems (its
+    socket a poller of the clock's scheduler), or None: both in-process."""
+    if options.modem is None:
+        return None
+    port = SerialPort(options.modem)
+    sea: Sea = SilentSea() if options.sea is None else SeaClient(*parse_udp(options.sea))
+    if isinstance(sea, SeaClient):
+        clock.scheduler.add_poller(sea)
+    return port, sea
 
 
 def _embed_sitl(world: World, options: LinkOptions, epoch_us: int, append_logs: bool, muted_logs: bool) -> None:
