@@ -39,7 +39,7 @@ from acoustic.nanomodem.replies import (
 )
 from missiontime.clocks import Clock
 
-ACK_WAIT_S = 0.5
+ACK_WAIT_S = 2.0  # the unit answers at once; this bound allows for a loaded host
 RESULT_WAIT_S = PING_TIMEOUT_S + 1.0 + 2 * 1.105  # the unit's #TO, a long packet each way, a margin
 POLL_S = 0.005  # between reads while waiting (the wall clock sleeps; a virtual one runs the world)
 
@@ -76,6 +76,9 @@ class ModemDriver:
         self.closed_reason: str | None = None
         self._replies: deque[Reply] = deque(maxlen=QUEUE_MAX)
         self._waiting = False  # a wait is reading replies (packets heard go to it as well as the inbox)
+        # How a wait passes time between reads: the clock's sleep, or a caller's that may end the wait
+        # by raising (a mission loop's, which an operator's quit interrupts).
+        self.sleep: Callable[[float], None] = clock.sleep
 
     @property
     def dropped(self) -> dict[str, int]:
@@ -145,7 +148,7 @@ class ModemDriver:
                 return Result(Outcome.CLOSED)
             if self.clock.time() >= deadline:
                 return Result(Outcome.NO_REPLY)
-            self.clock.sleep(POLL_S)
+            self.sleep(POLL_S)
 
     def received(self) -> list[Received]:
         """The packets heard so far (broadcasts with their sender, unicasts to this unit), oldest first."""

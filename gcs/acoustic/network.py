@@ -91,6 +91,13 @@ class AcousticNetwork:
         network._task = clock.scheduler.every(SAMPLE_S, network.sample, "acoustic-knowledge", clock.now_us)
         return network
 
+    def close(self) -> None:
+        """Let go of the serial port and the sea's socket (an in-process pipe has nothing to free)."""
+        self.uplink.driver.port.close()
+        close = getattr(self.modems.sea, "close", None)
+        if close is not None:
+            close()
+
     def sample(self, now_us: int) -> None:
         """Belief against truth now, for every aMussel of the fleet."""
         s = self.fleet.state

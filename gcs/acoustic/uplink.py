@@ -12,7 +12,9 @@
 
 from __future__ import annotations
 
+import math
 from collections import Counter
+from collections.abc import Callable
 
 from acoustic.airtime import airtime_s
 from acoustic.nanomodem.driver import ModemDriver
@@ -23,12 +25,13 @@ from acoustic.tdma import Owner, TdmaFrame
 from gcs.link.registry import VehicleRegistry
 from gcs.link.telemetry import MusselView
 from gcs.records.events import EventLog
-from missiontime import Clock, Scheduler, seconds_to_us
+from missiontime import US_PER_S, Clock, Scheduler, seconds_to_us
 from missiontime.clocks import Doorbell
 from mussel_sim.battery import to_millivolts
 from mussel_sim.vocabulary import MusselState
 
 REPORT_AIRTIME_US = seconds_to_us(airtime_s(SIZE))
+SLOT_WAIT_STEP_US = 1_000_000  # a wait for the aPad's slot passes in steps this long (a quit is heard between)
 ACOUSTIC_SOURCE = 0  # the registry's sender of what was heard acoustically (not a MAVLink system)
 
 
@@ -91,18 +94,27 @@ class AcousticUplink:
         return len(packets)
 
     # ---- call-ups
-    def call_up(self, mussel_id: int, asleep: bool, apad_id: int) -> bool:
+    def call_up(self, mussel_id: int, asleep: bool, apad_id: int, wait: Callable[[float], None] | None = None) -> bool:
         """Call an aMussel up in aPad `apad_id`'s TDMA slots (the GCS's unit speaks for it); True once
         its modem acknowledged the call-up. Each packet waits for the start of the aPad's next slot, so
-        it crosses no aMussel's report on the water."""
+        it crosses no aMussel's report on the water. `wait`: how to pass time (default the clock's
+        sleep): a mission loop's own, which ends the call-up by raising when the operator quits."""
+        sleep = wait or self.clock.sleep
+        self.driver.sleep = sleep
+        try:
+            return self._call_up(mussel_id, asleep, apad_id, sleep)
+        finally:
+            self.driver.sleep = self.clock.sleep
+
+    def _call_up(self, mussel_id: int, asleep: bool, apad_id: int, sleep: Callable[[float], None]) -> bool:
         if asleep:
-            self._wait_for_slot(apad_id)
+            self._wait_for_slot(apad_id, sleep)
             woken = self.driver.ping(mussel_id)
             self.counts["wake_pings"] += 1
             if not woken.ok:
                 self.counts[f"wake_ping:{woken.outcome.value}"] += 1
         for attempt in range(1, CALL_UP_TRIES + 1):
-            self._wait_for_slot(apad_id)
+            self._wait_for_slot(apad_id, sleep)
             result = self.driver.unicast_ack(mussel_id, CALL_UP)
             self.counts["call_up_sent"] += 1
             if result.ok:
@@ -114,9 +126,10 @@ class AcousticUplink:
         self.events.emit(self.clock.time(), "call_up_unacked", mussel=mussel_id, tries=CALL_UP_TRIES)
         return False
 
-    def _wait_for_slot(self, apad_id: int) -> None:
-        start_s = self.tdma.next_slot_start_s(Owner.APAD, apad_id, self.clock.time())
-        self.clock.sleep(start_s - self.clock.time())
+    def _wait_for_slot(self, apad_id: int, sleep: Callable[[float], None]) -> None:
+        start_us = math.ceil(self.tdma.next_slot_start_s(Owner.APAD, apad_id, self.clock.time()) * US_PER_S)
+        while (left_us := start_us - self.clock.now_us) > 0:  # in steps, so a quit is heard within one
+            sleep(min(left_us, SLOT_WAIT_STEP_US) / US_PER_S)
 
     def summary(self) -> dict[str, object]:
         """For result.json: the frame, what was heard and sent, what was dropped and why."""

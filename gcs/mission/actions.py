@@ -294,7 +294,7 @@ class ApadActions:
             self.command(self.api.command_mussel, mussel_id, MusselCommand.SURFACE, self.apad_id)
             self._log("call_up", mussel=mussel_id, distance_m=round(distance, 2))
         else:  # over the water, acknowledged, retried; a sleeper pinged awake first
-            acked = acoustic.uplink.call_up(mussel_id, self.knows.wake_in_s(mussel_id) > 0, self.apad_id)
+            acked = acoustic.uplink.call_up(mussel_id, self.knows.wake_in_s(mussel_id) > 0, self.apad_id, self._wait)
             self._log("call_up", mussel=mussel_id, distance_m=round(distance, 2), acoustic=True, acked=acked)
         return True
 

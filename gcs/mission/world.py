@@ -185,6 +185,8 @@ class World:
             vehicle.close()
         for proxy in self.proxies:
             proxy.close()
+        if self.acoustic is not None:
+            self.acoustic.close()
         self.link.close()
         self.events.close()
 

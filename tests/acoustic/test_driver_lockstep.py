@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from acoustic.airtime import RANGE_TICK_S
-from acoustic.nanomodem.driver import ModemDriver, Outcome
+from acoustic.nanomodem.driver import ACK_WAIT_S, ModemDriver, Outcome
 from acoustic.nanomodem.emulator import ModemEmulator, RemoteUnit
 from acoustic.nanomodem.lockstep import Attached, attach
 from acoustic.nanomodem.ports import pipe
@@ -83,7 +83,7 @@ def test_the_unit_answering_E_ends_the_wait_as_error_and_silence_as_no_reply() -
     clock.scheduler.every(0.001, unit, "a unit that refuses, then says nothing")
     assert driver.status().outcome is Outcome.ERROR
     t0 = clock.time()
-    assert driver.status().outcome is Outcome.NO_REPLY and clock.time() - t0 == pytest.approx(0.5, abs=0.006)
+    assert driver.status().outcome is Outcome.NO_REPLY and clock.time() - t0 == pytest.approx(ACK_WAIT_S, abs=0.006)
     modem.write(b"E\r\n")  # late: the next command does not take it for its own
     assert driver.status().outcome is Outcome.NO_REPLY and driver.dropped == {"unexpected_reply": 1}
 
