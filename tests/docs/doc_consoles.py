@@ -206,3 +206,33 @@ def _released(events: Path, mussels: list[int]) -> bool:
     after = lines[[e["event"] for e in lines].index("mission_resume") + 1:] if any(
         e["event"] == "mission_resume" for e in lines) else []
     return {e.get("mussel") for e in after if e["event"] == "released"} >= set(mussels)
+
+
+MODEM_SEA = "vil modem --scenario pool12-acoustic --sea udp:127.0.0.1:14660"
+GCS_MODEM = "vil gcs --sitl --scenario missions/pool12-acoustic.toml --modem /dev/pts/3 --sea udp:127.0.0.1:14660"
+
+
+def run_gcs_modem(w: Work) -> None:
+    """vil modem prints its pty first and names its sea; the console given that pty hears the aMussels
+    through it (the fleet table's ages) and calls one up (an acknowledged call-up in its events); Q ends
+    it (exit 0), and vil modem ends on SIGTERM (exit 0) having heard the reports."""
+    with ports_held(14660, kind="udp"):
+        modem = w.start(w.line(MODEM_SEA))
+        try:
+            device = modem.wait_output(r"^(/dev/\S+)$", timeout_s=60.0).group(1)
+            assert "their sea at udp:127.0.0.1:14660" in modem.wait_output(r"^vil modem: nanomodem v3.*$").group(0)
+            console = w.console(w.line(GCS_MODEM).replace("/dev/pts/3", device))
+            events = w.path / "runs/console-pool12-acoustic-run1/events.jsonl"
+            try:
+                console.wait("heard", "embedded SITL")
+                console.wait_until("an acknowledged call-up", lambda: events.exists() and any(
+                    json.loads(line).get("acked") is True for line in events.read_text().splitlines()
+                    if '"call_up"' in line), timeout_s=120.0)
+                console.press("Q")
+                console.wait_until("the console's end", lambda: console.popen.poll() is not None, timeout_s=30.0)
+                assert console.popen.returncode == 0, console.text()[-2000:]
+            finally:
+                console.close()
+        finally:
+            status = modem.stop()
+    assert status == 0 and "vil modem: stopped;" in modem.output and "heard" in modem.output, modem.output

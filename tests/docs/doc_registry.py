@@ -53,6 +53,10 @@ CLUSTER_LONG = ("a scheduler, a worker and a client start for 8 s of CPU; `dask 
                 "`vil sweep --scheduler` are tests/sweep/test_sweep_cluster.py's too, in the default run")
 CAPACITY_LONG = ("a local Dask cluster and four missions (8-15 s of CPU); the same path, a tiny capacity sweep, "
                  "its table and figure, is tests/sweep/test_capacity_sweep.py's in the default run")
+ACOUSTIC_LONG = ("a local Dask cluster and its missions (8-12 s of CPU); the spec's cells run and the table is "
+                 "made from them in tests/sweep/test_acoustic_compare.py, in the default run")
+MODEM_LONG = ("two processes on the wall clock for a minute; the same path (vil modem --sea as a process, the "
+              "console's GCS on its pty) is tests/tui/test_gcs_modem.py's, in the default run")
 DEV_MAKE = "`-o .venv/.installed`: a test never rebuilds the shared venv (it is rebuilt when pyproject.toml changes)"
 
 REGISTRY: dict[str, Entry] = {
@@ -190,6 +194,20 @@ REGISTRY: dict[str, Entry] = {
                              "(unit 5's answer is back in 0.61 s)"),
     run.FUZZ_MODEM: Entry("runs", run.run_fuzz_modem, ci=run.FUZZ_MODEM + " -n 2000",
                           why="120,000 inputs are minutes of CPU; 2,000 print the same counts by reason"),
+    run.ACOUSTIC_POOL: Entry("runs", run.run_acoustic_pool, ci=run.ACOUSTIC_POOL + " --duration 10m",
+                             why="40 mission minutes are 10 s of CPU; 10 print the same line (the doc's figures "
+                                 "are the long run's)"),
+    run.ACOUSTIC_BAY: Entry("runs", run.run_acoustic_bay, long_only="8 s of CPU; the same path is pool12-acoustic's "
+                            "in the default run, and bay24's channel tests/acoustic/test_acoustic_mission.py's"),
+    swp.ACOUSTIC_SWEEP: Entry("sweeps", swp.run_acoustic_sweep, full=False,
+                              ci=f"vil sweep {swp.ACOUSTIC_TINY} --out acoustic-tiny --workers 1",
+                              why="720 missions (45 min on 2 cores): the spec's grid on pool12, one strategy and "
+                                  "seed, 5-minute missions", long_only=ACOUSTIC_LONG),
+    swp.ACOUSTIC_COMPARE: Entry("sweeps", swp.run_acoustic_sweep, full=False,
+                                ci="python -m gcs.sweep.acoustic_compare acoustic-tiny",
+                                why="DIR: the tiny sweep above", long_only=ACOUSTIC_LONG),
+    con.MODEM_SEA: Entry("consoles", con.run_gcs_modem, long_only=MODEM_LONG),
+    con.GCS_MODEM: Entry("consoles", con.run_gcs_modem, long_only=MODEM_LONG),
 }
 
 

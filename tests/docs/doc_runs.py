@@ -357,3 +357,41 @@ def run_fuzz_modem(w: Work) -> None:
     assert "command parser: stray_byte" in out and "reply parser (driver): stray_byte" in out, out
     if w.full:
         assert "120,000 inputs" in out, out
+
+
+ACOUSTIC_POOL = "vil run missions/pool12-acoustic.toml"
+ACOUSTIC_BAY = "vil run missions/bay24-acoustic.toml"
+ACOUSTIC_LINE = re.compile(
+    r"(\S+) (\S+) s1: acoustic: TDMA frame ([\d.]+) s, ([\d,]+) of ([\d,]+) reports heard, knowledge ([\d.]+) s old "
+    r"\(median; max (\d+) s\), battery estimate off by ([\d.]+) % \(max ([\d.]+) %\), call-ups acknowledged "
+    r"(\d+) of (\d+) \((\d+) retries\)")
+
+
+def _acoustic_run(w: Work, command: str, frame_s: str) -> None:
+    out = words(w.sh(w.line(command), timeout_s=900).stdout)
+    said = ACOUSTIC_LINE.search(out)
+    assert said is not None and said[3] == frame_s, out
+    heard, sent = int(said[4].replace(",", "")), int(said[5].replace(",", ""))
+    assert 0 < heard <= sent and int(said[10]) <= int(said[11]), out
+    if w.full:  # the doc's row of this scenario with the channel on is what the run printed
+        name = said[1].removesuffix("-acoustic")
+        figures = re.search(rf"{said[1]} {said[2]} s1 +([\d.]+) +[\d.]+ +([\d.]+) +([\d.]+)", out)
+        assert figures is not None, out
+        row = next(line for line in _doc("docs/acoustic.md").splitlines()
+                   if re.match(rf"^\| {name} +\| {said[2]} +\| on ", line))
+        cells = [c.strip() for c in row.strip("|").split("|")]
+        assert cells[3:6] == [figures[1], figures[2], figures[3]], (cells, figures.groups())
+        assert cells[6] == f"{said[4]} of {said[5]}" and cells[9] == f"{said[10]} of {said[11]}", cells
+        assert cells[7] == f"{said[6]} s / {int(said[7]):,} s", cells
+        assert cells[8] == f"{said[8]} % / {said[9]} %", cells
+
+
+def run_acoustic_pool(w: Work) -> None:
+    """the run's acoustic line (pool12's TDMA frame, reports heard of sent, call-ups acknowledged); as written
+    (40 min): the doc's pool12 row with the channel on is what it printed, figure for figure."""
+    _acoustic_run(w, ACOUSTIC_POOL, "17.26")
+
+
+def run_acoustic_bay(w: Work) -> None:
+    """the same for bay24's row (its frame: 33.81 s)."""
+    _acoustic_run(w, ACOUSTIC_BAY, "33.81")

@@ -156,3 +156,27 @@ def run_capacity(w: Work) -> None:
     assert "largest kept alive" in printed and "keep_alive" in printed and "hourly_wake" in printed, printed
     figure = w.path / report.split("--figure ")[1].split()[0]
     assert figure.read_bytes()[:4] == b"\x89PNG"
+
+
+ACOUSTIC_SWEEP = "vil sweep missions/sweeps/acoustic.toml --out sweeps/acoustic --workers 2"
+ACOUSTIC_COMPARE = "python -m gcs.sweep.acoustic_compare sweeps/acoustic"
+ACOUSTIC_TINY = "acoustic-tiny.toml"
+
+
+def run_acoustic_sweep(w: Work) -> None:
+    """docs/acoustic.md's sweep: the shipped spec is pool12 and bay24, every strategy, seeds 1-20, the
+    channel off and on; a sweep of its grid runs on a local Dask cluster and the table compares off and
+    on per strategy, naming the one that holds up best."""
+    from gcs.sweep.spec import load_spec
+
+    spec = load_spec(w.path / "missions/sweeps/acoustic.toml")
+    assert spec.scenarios == ("pool12", "bay24") and spec.strategies is None and spec.seeds == tuple(range(1, 21))
+    assert spec.points == ({"acoustic.enabled": False}, {"acoustic.enabled": True})
+    text = (w.path / "missions/sweeps/acoustic.toml").read_text()
+    tiny = text.replace('scenarios = ["pool12", "bay24"]', f'scenarios = ["{w.path}/missions/pool12.toml"]')
+    tiny = tiny.replace('strategies = "all"', 'strategies = ["cautious"]').replace('seeds = "1-20"', "seeds = [1]")
+    (w.path / ACOUSTIC_TINY).write_text(tiny + '\n[set]\nmission.duration = "5m"\n')
+    w.sh(w.line(ACOUSTIC_SWEEP), timeout_s=3600)
+    printed = words(w.sh(w.line(ACOUSTIC_COMPARE), timeout_s=600).stdout)
+    assert "uptime off % | uptime on %" in printed and "| pool12 | cautious | 1 |" in printed, printed
+    assert "pool12: best with the channel on: cautious" in printed, printed
