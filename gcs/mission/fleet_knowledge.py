@@ -152,9 +152,10 @@ class FleetKnowledge:
         """Whether the aMussel may still be alive as far as the GCS can know: always, where every aMussel
         reports every second; in an acoustic scenario, heard within MAX_REPORT_AGE_S and not believed
         empty (a depleted aMussel under water falls silent: its estimate and its silence tell)."""
-        if self.acoustic is None:
+        view = self.api.mussels[mussel_id]
+        if self.acoustic is None or not view.simulated:  # a real one's report carries its own clock: `RealFleet`
             return True
-        heard_s = age_s(self.api.mussels[mussel_id], self.clock.now_us)
+        heard_s = age_s(view, self.clock.now_us)
         return self.battery(mussel_id) > 0.0 and heard_s <= MAX_REPORT_AGE_S
 
     def too_late_to_call_up(self) -> bool:

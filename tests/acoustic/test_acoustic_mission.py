@@ -9,7 +9,9 @@ retried, reports lost and counted, knowledge ages, and still nothing is lost.
 
 from __future__ import annotations
 
+import json
 import re
+import shutil
 from dataclasses import replace
 from pathlib import Path
 
@@ -20,6 +22,7 @@ from gcs.acoustic.frames import scenario_frame
 from gcs.mission.headless import run_mission
 from gcs.mission.results import RunResult
 from gcs.mission.scenario import Scenario, load_scenario
+from gcs.records import checkpoint
 from gcs.records.replay import read_events, read_tlog
 from gcs.records.report import write_report
 from mavlink_dialect import mavlink
@@ -116,3 +119,29 @@ def test_the_report_shows_belief_against_truth(noisy: Run, tmp_path: Path) -> No
     assert f"{heard:,} of {result.acoustic['fleet']['reports_sent']:,} status reports heard" in section
     rows = re.findall(r"<tr[^>]*><td class=\"text\">(\d+)</td>", section)
     assert sorted(int(m) for m in rows) == list(range(1, 13))  # one row of belief against truth per aMussel
+
+
+def test_a_crashed_acoustic_mission_resumes_to_the_uninterrupted_result(tmp_path: Path,
+                                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    # The folder as a crash at the first checkpoint past 5 minutes leaves it; the resume replays the
+    # mission to that checkpoint (the channel's draws included) and goes on.
+    scenario = replace(POOL.with_overrides(duration_s=600.0), acoustic=replace(POOL.acoustic, noise_psd_db=104.0))
+    whole, crashed = tmp_path / "whole", tmp_path / "crashed"
+    real_save, taken = checkpoint.save, []
+
+    def save_and_copy(files: checkpoint.CheckpointFiles, ckpt: checkpoint.Checkpoint) -> None:
+        real_save(files, ckpt)
+        if ckpt.time_us >= 300_000_000 and not taken:
+            taken.append(ckpt.time_us)
+            shutil.copytree(whole, crashed)
+
+    monkeypatch.setattr(checkpoint, "save", save_and_copy)
+    run_mission(scenario, whole)
+    monkeypatch.setattr(checkpoint, "save", real_save)
+    assert taken
+    run_mission(scenario, crashed, resume=True)
+    a, b = (json.loads((d / "result.json").read_text()) for d in (crashed, whole))
+    for r in (a, b):
+        del r["wall_s"], r["out_dir"]
+    assert a["acoustic"]["counts"]["reports_heard"] > 0 and a["acoustic"]["channel"]["packet_error"] > 0
+    assert a == b
