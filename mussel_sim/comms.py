@@ -15,8 +15,9 @@ way the paper's surface-station node did. It listens to:
 - AMUSSEL_STATUS with simulated == 0: a real aMussel. Mixing is allowed, sharing an id is not:
   the status is refused, counted and warned about (`MusselIdCollision` says why).
 
-Every incoming message is validated before it acts (an aPad we expect, latitude and longitude in
-range, a slot 1..N_SLOTS, a known latch and command, one of our ids); what fails is dropped and
+Every incoming message is validated before it acts (`mussel_sim.inbox_checks`: an aPad we expect,
+latitude and longitude in range, a slot 1..N_SLOTS, a known latch and command, one of our ids); what
+fails is dropped and
 counted by reason in `dropped` ("invalid:DOCK_SLOT_STATUS:slot"), and a handler that still raises
 is caught in `feed`, counted ("handler_error:NAME") and the runner goes on.
 
@@ -42,11 +43,11 @@ from mavlink_dialect import Codec, hot, mavlink
 from mavlink_dialect.transport import Transport
 from missiontime import US_PER_S, Scheduler, Task
 from mussel_sim.battery import to_millivolts
-from mussel_sim.behaviour import sleep_order_problem
 from mussel_sim.fleet import apply_latches, step
 from mussel_sim.fleet_sleep import publish_rows
 from mussel_sim.fleet_state import FleetInputs, FleetParams, FleetState, StepEvents
 from mussel_sim.geo import LocalFrame
+from mussel_sim.inbox_checks import invalid_field
 from mussel_sim.recorder import Recorder
 from mussel_sim.sensors import DummySensors, SensorField
 from mussel_sim.startconfig import MAX_MUSSEL_ID
@@ -58,10 +59,6 @@ DEG_E7 = 1e7
 STATUSTEXT_MAX = 50
 # DOCK_SLOT_STATUS latch values that hold an aMussel (the aPad's words, read here as wire values).
 HOLDING_LATCHES = (mavlink.DOCK_LATCH_STATE_CLOSING, mavlink.DOCK_LATCH_STATE_LATCHED)
-LATCHES = frozenset(mavlink.enums["DOCK_LATCH_STATE"]) - {max(mavlink.enums["DOCK_LATCH_STATE"])}  # minus _ENUM_END
-COMMANDS = frozenset(int(c) for c in MusselCommand)
-N_SLOTS = 4  # an aPad's docking slots (apad_sitl.vocabulary.N_SLOTS; the fleet does not import the aPad)
-MAX_LAT_E7, MAX_LON_E7 = 90 * 10**7, 180 * 10**7
 SURFACE_DEPTH_M = 0.01  # this shallow an aMussel is at the surface, in WiFi's reach (floating and docked: 0 m)
 
 
@@ -278,7 +275,7 @@ class FleetRunner:
         src = int(msg.get_srcSystem())
         if src == self.codec.system_id:
             return  # our own traffic echoed back by a router
-        bad = self._invalid(src, msg)
+        bad = invalid_field(msg, src, self.config.apad_ids, self.config.commanders, self._ids)
         if bad is not None:
             self.dropped[f"invalid:{msg.get_type()}:{bad}"] += 1
             return
@@ -299,33 +296,6 @@ class FleetRunner:
                     self._warn(f"aMussel {mussel_id} also reported by system {src}: refused")
                 return
             self.real_mussel_ids.add(mussel_id)
-
-    def _invalid(self, src: int, msg: mavlink.MAVLink_message) -> str | None:
-        """The first field of `msg` that the fleet may not act on, or None."""
-        m: Any = msg
-        apads = self.config.apad_ids
-        if isinstance(msg, mavlink.MAVLink_global_position_int_message | mavlink.MAVLink_dock_slot_status_message):
-            if apads is not None and src not in apads:
-                return "source"
-            if isinstance(msg, mavlink.MAVLink_global_position_int_message):
-                return None if -MAX_LAT_E7 <= m.lat <= MAX_LAT_E7 and -MAX_LON_E7 <= m.lon <= MAX_LON_E7 else "lat_lon"
-            if not 1 <= m.slot <= N_SLOTS:
-                return "slot"
-            return None if m.latch in LATCHES else "latch"
-        if isinstance(msg, mavlink.MAVLink_amussel_command_message | mavlink.MAVLink_amussel_sleep_order_message):
-            if self.config.commanders is not None and src not in self.config.commanders:
-                return "source"
-            if apads is not None and m.target_system not in apads:
-                return "target"  # relayed through an aPad, or not at all
-            if isinstance(msg, mavlink.MAVLink_amussel_command_message) and m.command not in COMMANDS:
-                return "command"
-            if m.mussel_id not in self._ids:
-                return "mussel_id"
-            return sleep_order_problem(m.interval, m.awake) if isinstance(
-                msg, mavlink.MAVLink_amussel_sleep_order_message) else None
-        if isinstance(msg, mavlink.MAVLink_amussel_status_message) and msg.simulated == 0:
-            return None if 1 <= m.mussel_id <= MAX_MUSSEL_ID else "mussel_id"
-        return None
 
     def poller(self, transport: Transport) -> _TransportPoller:
         """A scheduler poller that feeds whatever `transport` received into this runner."""
