@@ -17,9 +17,8 @@ way the paper's surface-station node did. It listens to:
 
 Every incoming message is validated before it acts (`mussel_sim.inbox_checks`: an aPad we expect,
 latitude and longitude in range, a slot 1..N_SLOTS, a known latch and command, one of our ids); what
-fails is dropped and
-counted by reason in `dropped` ("invalid:DOCK_SLOT_STATUS:slot"), and a handler that still raises
-is caught in `feed`, counted ("handler_error:NAME") and the runner goes on.
+fails is dropped and counted by reason in `dropped` ("invalid:DOCK_SLOT_STATUS:slot"), and a handler
+that still raises is caught in `feed`, counted ("handler_error:NAME") and the runner goes on.
 
 Incoming events are queued and become the inputs of the next step, so the model stays pure and a
 run in lockstep is deterministic. Refused surface commands are reported as STATUSTEXT warnings.
