@@ -221,7 +221,8 @@ def run_slack_first(w: Work) -> None:
     assert result(w, folder.name)["strategy"] == "slack_first"
 
 
-STRATEGIES = ("none", "greedy", "cautious", "weighted", "least_slack", "route_optimal", "rolling", "lookahead")
+STRATEGIES = ("none", "greedy", "cautious", "weighted", "least_slack", "route_optimal", "rolling", "lookahead",
+              "keep_alive")
 CI_NAME = "lookahead"
 T19 = 2.093  # Student's t, 95 % two-sided, 19 degrees of freedom
 
@@ -242,7 +243,7 @@ def _measured(doc: str) -> dict[tuple[str, str], Row]:
             rest = cells.group(6).split()
             table[cells.group(1), cells.group(2)] = Row([re.sub(r" +", " ", c) for c in cells.groups()[2:5]],
                                                         rest[:1] == ["yes"], "dominates cautious" in line)
-    assert len(table) == 16, table
+    assert len(table) == 2 * len(STRATEGIES), table
     return table
 
 
