@@ -42,7 +42,8 @@ def test_the_table_sets_the_channel_off_against_on_for_the_same_seeds(swept: Pat
     assert r["uptime off %"] == round(off["uptime_avg"], 2) and r["uptime on %"] == round(on["uptime_avg"], 2)
     assert r["change"] == round(on["uptime_avg"] - off["uptime_avg"], 2)
     assert verdicts(table) == [f"pool12: best with the channel on: cautious ({r['uptime on %']:.2f} % mean uptime, "
-                               f"{r['change']:+.2f} against off); loses least: cautious ({r['change']:+.2f})"]
+                               f"{r['change']:+.2f} against off); best change against off: cautious "
+                               f"({r['change']:+.2f})"]
 
 
 def test_the_command_prints_the_table_and_refuses_an_empty_folder(swept: Path, tmp_path: Path,
