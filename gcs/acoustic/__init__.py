@@ -1,3 +1,4 @@
-"""The GCS's side of the acoustic room (acoustic/): what a scenario's fleet and area mean to the
-channel and the TDMA frame (frames.py), and the figures and tables of docs/acoustic.md (figures.py).
-The loop's use of the channel (planning on what was heard, acoustic call-ups) plugs in here next."""
+"""The GCS's side of the acoustic room (acoustic/) in a mission: the network composed on the mission
+clock (network.py), the GCS's end of it (uplink.py: reports heard, call-ups sent) and what the planner
+believes of an aMussel it hears now and then (knowledge.py). It imports nothing of `gcs.mission`, which
+composes it (world.py); what a scenario means to the channel is `gcs.mission.acoustic_frame`."""

@@ -23,15 +23,13 @@ from acoustic.nanomodem.emulator import ModemEmulator, RemoteUnit
 from acoustic.nanomodem.lockstep import Attached, attach
 from acoustic.nanomodem.ports import BytePort, pipe
 from acoustic.nanomodem.sea import Sea
+from acoustic.params import AcousticParams
 from acoustic.tdma import TdmaFrame, tdma_frame
 from gcs.acoustic.knowledge import KnowledgeLedger, age_s, believed_battery
 from gcs.acoustic.uplink import AcousticUplink
 from gcs.link.registry import VehicleRegistry
-from gcs.mission.scenario import Scenario
-from gcs.mission.scenario_models import planning_profile
 from gcs.records.events import EventLog
 from missiontime import Clock, Task
-from mussel_sim.battery import sim_minutes
 from mussel_sim.comms import FleetRunner
 from mussel_sim.modems import MusselModems
 
@@ -57,23 +55,23 @@ class AcousticNetwork:
 
     @classmethod
     def build(cls, clock: Clock, fleet: FleetRunner, registry: VehicleRegistry, events: EventLog,
-              scenario: Scenario, area_range_m: float, unit: tuple[BytePort, Sea] | None = None) -> AcousticNetwork:
-        """The network of `scenario` (its `[acoustic]` enabled) on `clock`, from mission time now. `unit`:
-        the GCS's modem on a serial port and the sea its remote units are on (`vil gcs --modem --sea`);
-        None: both emulated in-process (lockstep)."""
-        params = scenario.acoustic
+              params: AcousticParams, home_deg: tuple[float, float], apad_ids: list[int], seed: int,
+              drain_per_s: float, area_range_m: float, unit: tuple[BytePort, Sea] | None = None) -> AcousticNetwork:
+        """The network on `clock`, from mission time now: the GCS's unit at the first aPad's home
+        (`home_deg`, latitude and longitude), a slot for each aMussel and aPad (`apad_ids`), the channel's
+        draws from `seed`; `drain_per_s`, the drain believed of an aMussel before its loop says
+        (`belief`). `unit`: the GCS's modem on a serial port and the sea its remote units are on
+        (`vil gcs --modem --sea`); None: both emulated in-process (lockstep)."""
         ids = [int(m) for m in fleet.state.ids]  # sorted: the medium's nodes follow the fleet's rows
         if ids and (ids[0] <= GCS_ADDRESS or ids[-1] > MAX_ADDRESS):
             raise ValueError(f"acoustic scenarios need aMussel ids 1..{MAX_ADDRESS} (the nanomodem's addresses)")
-        home = scenario.apads[0]
-        hx, hy = (float(v[0]) for v in fleet.frame.to_local(np.array([home.home_lat_deg]),
-                                                             np.array([home.home_lon_deg])))
+        hx, hy = (float(v[0]) for v in fleet.frame.to_local(np.array([home_deg[0]]), np.array([home_deg[1]])))
         emulator: Attached | None = None
         if unit is None:  # lockstep: the emulator in-process, its local unit the GCS's, on a byte pipe
             s = fleet.state
             remotes = tuple(RemoteUnit(m, (float(s.x_m[k]) - hx, float(s.y_m[k]) - hy, float(s.depth_m[k])))
                             for k, m in enumerate(ids))
-            core = ModemEmulator(params, remotes, np.random.default_rng([scenario.seed, CHANNEL_SEED]),
+            core = ModemEmulator(params, remotes, np.random.default_rng([seed, CHANNEL_SEED]),
                                  address=GCS_ADDRESS, position_m=(0.0, 0.0, GCS_DEPTH_M))
             gcs_end, modem_end = pipe()
             emulator = attach(core, modem_end, clock)
@@ -81,13 +79,12 @@ class AcousticNetwork:
             sea: Sea = emulator
         else:
             port, sea = unit
-        tdma = tdma_frame(ids, [a.system_id for a in scenario.apads], area_range_m, params)
+        tdma = tdma_frame(ids, apad_ids, area_range_m, params)
         modems = MusselModems(fleet, sea, tdma, GCS_ADDRESS, (hx, hy))
         modems.register(clock.scheduler, clock.now_us)
         uplink = AcousticUplink(ModemDriver(port, clock, params.sound_speed_mps), registry, clock, events, tdma)
         uplink.register(clock.scheduler)
-        drain = planning_profile(scenario).discharge.rate_per_min * sim_minutes(scenario.mission.theta, 1.0)
-        network = cls(emulator, modems, uplink, KnowledgeLedger(fleet.state.ids), registry, fleet, drain)
+        network = cls(emulator, modems, uplink, KnowledgeLedger(fleet.state.ids), registry, fleet, drain_per_s)
         network._task = clock.scheduler.every(SAMPLE_S, network.sample, "acoustic-knowledge", clock.now_us)
         return network
 

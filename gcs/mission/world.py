@@ -17,11 +17,11 @@ import numpy as np
 from acoustic.nanomodem.ports import BytePort, SerialPort
 from acoustic.nanomodem.sea import Sea, SeaClient, SilentSea, parse_udp
 from apad_sitl.endpoint import SitlVehicle
-from gcs.acoustic.frames import area_range_m
 from gcs.acoustic.network import AcousticNetwork
 from gcs.api import ApadApi, Location
 from gcs.link.faultproxy import FaultProxy, LinkFaults
 from gcs.link.router import Link
+from gcs.mission.acoustic_frame import area_range_m
 from gcs.mission.control import LoopControl, LoopSettings, LoopStatus
 from gcs.mission.duty import scenario_duties
 from gcs.mission.energy_budget import EnergyBudget
@@ -44,7 +44,7 @@ from gcs.records.run_folder import RunFolder
 from mavlink_dialect import Codec, Transport, mavlink, memory_pair, open_transport, signing
 from mavlink_dialect.transport import UdpTransport
 from missiontime import Clock, VirtualClock, seconds_to_us
-from mussel_sim.battery import charge_profile, discharge_profile
+from mussel_sim.battery import charge_profile, discharge_profile, sim_minutes
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner
 from mussel_sim.day_ledger import day_us
 from mussel_sim.fleet_state import initial_state
@@ -248,8 +248,12 @@ def build_world(
                   options=options)
     world.mute_logs(muted_logs)
     if scenario.acoustic.enabled:
-        world.acoustic = AcousticNetwork.build(clock, fleet, link.registry, events, scenario, area_range_m(scenario),
-                                               serial_unit(options, clock))
+        home = scenario.apads[0]
+        drain = planning_profile(scenario).discharge.rate_per_min * sim_minutes(scenario.mission.theta, 1.0)
+        world.acoustic = AcousticNetwork.build(
+            clock, fleet, link.registry, events, scenario.acoustic, (home.home_lat_deg, home.home_lon_deg),
+            [a.system_id for a in scenario.apads], scenario.seed, drain, area_range_m(scenario),
+            serial_unit(options, clock))
     world.real = RealFleet(link.registry.mussels, link.registry.mussel_heard_us,
                            discharge_profile(scenario.fleet.discharge), charge_profile(scenario.fleet.charge),
                            scenario.mission.theta)

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 from testkit import scenario_variant
 
-from gcs.acoustic.frames import scenario_frame
+from gcs.mission.acoustic_frame import scenario_frame
 from gcs.mission.headless import run_mission
 from gcs.mission.results import RunResult
 from gcs.mission.scenario import Scenario, load_scenario

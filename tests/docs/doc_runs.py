@@ -306,7 +306,7 @@ def run_bay24_name(w: Work) -> None:
 
 
 # docs/acoustic.md
-ACOUSTIC_FIGURES = "python -m gcs.acoustic.figures --figure docs/acoustic-delivery.png"
+ACOUSTIC_FIGURES = "python -m gcs.mission.acoustic_figures --figure docs/acoustic-delivery.png"
 VIL_MODEM = "vil modem --nodes 5@300,0,5 9@2400,0,5"
 FUZZ_MODEM = ".venv/bin/python bench/fuzz_modem.py"
 

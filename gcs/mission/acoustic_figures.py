@@ -1,6 +1,6 @@
 """docs/acoustic.md's figure and table: delivery against range, and the TDMA frames of shipped scenarios.
 
-    python -m gcs.acoustic.figures --figure docs/acoustic-delivery.png
+    python -m gcs.mission.acoustic_figures --figure docs/acoustic-delivery.png
 
 Delivery probability against range for 16- and 64-byte packets under the default channel (the
 scenario's `[acoustic]` defaults: acoustic/params.py), and the TDMA frame (slot and frame length) of
@@ -20,7 +20,7 @@ from rich.table import Table
 from acoustic.params import AcousticParams
 from acoustic.per import success_probability
 from acoustic.propagation import snr_db
-from gcs.acoustic.frames import area_range_m, scenario_frame
+from gcs.mission.acoustic_frame import area_range_m, scenario_frame
 from gcs.mission.scenario import ScenarioError, load_scenario
 
 PAYLOADS = (16, 64)
@@ -75,7 +75,7 @@ def main(argv: list[str] | None = None) -> int:
         try:
             scenario = load_scenario(name)
         except ScenarioError as exc:
-            print(f"gcs.acoustic.figures: {exc}", file=sys.stderr)
+            print(f"gcs.mission.acoustic_figures: {exc}", file=sys.stderr)
             return 2
         frame = scenario_frame(scenario)
         table.add_row(scenario.name, str(scenario.fleet.count), str(len(scenario.apads)),
