@@ -184,6 +184,10 @@ REGISTRY: dict[str, Entry] = {
                                ci="python -m gcs.sweep.capacity capacity-tiny --figure capacity.png",
                                why="DIR: the tiny sweep above; the figure written beside it, not over the doc's",
                                long_only=CAPACITY_LONG),
+    swp.CAPACITY_REPORT_24H: Entry("sweeps", swp.run_capacity, full=False,
+                                   ci="python -m gcs.sweep.capacity capacity-tiny --figure capacity.png",
+                                   why="DIR: the tiny sweep above (the same report as the 6-h one's, of another "
+                                       "folder); the figure written beside it", long_only=CAPACITY_LONG),
     # docs/acoustic.md
     run.ACOUSTIC_FIGURES: Entry("runs", run.run_acoustic_figures, full=False,
                                 ci="python -m gcs.mission.acoustic_figures --figure acoustic-delivery.png",

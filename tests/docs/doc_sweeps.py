@@ -126,6 +126,7 @@ def run_slack_sweep(w: Work) -> None:
 CAPACITY_SWEEP = "vil sweep missions/sweeps/capacity.toml --out sweeps/capacity --workers 2"
 CAPACITY_6H = "vil sweep missions/sweeps/capacity-6h.toml --out sweeps/capacity-6h --workers 2"
 CAPACITY_REPORT = "python -m gcs.sweep.capacity sweeps/capacity-6h --figure docs/capacity.png"
+CAPACITY_REPORT_24H = "python -m gcs.sweep.capacity sweeps/capacity --figure docs/capacity-24h.png"
 CAPACITY_TINY = "capacity-tiny.toml"
 
 
