@@ -362,6 +362,10 @@ import os, signal, sys, threading, time
 from missiontime import VirtualClock
 from missiontime.processes import Processes
 
+# A suite started in the background (`make test &`) hands its processes SIGINT ignored, and Python
+# keeps an inherited SIG_IGN: Ctrl-C is put back as a terminal would have it.
+signal.signal(signal.SIGINT, signal.default_int_handler)
+
 unwound = []
 
 def interrupting(c):
