@@ -49,6 +49,20 @@ def scenario_variant(name: str, out: Path, replace: dict[str, str]) -> Path:
     return out
 
 
+@contextmanager
+def sigint_as_in_a_terminal() -> Iterator[None]:
+    """Processes started inside see Ctrl-C as a terminal's foreground job does: a suite started in the
+    background (`make test &`) has SIGINT ignored, every process it starts inherits that, and Python keeps
+    an inherited SIG_IGN. A handled SIGINT is reset to the default by exec, so the child's Python installs
+    its KeyboardInterrupt again."""
+    before = signal.getsignal(signal.SIGINT)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
 DASK = Path(sys.executable).parent / "dask"
 DASK_START_TIMEOUT_S = 60.0
 

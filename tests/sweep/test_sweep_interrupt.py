@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 import pytest
+from testkit import sigint_as_in_a_terminal
 
 pytestmark = [pytest.mark.slow]
 
@@ -30,8 +31,9 @@ def test_ctrl_c_of_a_sweep_is_one_line_and_running_it_again_finishes(tmp_path: P
     (tmp_path / "six.toml").write_text(SPEC)
     cmd = [sys.executable, "-m", "gcs.cli", "sweep", "six.toml", "--out", "out", "--workers", "2"]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    proc = subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-                            start_new_session=True)  # its own process group, as a terminal's job
+    with sigint_as_in_a_terminal():
+        proc = subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                                start_new_session=True)  # its own process group, as a terminal's job
     try:
         deadline = time.monotonic() + 120
         while not list((tmp_path / "out" / "cells").glob("*.json")):  # one mission done: something to keep
