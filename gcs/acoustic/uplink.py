@@ -23,7 +23,7 @@ from acoustic.orders import CALL_UP, CALL_UP_TRIES
 from acoustic.status_packet import SIZE, PacketError, unpack
 from acoustic.tdma import Owner, TdmaFrame
 from gcs.link.registry import VehicleRegistry
-from gcs.link.telemetry import MusselView
+from gcs.link.telemetry import MusselView, lat_lon_ok
 from gcs.records.events import EventLog
 from missiontime import US_PER_S, Clock, Scheduler, seconds_to_us
 from missiontime.clocks import Doorbell
@@ -78,13 +78,17 @@ class AcousticUplink:
             except ValueError:
                 self.dropped["report:state"] += 1
                 continue
+            lat_e7, lon_e7 = round(report.lat_deg * 1e7), round(report.lon_deg * 1e7)
+            if report.mussel_id < 1 or not lat_lon_ok(lat_e7, lon_e7):  # what no aMussel sends: refused as on MAVLink
+                self.dropped["report:mussel_id" if report.mussel_id < 1 else "report:lat_lon"] += 1
+                continue
             sent_us = max(now_us - REPORT_AIRTIME_US, 0)
             known = self.registry.mussels.get(report.mussel_id)
             if known is not None and known.time_us >= sent_us:
                 self.dropped["report:older_than_known"] += 1
                 continue
-            view = MusselView(report.mussel_id, round(report.lat_deg * 1e7), round(report.lon_deg * 1e7),
-                              report.depth_m, report.battery_frac, round(float(to_millivolts(report.battery_frac))),
+            view = MusselView(report.mussel_id, lat_e7, lon_e7, report.depth_m, report.battery_frac,
+                              round(float(to_millivolts(report.battery_frac))),
                               state, True, sent_us)
             refused = self.registry.apply(ACOUSTIC_SOURCE, view, now_us)
             if refused is not None:
