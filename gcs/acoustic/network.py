@@ -112,5 +112,7 @@ class AcousticNetwork:
 
     def summary(self) -> dict[str, object]:
         channel = {} if self.emulator is None else dict(self.emulator.core.medium.counts)  # else: in `vil modem`
+        sea = dict(getattr(self.modems.sea, "dropped", {}))  # a sea over UDP, or none: what it did not carry
         return {**self.uplink.summary(), "fleet": dict(sorted(self.modems.counts.items())),
-                "channel": channel, "knowledge": self.ledger.summary().as_dict()}
+                "channel": channel, "knowledge": self.ledger.summary().as_dict(),
+                **({"sea_dropped": dict(sorted(sea.items()))} if sea else {})}
