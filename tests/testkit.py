@@ -8,6 +8,7 @@ import json
 import os
 import pty
 import re
+import select
 import shlex
 import signal
 import socket
@@ -47,6 +48,21 @@ def scenario_variant(name: str, out: Path, replace: dict[str, str]) -> Path:
         text = text.replace(old, new)
     out.write_text(text)
     return out
+
+
+VIL_MODEM_START_S = 60.0  # `vil modem`'s first line (its imports on a loaded machine); past it a test fails
+
+
+def start_vil_modem(*args: str) -> tuple[str, subprocess.Popen[str]]:
+    """`vil modem ARGS` as a real process, and the serial device its first line names."""
+    proc = subprocess.Popen([str(Path(sys.executable).parent / "vil"), "modem", *args],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert proc.stdout is not None
+    ready, _, _ = select.select([proc.stdout], [], [], VIL_MODEM_START_S)
+    assert ready, "vil modem printed no device within the bound"
+    device = proc.stdout.readline().strip()
+    assert device.startswith("/dev/"), device
+    return device, proc
 
 
 @contextmanager

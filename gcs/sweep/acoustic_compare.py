@@ -15,7 +15,6 @@ with the channel on, and the smallest loss against off).
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -23,7 +22,7 @@ from typing import Any
 import pandas as pd
 
 from gcs.sweep.capacity import markdown
-from gcs.sweep.store import CELLS
+from gcs.sweep.store import read_cells
 
 
 def mission_row(record: dict[str, Any]) -> dict[str, Any]:
@@ -50,10 +49,7 @@ def mission_row(record: dict[str, Any]) -> dict[str, Any]:
 
 
 def read_missions(folder: Path) -> pd.DataFrame:
-    paths = sorted((folder / CELLS).glob("*.json"))
-    if not paths:
-        raise FileNotFoundError(f"{folder}: no finished missions in {folder / CELLS} (run the sweep first)")
-    rows = pd.DataFrame([mission_row(json.loads(p.read_text(encoding="utf-8"))) for p in paths])
+    rows = pd.DataFrame([mission_row(record) for record in read_cells(folder)])
     return rows.sort_values(["scenario", "strategy", "acoustic", "seed"], ignore_index=True)
 
 

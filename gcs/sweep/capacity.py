@@ -13,14 +13,13 @@ from __future__ import annotations
 
 import argparse
 import io
-import json
 import sys
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
-from gcs.sweep.store import CELLS
+from gcs.sweep.store import read_cells
 
 DAY_S = 86400.0
 
@@ -54,10 +53,7 @@ def mission_row(record: dict[str, Any]) -> dict[str, Any]:
 
 def read_missions(folder: Path) -> pd.DataFrame:
     """Every finished mission in `folder`/cells, sorted by profile, strategy, count and seed."""
-    paths = sorted((folder / CELLS).glob("*.json"))
-    if not paths:
-        raise FileNotFoundError(f"{folder}: no finished missions in {folder / CELLS} (run the sweep first)")
-    rows = pd.DataFrame([mission_row(json.loads(p.read_text(encoding="utf-8"))) for p in paths])
+    rows = pd.DataFrame([mission_row(record) for record in read_cells(folder)])
     return rows.sort_values(["profile", "strategy", "count", "seed"], ignore_index=True)
 
 

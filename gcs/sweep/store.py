@@ -73,6 +73,15 @@ def write_cell(out: Path, cell: Cell, outcome: dict[str, Any]) -> None:
         tmp.write_text(json.dumps(record, separators=(",", ":")), encoding="utf-8")
 
 
+def read_cells(out: Path) -> list[dict[str, Any]]:
+    """Every finished mission's record in `out`/cells, in file order (a sweep still running: those done);
+    FileNotFoundError naming the folder if there is none."""
+    paths = sorted((out / CELLS).glob("*.json"))
+    if not paths:
+        raise FileNotFoundError(f"{out}: no finished missions in {out / CELLS} (run the sweep first)")
+    return [json.loads(p.read_text(encoding="utf-8")) for p in paths]
+
+
 def read_cell(out: Path, key: str) -> dict[str, Any]:
     path = cell_path(out, key)
     try:

@@ -3,36 +3,25 @@ the unit's protocol writes them, through pyserial; and the driver over the same 
 
 from __future__ import annotations
 
-import select
 import signal
 import subprocess
-import sys
 import time
 from collections.abc import Iterator
-from pathlib import Path
 
 import pytest
 import serial
+from testkit import start_vil_modem
 
 from acoustic.nanomodem.driver import ModemDriver, Outcome
 from acoustic.nanomodem.ports import SerialPort
 from acoustic.nanomodem.replies import Range, Received
 from missiontime.clocks import WallClock
 
-VIL = Path(sys.executable).parent / "vil"
-START_BOUND_S = 60.0  # the process's first line (imports on a loaded machine); past it the test fails
-
 
 @pytest.fixture(scope="module")
 def modem() -> Iterator[tuple[str, subprocess.Popen[str]]]:
     """`vil modem` with unit 5 at 300 m (5 m deep) and unit 9 at 5 km, out of reach."""
-    proc = subprocess.Popen([str(VIL), "modem", "--nodes", "5@300,0,5", "9@5000,0,5", "--seed", "1"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert proc.stdout is not None
-    ready, _, _ = select.select([proc.stdout], [], [], START_BOUND_S)
-    assert ready, "vil modem printed no device within the bound"
-    device = proc.stdout.readline().strip()
-    assert device.startswith("/dev/"), device
+    device, proc = start_vil_modem("--nodes", "5@300,0,5", "9@5000,0,5", "--seed", "1")
     yield device, proc
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=30)

@@ -9,15 +9,13 @@ acknowledged call-up. The refusals of the flags are one line each.
 from __future__ import annotations
 
 import asyncio
-import select
 import signal
 import subprocess
-import sys
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from testkit import free_udp_port
+from testkit import free_udp_port, start_vil_modem
 from tui_helpers import wait_for
 
 from gcs.cli import main
@@ -28,21 +26,13 @@ from mussel_sim.vocabulary import MusselState
 
 pytestmark = [pytest.mark.sitl, pytest.mark.tui]
 
-VIL = Path(sys.executable).parent / "vil"
-START_BOUND_S = 60.0  # vil modem's first line (imports on a loaded machine)
 CALLED_BOUND_S = 120.0  # wall seconds to the first call-up acknowledged: the first plan, the aPad's slot (17 s)
 
 
 @pytest.fixture()
 def sea_modem() -> Iterator[tuple[str, str, subprocess.Popen[str]]]:
     sea = f"udp:127.0.0.1:{free_udp_port()}"
-    proc = subprocess.Popen([str(VIL), "modem", "--scenario", "pool12-acoustic", "--sea", sea],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert proc.stdout is not None
-    ready, _, _ = select.select([proc.stdout], [], [], START_BOUND_S)
-    assert ready, "vil modem printed no device within the bound"
-    device = proc.stdout.readline().strip()
-    assert device.startswith("/dev/"), device
+    device, proc = start_vil_modem("--scenario", "pool12-acoustic", "--sea", sea)
     yield device, sea, proc
     if proc.poll() is None:
         proc.send_signal(signal.SIGINT)
