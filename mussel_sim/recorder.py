@@ -79,6 +79,7 @@ class RecorderHead:
     samples_due: NDArray[np.int64] | None = None
     max_trace_rows: int = DEFAULT_MAX_TRACE_ROWS
     days: DayLedger | None = None  # a copy; None: no per-day figures
+    start_us: int | None = None  # mission time before the first step; None: a checkpoint from before it was kept
 
 
 @dataclass(frozen=True)
@@ -115,6 +116,7 @@ class Recorder:
         self._counts[ACTIVE] = True
         self._counts[SINKING] = sinking_counts_active
         self.times = StateTimes.zeros(self.ids.size)
+        self.start_us = int(start_us)  # mission time of the state before the first step
         self._last_us = int(start_us)
         self._trace_ids_arg = None if trace_ids is None else np.asarray(trace_ids, np.int64)
         self._max_trace_bytes = int(max_trace_bytes)
@@ -186,7 +188,7 @@ class Recorder:
         return RecorderHead(self.ids, self._trace_ids_arg, self._max_trace_bytes, self.active_steps.copy(),
                             self.n_steps, self.trace_stride, self.sinking_counts_active, self.times.copy(),
                             self._last_us, self.samples_taken.copy(), self.samples_due.copy(), self._max_trace_rows,
-                            self.days.copy() if self.days is not None else None)
+                            self.days.copy() if self.days is not None else None, self.start_us)
 
     def rows_since(self, k: int) -> RecorderRows:
         """The rows of steps k, k + 1, ... recorded so far (copies; trace rows only as kept now)."""
@@ -214,6 +216,7 @@ class Recorder:
         rec = cls(head.ids, 1, head.trace_ids, head.max_trace_bytes, head.sinking_counts_active, head.last_us,
                   head.max_trace_rows)
         rec.days = head.days.copy() if head.days is not None else None
+        rec.start_us = int(head.start_us) if head.start_us is not None else 0
         n = int(head.n_steps)
         if head.active_steps.shape != rec.ids.shape or n < 0 or int(head.trace_stride) < 0:
             raise ValueError("recorder head does not fit its ids")

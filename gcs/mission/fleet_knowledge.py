@@ -92,7 +92,8 @@ class FleetKnowledge:
                    if self.battery(m) < threshold and self.heard_alive(m)]
         if self.real is not None:  # a real one's last report may be old: its estimate decides
             real = set(self.real.ids())
-            ids = sorted({m for m in ids if m not in real} | set(self.real.below(threshold, self.clock.now_us)))
+            below = self.real.below(threshold, self.clock.now_us, self.drain_per_min)
+            ids = sorted({m for m in ids if m not in real} | set(below))
         out = []
         for m in ids:
             if not self.api.mussels[m].simulated:
@@ -124,7 +125,7 @@ class FleetKnowledge:
             rise_s = 0.0 if state == MusselState.FLOATING else self.settings.mussel_surfacing_s
             call_up_s = 0.0 if distance <= self.settings.acoustic_range_m else trip_s
             need_s = max(trip_s, call_up_s + rise_s) + DOCK_MARGIN_S
-            per_s = self.real.discharge.rate_per_min * sim_minutes(self.real.theta, 1.0)
+            per_s = self.drain_per_s(mussel_id)
             battery = self.battery(mussel_id)
             if battery <= per_s * need_s:
                 return f"its battery ({battery:.3f}) would give out before it could be docked ({need_s:.0f} s)"
@@ -193,6 +194,10 @@ class FleetKnowledge:
     def drain_per_s(self, mussel_id: int) -> float:
         return self.duty(mussel_id).drain_per_s(self.settings.mission.theta)
 
+    def drain_per_min(self, mussel_id: int) -> float:
+        """Battery fraction per simulated minute deployed, by its duty (a real one's estimate runs on it)."""
+        return self.duty(mussel_id).rate_per_min
+
     def wake_in_s(self, mussel_id: int) -> float:
         """Mission seconds until it next hears a call-up (0: awake, or always on)."""
         return self.duty(mussel_id).wake_in_s(mussel_id, self.clock.time(), self.settings.mission.theta)
@@ -229,7 +234,7 @@ class FleetKnowledge:
             return believed_battery(view, self.clock.now_us, self.drain_per_s(mussel_id))
         if self.real is not None and not view.simulated and mussel_id in self.real.heard_us:
             on_slot = mussel_id in self.docked().values()
-            return self.real.estimate(mussel_id, self.clock.now_us, on_slot).battery_frac
+            return self.real.estimate(mussel_id, self.clock.now_us, on_slot, self.drain_per_min(mussel_id)).battery_frac
         return view.battery_frac
 
     def distance_to(self, mussel_id: int) -> float:

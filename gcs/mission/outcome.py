@@ -225,7 +225,7 @@ def write_outputs(world: World, result: RunResult, folder: RunFolder, apad_times
     order = np.argsort(start.ids)[np.searchsorted(np.sort(start.ids), rec.ids)]
     end_lat, end_lon = world.frame.to_geodetic(end.x_m, end.y_m)
     arrays: dict[str, Any] = dict(
-        ids=rec.ids, step_time_us=rec.step_time_us(), active_count=rec.active_count(),
+        ids=rec.ids, start_us=np.int64(rec.start_us), step_time_us=rec.step_time_us(), active_count=rec.active_count(),
         battery_steps=steps, battery=battery, battery_state=state, trace_ids=rec.trace_ids,
         **trace_arrays(rec, apad_times), traces_format=np.int64(TRACES_FORMAT),
         start_lat_deg=start.lat_deg[order], start_lon_deg=start.lon_deg[order], end_lat_deg=end_lat,

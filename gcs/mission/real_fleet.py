@@ -2,15 +2,17 @@
 
 A real agent reports now and then (AMUSSEL_STATUS with `simulated = 0`, on the bridge address).
 Between reports the GCS keeps an estimate: the battery by the fleet's own models from the last
-report (eq. 1 discharging; eq. 2 charging while it is on one of our slots, which we know from the
-aPad whatever the agent last said), the position at the last fix (the random drift has zero mean;
-an active aMussel sits on the seabed). Every estimate carries its age, and nothing shows it as
+report (eq. 1 discharging, at the drain of its duty: its profile or the last sleep order sent to it;
+eq. 2 charging while it is on one of our slots, which we know from the aPad whatever the agent
+last said), the position at the last fix (the random drift has zero mean; an active aMussel sits on
+the seabed). Every estimate carries its age, and nothing shows it as
 more than that. One silent for longer than MAX_REPORT_AGE_S is not planned for: the aPad would go
 to a unit that may be dead. Simulated aMussels report every second and need none of this.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,26 +46,29 @@ class RealFleet:
     def ids(self) -> list[int]:
         return sorted(m for m in self.heard_us if m in self.table and not self.table[m].simulated)
 
-    def estimate(self, mussel_id: int, now_us: int, on_slot: bool = False) -> Estimate:
-        """Its battery now by the models; `on_slot`: the aPad reports it latched on one of its slots."""
+    def estimate(self, mussel_id: int, now_us: int, on_slot: bool = False,
+                 drain_per_min: float | None = None) -> Estimate:
+        """Its battery now by the models; `on_slot`: the aPad reports it latched on one of its slots;
+        `drain_per_min`: what its duty uses deployed (None: the scenario's discharge profile)."""
         view = self.table[mussel_id]
         age_s = max(now_us - self.heard_us[mussel_id], 0) / 1e6
         charging = on_slot or view.state == MusselState.DOCKED
         if view.state == MusselState.DEPLETED and not charging:
             battery = view.battery_frac
         else:  # eqs. (1)-(2) over the time since the report, in one step (charge: the band it was in)
-            battery = float(step_battery(np.array([view.battery_frac]), np.array([charging]), self.discharge,
+            discharge = self.discharge if drain_per_min is None else DischargeProfile("duty", drain_per_min)
+            battery = float(step_battery(np.array([view.battery_frac]), np.array([charging]), discharge,
                                          self.charge, self.theta, age_s)[0])
         return Estimate(mussel_id, battery, view.battery_frac, age_s)
 
-    def below(self, threshold: float, now_us: int) -> list[int]:
+    def below(self, threshold: float, now_us: int, drain_per_min: Callable[[int], float] | None = None) -> list[int]:
         """Real aMussels active by their last report, heard within MAX_REPORT_AGE_S, whose estimated
-        battery is below `threshold`."""
+        battery is below `threshold`; `drain_per_min`: each one's drain (None: the scenario's)."""
         out = []
         for m in self.ids():
             if self.table[m].state != MusselState.ACTIVE:
                 continue
-            e = self.estimate(m, now_us)
+            e = self.estimate(m, now_us, drain_per_min=None if drain_per_min is None else drain_per_min(m))
             if e.age_s <= MAX_REPORT_AGE_S and e.battery_frac < threshold:
                 out.append(m)
         return out

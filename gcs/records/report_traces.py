@@ -62,7 +62,7 @@ def history(z: dict[str, NDArray[Any]]) -> dict[str, NDArray[Any]]:
     """The report's history at the traces' steps: t_s `(k,)` (mission s since the start), active `(k,)`,
     battery `(k, n)`, state `(k, n)`, apad_cost_m `(k, m)`, and the aPads' own track times."""
     step_us = np.asarray(z["step_time_us"], np.int64)
-    origin_us = int(step_us[0] - (step_us[1] - step_us[0])) if step_us.size > 1 else 0
+    origin_us = int(z["start_us"]) if "start_us" in z else _first_step_origin_us(step_us)
     steps = np.asarray(z["battery_steps"], np.int64)
     t_s = (step_us[steps] - origin_us) / US_PER_S
     track_t = np.asarray(z["apad_t_s"], np.float64)
@@ -72,6 +72,11 @@ def history(z: dict[str, NDArray[Any]]) -> dict[str, NDArray[Any]]:
     return {"t_s": t_s, "active": np.asarray(z["active_count"], np.int32)[steps],
             "battery": np.asarray(z["battery"], np.float32), "state": np.asarray(z["battery_state"], np.uint8),
             "apad_cost_m": cost_at, "end_s": np.array((step_us[-1] - origin_us) / US_PER_S if step_us.size else 0.0)}
+
+
+def _first_step_origin_us(step_us: NDArray[np.int64]) -> int:
+    """The mission's start in traces written before they kept it: a first step as long as the second."""
+    return int(step_us[0] - (step_us[1] - step_us[0])) if step_us.size > 1 else 0
 
 
 def owners(events: tuple[Event, ...], ids: NDArray[np.int64], single: int) -> NDArray[np.int64]:

@@ -88,6 +88,9 @@ def test_a_report_from_traces_shows_what_the_replay_shows(run: tuple[RunResult, 
     _, out = run
     traced, replayed = load_run(out), load_replayed_run(out)
     assert traced.indices.source == "result.json" and traced.t_s.size == 600
+    with np.load(out / "traces.npz") as z:
+        assert int(z["start_us"]) == 0  # the recorder's own start, not one guessed from the first step
+    assert traced.t_s[0] == 1.0 and traced.end_s == DURATION_S
     rows = np.searchsorted(replayed.t_s, traced.t_s)  # the replay samples every second from 0
     np.testing.assert_array_equal(replayed.t_s[rows], traced.t_s)
     np.testing.assert_array_equal(replayed.battery[rows], traced.battery)

@@ -12,6 +12,7 @@ from testkit import free_udp_port, scenario_variant
 
 from gcs.cli import main
 from gcs.mission.control import LoopControl
+from gcs.mission.duty import Duty
 from gcs.mission.scenario import load_scenario
 from gcs.mission.world import LinkOptions, build_world
 from missiontime import PacedClock
@@ -50,6 +51,14 @@ def test_real_amussels_on_the_bridge_are_served_beside_the_simulated_fleet(tmp_p
         assert world.real is not None
         later_us = world.clock.now_us + 60_000_000  # a minute of mission time without a report
         off_slot, on_slot = world.real.estimate(101, later_us), world.real.estimate(101, later_us, on_slot=True)
+        # A sleep order sent to a real aMussel: the planner's estimate runs on the order's drain from then on.
+        order = Duty.of_order(3600.0, 60.0)
+        loop.knows.ordered(101, order)
+        ordered_drain = loop.knows.drain_per_min(101)
+        asleep = world.real.estimate(101, later_us, drain_per_min=ordered_drain)
+        on = 101 in loop.knows.docked().values()
+        believed = loop.knows.battery(101)
+        by_order = world.real.estimate(101, world.clock.now_us, on, order.rate_per_min).battery_frac
         dropped = dict(world.link.dropped)
         table = world.api.mussels
         simulated_5 = table[5].simulated
@@ -75,6 +84,8 @@ def test_real_amussels_on_the_bridge_are_served_beside_the_simulated_fleet(tmp_p
     drain = discharge_profile(scenario.fleet.discharge).rate_per_min * off_slot.age_s / 60.0 * scenario.mission.theta
     assert off_slot.battery_frac == pytest.approx(max(0.0, 0.3 - drain))
     assert on_slot.battery_frac > 0.3
+    assert ordered_drain == order.rate_per_min < discharge_profile(scenario.fleet.discharge).rate_per_min
+    assert off_slot.battery_frac < asleep.battery_frac < 0.3 and believed == by_order
 
 
 def test_an_id_both_real_and_simulated_is_refused_at_start(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

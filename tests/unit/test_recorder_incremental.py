@@ -42,6 +42,7 @@ def assert_same(a: Recorder, b: Recorder) -> None:
     assert a.days == b.days
     assert a.summary() == b.summary()
     assert a.trace_stride == b.trace_stride
+    assert a.start_us == b.start_us
 
 
 def concat(pieces: list[RecorderRows]) -> RecorderRows:
@@ -55,7 +56,8 @@ def concat(pieces: list[RecorderRows]) -> RecorderRows:
 @pytest.mark.parametrize("budget_rows", [10**6, 16, 5])
 def test_rows_taken_in_pieces_rebuild_the_same_recorder_and_it_goes_on_the_same(budget_rows: int) -> None:
     run = states(400)
-    rec = Recorder(np.arange(1, N + 1), max_trace_bytes=budget_rows * ROW_BYTES, day_us=7_000_000)
+    # A first step shorter than the others (0.6 s): the start is kept, not guessed from the steps.
+    rec = Recorder(np.arange(1, N + 1), max_trace_bytes=budget_rows * ROW_BYTES, day_us=7_000_000, start_us=400_000)
     pieces, done = [], 0
     for k, s in enumerate(run[:300]):
         rec.record(s)
