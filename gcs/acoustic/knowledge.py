@@ -28,10 +28,12 @@ def age_s(view: MusselView, now_us: int) -> float:
     return max(now_us - view.time_us, 0) / US_PER_S
 
 
-def believed_battery(view: MusselView, now_us: int, drain_per_s: float) -> float:
+def believed_battery(view: MusselView, now_us: int, drain_per_s: float, released: bool = False) -> float:
     """Its battery now as the GCS can know it: under water, the report run down at `drain_per_s`
-    since it was made (never below empty); at the surface or depleted, as reported."""
-    if view.state not in UNDERWATER:
+    since it was made (never below empty); at the surface or depleted, as reported. `released`: its
+    last report says docked but no slot holds it now, so it is sinking out of WiFi's reach and its
+    next report comes in its slot: under water too."""
+    if view.state not in UNDERWATER and not (released and view.state == MusselState.DOCKED):
         return view.battery_frac
     return max(view.battery_frac - drain_per_s * age_s(view, now_us), 0.0)
 

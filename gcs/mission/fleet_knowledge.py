@@ -231,7 +231,8 @@ class FleetKnowledge:
         acoustic scenario, for one under water, run down since its last report (`believed_battery`)."""
         view = self.api.mussels[mussel_id]
         if self.acoustic is not None and view.simulated:
-            return believed_battery(view, self.clock.now_us, self.drain_per_s(mussel_id))
+            released = view.state == MusselState.DOCKED and mussel_id not in self.docked().values()
+            return believed_battery(view, self.clock.now_us, self.drain_per_s(mussel_id), released)
         if self.real is not None and not view.simulated and mussel_id in self.real.heard_us:
             on_slot = mussel_id in self.docked().values()
             return self.real.estimate(mussel_id, self.clock.now_us, on_slot, self.drain_per_min(mussel_id)).battery_frac

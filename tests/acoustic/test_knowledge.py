@@ -1,0 +1,33 @@
+"""The GCS's belief of an aMussel it hears now and then (`believed_battery`), as a pure function."""
+
+from __future__ import annotations
+
+import pytest
+
+from gcs.acoustic.knowledge import believed_battery
+from gcs.link.telemetry import MusselView
+from mussel_sim.vocabulary import MusselState
+
+DRAIN = 0.001  # battery fraction per mission second
+
+
+def view(state: MusselState, battery: float = 0.6, time_us: int = 0) -> MusselView:
+    return MusselView(7, 0, 0, 0.0, battery, 4000, state, True, time_us)
+
+
+@pytest.mark.parametrize("state", [MusselState.ACTIVE, MusselState.SINKING, MusselState.SURFACING])
+def test_under_water_the_report_runs_down_since_it_was_made(state: MusselState) -> None:
+    assert believed_battery(view(state, time_us=2_000_000), 12_000_000, DRAIN) == pytest.approx(0.6 - 10 * DRAIN)
+    assert believed_battery(view(state, battery=0.005), 12_000_000, DRAIN) == 0.0  # never below empty
+
+
+@pytest.mark.parametrize("state", [MusselState.FLOATING, MusselState.DOCKED, MusselState.DEPLETED])
+def test_at_the_surface_or_depleted_the_report_stands(state: MusselState) -> None:
+    assert believed_battery(view(state), 60_000_000, DRAIN) == 0.6
+
+
+def test_one_released_since_its_last_docked_report_is_believed_under_water() -> None:
+    # Its last WiFi report said docked; no slot holds it now, so it sinks, silent until its slot.
+    assert believed_battery(view(MusselState.DOCKED), 30_000_000, DRAIN, released=True) == pytest.approx(0.57)
+    # `released` says nothing of one that is not docked by its report.
+    assert believed_battery(view(MusselState.FLOATING), 30_000_000, DRAIN, released=True) == 0.6
