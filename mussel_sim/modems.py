@@ -9,7 +9,8 @@ local unit; positions go to the sea in metres from it (x east, y north, z down).
   SINKING) that has been awake since its previous slot sends its status report
   (`acoustic.status_packet`, 31 bytes) to the GCS's unit as a unicast; the channel decides whether
   it arrives. At the surface it speaks over WiFi (MAVLink) instead (`CommsConfig.wifi_at_surface_only`),
-  and a depleted one under water says nothing.
+  and a depleted one says nothing: its modem has no power (`Sea.power`), so it hears no ping or
+  call-up and acknowledges none either.
 - A call-up (an acknowledged unicast of `acoustic.orders.CALL_UP`) heard by an aMussel becomes a
   SURFACE command at the fleet's next step; a ping heard wakes a sleeper (the wake-up ping), so a
   call-up after it is taken at once. The fleet still lets it rise only with an aPad within acoustic
@@ -51,6 +52,7 @@ class MusselModems:
         self._seq: dict[int, int] = {}
         self.counts: Counter[str] = Counter()  # reports sent, slots silent by reason, frames heard by kind
         self._slot = 0
+        self._unpowered: set[int] = set()  # the aMussels whose modem the sea has without power
         self._task: Task | None = None
         sea.listen(self._heard)
 
@@ -62,6 +64,7 @@ class MusselModems:
     def _slot_task(self, now_us: int) -> None:
         slot = self.tdma.slots[self._slot % len(self.tdma.slots)]
         self._slot += 1
+        self._follow_power()
         if slot.owner is not Owner.AMUSSEL:
             return  # the aPads' slots: they send nothing yet
         s = self.fleet.state
@@ -99,6 +102,15 @@ class MusselModems:
         """The sea's remote units where the fleet is now."""
         s = self.fleet.state
         self.sea.move(s.ids.tolist(), np.column_stack([s.x_m, s.y_m, s.depth_m]) - self._origin)
+
+    def _follow_power(self) -> None:
+        """The sea's modems powered as their aMussels are: a depleted one's is off (told on change only)."""
+        s = self.fleet.state
+        off = set(s.ids[s.state == MusselState.DEPLETED].tolist())
+        if off != self._unpowered:
+            self.sea.power({m: m not in off for m in off ^ self._unpowered})
+            self.counts["modems_powered_off"] += len(off - self._unpowered)
+            self._unpowered = off
 
     def _heard(self, address: int, kind: FrameKind, data: bytes) -> None:
         """What an aMussel's modem heard addressed to it: a call-up, or a ping that wakes it."""

@@ -5,7 +5,8 @@ instant (`advance`), returning the bytes the unit writes by then; `next_due_s` s
 something to do (the edge sleeps until then). Between units go `Frame`s over a `Medium`, so delay,
 loss, half duplex and collisions are the channel model's. The remote units answer as the real ones
 do: a ping or an acknowledged unicast with a reply, `$V` with their voltage, `$E` with the data
-back; a unit answers as soon as the request has arrived (`TURNAROUND_S`). Pure: no clock, no I/O.
+back; a unit answers as soon as the request has arrived (`TURNAROUND_S`). A remote unit without power
+(`set_power`: its aMussel depleted) hears nothing and answers nothing. Pure: no clock, no I/O.
 
 Where the unit's guide is silent (NOTES.md), the emulator's reading: `$V` and `$M` unanswered give
 `#TO` after the same 4 s as a ping; `$T` sends a command packet the remote counts; an echo comes
@@ -128,6 +129,7 @@ class ModemEmulator:
         # What a remote unit heard addressed to it (or to all) is also handed here: (end s, address, frame).
         self.on_remote_heard: Callable[[float, int, Frame], None] | None = None
         self.counts: dict[str, int] = {}
+        self.unpowered: set[int] = set()  # addresses of remote units without power
         self._waits: list[_Wait] = []
         self._quality: int | None = None
         self._out = bytearray()
@@ -167,6 +169,17 @@ class ModemEmulator:
                 continue
             nodes[node] = position
         self.medium.move(nodes)
+
+    def set_power(self, powered: dict[int, bool]) -> None:
+        """Remote units' power (address -> has it): one without hears and answers nothing; an unknown
+        address is counted."""
+        for address, on in powered.items():
+            if address not in self._nodes:
+                self._count("power_unknown_unit")
+            elif on:
+                self.unpowered.discard(address)
+            else:
+                self.unpowered.add(address)
 
     def _count(self, reason: str) -> None:
         self.counts[reason] = self.counts.get(reason, 0) + 1
@@ -280,6 +293,9 @@ class ModemEmulator:
 
     def _remote_heard(self, unit: RemoteUnit, node: int, frame: Frame, r: Reception) -> None:
         if frame.dest is not None and frame.dest != unit.address:
+            return
+        if unit.address in self.unpowered:
+            self._count("remote_unpowered")
             return
         self.heard.entries.append((r.end_s, unit.address, frame))
         self.heard.total += 1

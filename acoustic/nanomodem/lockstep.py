@@ -59,6 +59,9 @@ class Attached:
     def move(self, addresses: list[int], positions_m: NDArray[np.float64]) -> None:
         self.core.move_remotes(addresses, positions_m)
 
+    def power(self, powered: dict[int, bool]) -> None:
+        self.core.set_power(powered)
+
     def listen(self, heard: Heard) -> None:
         self.core.on_remote_heard = lambda _t_s, address, frame: heard(address, frame.kind, frame.data)
 

@@ -1,7 +1,7 @@
 """The water's other side: how simulated remote units (the aMussels' modems) reach the emulator's medium.
 
-A `Sea` is what `mussel_sim.modems` speaks to: a remote unit sends, the remote units move, and what a
-remote unit hears addressed to it (or to all) comes back. Two implementations:
+A `Sea` is what `mussel_sim.modems` speaks to: a remote unit sends, the remote units move or lose or
+regain power, and what a remote unit hears addressed to it (or to all) comes back. Two implementations:
 
 - in lockstep, `acoustic.nanomodem.lockstep.Attached` (the emulator in-process, on the mission clock);
 - beside a unit on a serial port, `SeaClient` here: datagrams to `vil modem --sea udp:HOST:PORT`, whose
@@ -12,6 +12,7 @@ The datagrams are ASCII lines (one command per datagram), each field separated b
     S <address> <dest|*> <hex data>        remote unit <address> sends (to <dest>, or to all)
     M <address> <x> <y> <z> [...]          remote units' positions, metres from the served unit (x east,
                                            y north, z down); several units in one datagram
+    P <address> <0|1> [...]                remote units' power (0: none, it hears and answers nothing)
     H <address> <kind> <hex data>          (emulator to client) remote unit <address> heard a frame
 
 `parse` refuses anything else with a `SeaError` naming the reason (the receiver counts it).
@@ -43,6 +44,8 @@ class Sea(Protocol):
 
     def move(self, addresses: list[int], positions_m: NDArray[np.float64]) -> None: ...
 
+    def power(self, powered: dict[int, bool]) -> None: ...
+
     def listen(self, heard: Heard) -> None: ...
 
 
@@ -62,6 +65,11 @@ class Send:
 @dataclass(frozen=True)
 class Move:
     positions: dict[int, tuple[float, float, float]]
+
+
+@dataclass(frozen=True)
+class Power:
+    powered: dict[int, bool]
 
 
 @dataclass(frozen=True)
@@ -87,7 +95,7 @@ def _hex(text: str) -> bytes:
         raise SeaError("hex") from None
 
 
-def parse(datagram: bytes) -> Send | Move | HeardFrame:
+def parse(datagram: bytes) -> Send | Move | Power | HeardFrame:
     """One datagram's command; `SeaError` with the reason if it is none."""
     try:
         fields = datagram.decode("ascii").split(" ")
@@ -111,10 +119,17 @@ def parse(datagram: bytes) -> Send | Move | HeardFrame:
                     raise SeaError("position")
                 positions[_address(rest[k])] = (xyz[0], xyz[1], xyz[2])
             return Move(positions)
+        case ["P", *rest] if rest and len(rest) % 2 == 0:
+            powered = {}
+            for k in range(0, len(rest), 2):
+                if rest[k + 1] not in ("0", "1"):
+                    raise SeaError("power")
+                powered[_address(rest[k])] = rest[k + 1] == "1"
+            return Power(powered)
     raise SeaError("command")
 
 
-def encode(item: Send | Move | HeardFrame) -> bytes:
+def encode(item: Send | Move | Power | HeardFrame) -> bytes:
     match item:
         case Send():
             dest = "*" if item.dest is None else str(item.dest)
@@ -123,6 +138,8 @@ def encode(item: Send | Move | HeardFrame) -> bytes:
             return f"H {item.address} {item.kind.value} {item.data.hex()}".encode()
         case Move():
             return ("M " + " ".join(f"{a} {x:.3f} {y:.3f} {z:.3f}" for a, (x, y, z) in item.positions.items())).encode()
+        case Power():
+            return ("P " + " ".join(f"{a} {int(on)}" for a, on in item.powered.items())).encode()
 
 
 class SeaClient:
@@ -147,6 +164,11 @@ class SeaClient:
             chunk = {a: (float(p[0]), float(p[1]), float(p[2]))
                      for a, p in zip(addresses[k:k + 100], positions_m[k:k + 100], strict=True)}
             self._out(encode(Move(chunk)))
+
+    def power(self, powered: dict[int, bool]) -> None:
+        items = list(powered.items())
+        for k in range(0, len(items), 100):  # a datagram per 100 units, as `move`
+            self._out(encode(Power(dict(items[k:k + 100]))))
 
     def listen(self, heard: Heard) -> None:
         self._heard = heard
@@ -199,6 +221,9 @@ class SilentSea:
         self.dropped["no_sea"] += 1
 
     def move(self, addresses: list[int], positions_m: NDArray[np.float64]) -> None:
+        pass
+
+    def power(self, powered: dict[int, bool]) -> None:
         pass
 
     def listen(self, heard: Heard) -> None:

@@ -29,7 +29,7 @@ import serial
 
 from acoustic.nanomodem.emulator import Frame, ModemEmulator
 from acoustic.nanomodem.ports import BAUD
-from acoustic.nanomodem.sea import MAX_DATAGRAM, HeardFrame, Move, SeaError, Send, encode, parse
+from acoustic.nanomodem.sea import MAX_DATAGRAM, HeardFrame, Move, Power, SeaError, Send, encode, parse
 
 MAX_IDLE_S = 0.5  # the loop wakes at least this often (to see a stop request)
 
@@ -115,6 +115,8 @@ class _SeaPort:
                     self.core.remote_send(item.address, now_s, item.data, item.dest)
                 elif isinstance(item, Move):
                     self.core.move_remotes(list(item.positions), np.array(list(item.positions.values())))
+                elif isinstance(item, Power):
+                    self.core.set_power(item.powered)
                 else:
                     self._count("sea_not_a_command")
             except (KeyError, ValueError):  # a unit this sea does not have; a payload the modem cannot send

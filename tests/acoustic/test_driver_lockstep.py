@@ -70,6 +70,20 @@ def test_unicast_with_ack_voltage_echo_and_packets_heard() -> None:
     assert [f.data for _, a, f in core.heard.entries if a == 5][-3:] == [b"hello all", b"hi", b""]
 
 
+def test_a_unit_without_power_hears_and_answers_nothing_until_it_has_power_again() -> None:
+    driver, attached, clock = _attached()
+    core = attached.core
+    attached.power({5: False, 77: False})  # 77: no such unit, counted
+    assert core.unpowered == {5} and core.counts["power_unknown_unit"] == 1
+    t0 = clock.time()
+    assert driver.ping(5).outcome is Outcome.TIMEOUT and clock.time() - t0 == pytest.approx(4.0, abs=0.011)
+    assert driver.unicast_ack(5, b"surface!").outcome is Outcome.TIMEOUT
+    assert core.heard.total == 0 and core.counts["remote_unpowered"] == 2
+    attached.power({5: True})
+    assert driver.ping(5).ok and driver.unicast_ack(5, b"surface!").ok
+    assert [(a, f.data) for _, a, f in core.heard.entries] == [(5, b""), (5, b"surface!")]
+
+
 def test_the_unit_answering_E_ends_the_wait_as_error_and_silence_as_no_reply() -> None:
     clock = VirtualClock()
     host, modem = pipe()

@@ -20,7 +20,7 @@ from testkit import free_udp_port
 from acoustic.nanomodem.driver import ModemDriver
 from acoustic.nanomodem.emulator import FrameKind
 from acoustic.nanomodem.ports import SerialPort
-from acoustic.nanomodem.sea import HeardFrame, Move, SeaClient, SeaError, Send, encode, parse
+from acoustic.nanomodem.sea import HeardFrame, Move, Power, SeaClient, SeaError, Send, encode, parse
 from missiontime.clocks import WallClock
 
 VIL = Path(sys.executable).parent / "vil"
@@ -33,20 +33,22 @@ DATA = st.binary(min_size=0, max_size=64)
     st.builds(HeardFrame, ADDRESS, st.sampled_from(list(FrameKind)), DATA),
     st.builds(Move, st.dictionaries(ADDRESS, st.tuples(*[st.floats(-1e5, 1e5).map(lambda v: round(v, 3))] * 3),
                                     min_size=1, max_size=20)),
+    st.builds(Power, st.dictionaries(ADDRESS, st.booleans(), min_size=1, max_size=20)),
 ))
-def test_every_command_survives_its_encoding(item: Send | HeardFrame | Move) -> None:
+def test_every_command_survives_its_encoding(item: Send | HeardFrame | Move | Power) -> None:
     assert parse(encode(item)) == item
 
 
 @settings(max_examples=2000)
 @given(st.one_of(st.binary(max_size=200), st.text(max_size=120).map(str.encode),
-                 st.lists(st.sampled_from(["S", "M", "H", "1", "256", "*", "-3", "nan", "inf", "zz", "ping", "", "5",
-                                           "1e9", "0x10", "abc"]), max_size=9).map(lambda w: " ".join(w).encode())))
+                 st.lists(st.sampled_from(["S", "M", "H", "P", "0", "1", "256", "*", "-3", "nan", "inf", "zz", "ping",
+                                           "", "5", "1e9", "0x10", "abc"]), max_size=9)
+                 .map(lambda w: " ".join(w).encode())))
 def test_anything_else_is_refused_with_a_reason(datagram: bytes) -> None:
     try:
         parse(datagram)
     except SeaError as exc:
-        assert exc.reason in {"not_ascii", "address", "hex", "kind", "position", "command"}
+        assert exc.reason in {"not_ascii", "address", "hex", "kind", "position", "power", "command"}
 
 
 def test_vil_modem_counts_hostile_datagrams_and_still_carries_a_report() -> None:
@@ -59,7 +61,8 @@ def test_vil_modem_counts_hostile_datagrams_and_still_carries_a_report() -> None
         assert ready, "vil modem printed no device within the bound"
         device = proc.stdout.readline().strip()
         hostile = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        for datagram in (b"\xff\xfe", b"S 999 * 00", b"S 5 * zz", b"M 5 nan 0 0", b"H 5 ping 00", b"Q", b"S 7 * 00"):
+        for datagram in (b"\xff\xfe", b"S 999 * 00", b"S 5 * zz", b"M 5 nan 0 0", b"H 5 ping 00", b"Q", b"S 7 * 00",
+                         b"P 5 2", b"P 7 0"):
             hostile.sendto(datagram, ("127.0.0.1", port))
         hostile.close()
         sea = SeaClient("127.0.0.1", port)
@@ -79,5 +82,5 @@ def test_vil_modem_counts_hostile_datagrams_and_still_carries_a_report() -> None
         _, err = proc.communicate(timeout=30)
     assert proc.returncode == 0
     for reason in ("sea_not_ascii 1", "sea_address 1", "sea_hex 1", "sea_position 1", "sea_not_a_command 1",
-                   "sea_command 1", "sea_unknown_unit_or_payload 1"):
+                   "sea_command 1", "sea_unknown_unit_or_payload 1", "sea_power 1", "power_unknown_unit 1"):
         assert reason in err, (reason, err)
