@@ -17,6 +17,7 @@ from numpy.typing import ArrayLike
 
 from acoustic.airtime import airtime_s
 from acoustic.params import AcousticParams
+from missiontime import US_PER_S
 
 
 class Owner(Enum):
@@ -83,7 +84,10 @@ def tdma_frame(mussel_ids: ArrayLike, apad_ids: ArrayLike, area_range_m: float, 
         raise ValueError(f"area range must be a finite non-negative number, got {area_range_m}")
     packet = airtime_s(params.max_packet_bytes)
     delay = area_range_m / params.sound_speed_mps
-    slot_s = packet + delay + params.guard_s
+    # A whole number of microseconds: the fleet's slot task runs on the mission clock's microseconds and
+    # the GCS's uplink counts slots in seconds from mission time 0; equal steps keep them together for
+    # a mission of months (rounding each slot apart would drift ~0.5 us a slot: a second in 90 days).
+    slot_s = math.ceil((packet + delay + params.guard_s) * US_PER_S) / US_PER_S
     owners = [(Owner.AMUSSEL, i) for i in mussels] + [(Owner.APAD, i) for i in apads]
     slots = tuple(Slot(k, owner, node, k * slot_s, (k + 1) * slot_s) for k, (owner, node) in enumerate(owners))
     return TdmaFrame(slot_s, packet, delay, params.guard_s, slots)

@@ -30,7 +30,7 @@ from acoustic.nanomodem.sea import Sea
 from acoustic.orders import CALL_UP
 from acoustic.status_packet import StatusReport, pack
 from acoustic.tdma import Owner, TdmaFrame
-from missiontime import US_PER_S, Scheduler, Task
+from missiontime import US_PER_S, Scheduler, Task, seconds_to_us
 from mussel_sim.comms import FleetRunner
 from mussel_sim.fleet_sleep import publish_rows
 from mussel_sim.vocabulary import MusselCommand, MusselState
@@ -57,8 +57,13 @@ class MusselModems:
         sea.listen(self._heard)
 
     def register(self, scheduler: Scheduler, start_us: int = 0) -> Task:
-        """A task at every slot's start, from mission time `start_us` (the frame repeats from there)."""
-        self._task = scheduler.every(self.tdma.slot_s, self._slot_task, "tdma-slot", start_us)
+        """A task at every slot's start from mission time `start_us` on. The frame runs from mission time
+        0 whenever the fleet joins it, as the GCS's uplink counts it (`TdmaFrame.next_slot_start_s`): a
+        mission restored from a checkpoint keeps the slots where they were, or a call-up sent in the
+        aPad's slot would cross the aMussels' reports."""
+        slot_us = seconds_to_us(self.tdma.slot_s)
+        self._slot = -(-start_us // slot_us)  # the first slot starting at or after `start_us`
+        self._task = scheduler.every(self.tdma.slot_s, self._slot_task, "tdma-slot", self._slot * slot_us)
         return self._task
 
     def _slot_task(self, now_us: int) -> None:

@@ -22,10 +22,14 @@ from gcs.mission.acoustic_frame import scenario_frame
 from gcs.mission.headless import run_mission
 from gcs.mission.results import RunResult
 from gcs.mission.scenario import Scenario, load_scenario
+from gcs.mission.session import MissionSession
+from gcs.mission.world import LinkOptions, build_world
 from gcs.records import checkpoint
 from gcs.records.replay import read_events, read_tlog
 from gcs.records.report import write_report
+from gcs.records.run_folder import RunFolder
 from mavlink_dialect import mavlink
+from missiontime import VirtualClock
 from mussel_sim.comms import SURFACE_DEPTH_M
 
 Run = tuple[Scenario, RunResult, Path]
@@ -145,3 +149,46 @@ def test_a_crashed_acoustic_mission_resumes_to_the_uninterrupted_result(tmp_path
         del r["wall_s"], r["out_dir"]
     assert a["acoustic"]["counts"]["reports_heard"] > 0 and a["acoustic"]["channel"]["packet_error"] > 0
     assert a == b
+
+
+def test_an_acoustic_mission_restored_from_a_checkpoint_hears_on_and_loses_nothing(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # The console's way back (`vil gcs --resume`): the checkpoint's state put into a fresh world, no
+    # replay. The acoustic network starts afresh (a new frame from the resume, the emulator's water
+    # empty) on what the restored registry last heard: it must hear on, call up on, and lose nothing.
+    scenario = POOL.with_overrides(duration_s=900.0)  # restored while charging, the next collection after
+    whole, crashed = tmp_path / "whole", tmp_path / "crashed"
+    real_save, taken = checkpoint.save, []
+
+    def save_and_copy(files: checkpoint.CheckpointFiles, ckpt: checkpoint.Checkpoint) -> None:
+        real_save(files, ckpt)
+        if ckpt.time_us >= 240_000_000 and not taken:
+            taken.append(ckpt.time_us)
+            shutil.copytree(whole, crashed)
+
+    monkeypatch.setattr(checkpoint, "save", save_and_copy)
+    run_mission(scenario, whole)
+    monkeypatch.setattr(checkpoint, "save", real_save)
+    files = checkpoint.CheckpointFiles(RunFolder(crashed).checkpoint)
+    saved = files.read()
+    checkpoint.cut_logs(RunFolder(crashed), saved)
+    world = build_world(scenario, VirtualClock(start_us=saved.time_us), crashed, LinkOptions(), mission_start_us=0,
+                        append_logs=True)
+    session = MissionSession(world, files, saved, setup=checkpoint.setup_digest(scenario))
+    try:
+        assert session.start()
+        session.run()
+        result = session.result(0.0)
+        session.finish()
+    finally:
+        session.close()
+        world.close()
+    a = result.acoustic
+    resumed_s = 900.0 - saved.time_us / 1e6
+    assert result.end_reason == "mission time" and result.misplaced == []
+    frames = resumed_s / scenario_frame(scenario).frame_s
+    assert a["counts"]["reports_heard"] > 0.8 * frames * 6  # at least half the fleet heard in each frame
+    assert a["counts"]["call_up_sent"] > 0 and a["counts"]["call_ups_acked"] == a["counts"]["call_up_sent"]
+    k = a["knowledge"]
+    assert k["samples"] == pytest.approx(resumed_s / 10, abs=2)
+    assert k["age_max_s"] < 2 * scenario_frame(scenario).frame_s and k["battery_error_max"] < 0.01

@@ -44,6 +44,17 @@ def test_next_slot_start_repeats_every_frame() -> None:
     assert frame.next_slot_start_s(Owner.APAD, 7, 100.0) >= 100.0
 
 
+def test_a_slot_is_whole_microseconds_so_the_fleet_and_the_gcs_keep_the_same_slots_for_months() -> None:
+    frame = tdma_frame(range(1, 121), [1, 2], 1234.567, P)  # a delay of no whole microseconds
+    slot_us = round(frame.slot_s * 1e6)
+    assert slot_us / 1e6 == frame.slot_s and slot_us >= (frame.packet_s + frame.delay_s + frame.guard_s) * 1e6
+    # 90 days on: the uplink's slot start (seconds from mission time 0) is the clock's k-th slot to the microsecond.
+    t_s = 90 * 86_400.0
+    start_s = frame.next_slot_start_s(Owner.APAD, 2, t_s)
+    k = round(start_s / frame.slot_s)
+    assert abs(start_s * 1e6 - k * slot_us) < 1.0 and k % len(frame.slots) == frame.slot_of(Owner.APAD, 2).index
+
+
 def test_largest_range_of_an_area() -> None:
     square = [(0, 0), (30, 0), (30, 40), (0, 40)]
     assert largest_range_m(square) == pytest.approx(50.0)
