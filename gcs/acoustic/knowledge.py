@@ -28,14 +28,18 @@ def age_s(view: MusselView, now_us: int) -> float:
     return max(now_us - view.time_us, 0) / US_PER_S
 
 
-def believed_battery(view: MusselView, now_us: int, drain_per_s: float, released: bool = False) -> float:
+def believed_battery(view: MusselView, now_us: int, drain_per_s: float, released: bool = False,
+                     anchor: tuple[int, float] | None = None) -> float:
     """Its battery now as the GCS can know it: under water, the report run down at `drain_per_s`
     since it was made (never below empty); at the surface or depleted, as reported. `released`: its
     last report says docked but no slot holds it now, so it is sinking out of WiFi's reach and its
-    next report comes in its slot: under water too."""
+    next report comes in its slot: under water too. `anchor`: (mission us, battery) believed when its
+    duty last changed (a sleep order); after the report, the run-down at `drain_per_s` (the new duty's)
+    starts there, the old duty's having run to it."""
     if view.state not in UNDERWATER and not (released and view.state == MusselState.DOCKED):
         return view.battery_frac
-    return max(view.battery_frac - drain_per_s * age_s(view, now_us), 0.0)
+    since_us, battery = (view.time_us, view.battery_frac) if anchor is None or anchor[0] <= view.time_us else anchor
+    return max(battery - drain_per_s * max(now_us - since_us, 0) / US_PER_S, 0.0)
 
 
 @dataclass(frozen=True)

@@ -75,6 +75,8 @@ class FleetKnowledge:
         self.acoustic = acoustic
         self.unreachable: set[int] = set()
         self.duties: dict[int, Duty] = dict(settings.duties)  # each aMussel's, and the sleep orders sent since
+        # Acoustic: the battery believed when an aMussel's duty last changed, and when (`believed_battery`)
+        self._duty_changed: dict[int, tuple[int, float]] = {}
         self._default_duty = Duty(discharge_profile(settings.mussel_discharge).rate_per_min)
         self._log = log
 
@@ -188,7 +190,10 @@ class FleetKnowledge:
         return self.settings.duties.get(mussel_id, self._default_duty)
 
     def ordered(self, mussel_id: int, duty: Duty) -> None:
-        """A sleep order was sent: plan with it from now on."""
+        """A sleep order was sent: plan with it from now on (heard acoustically, the belief ran down at
+        the old duty until now, and runs down at the new one from here)."""
+        if self.acoustic is not None and mussel_id in self.api.mussels:
+            self._duty_changed[mussel_id] = (self.clock.now_us, self.battery(mussel_id))
         self.duties[mussel_id] = duty
 
     def drain_per_s(self, mussel_id: int) -> float:
@@ -232,7 +237,8 @@ class FleetKnowledge:
         view = self.api.mussels[mussel_id]
         if self.acoustic is not None and view.simulated:
             released = view.state == MusselState.DOCKED and mussel_id not in self.docked().values()
-            return believed_battery(view, self.clock.now_us, self.drain_per_s(mussel_id), released)
+            return believed_battery(view, self.clock.now_us, self.drain_per_s(mussel_id), released,
+                                    self._duty_changed.get(mussel_id))
         if self.real is not None and not view.simulated and mussel_id in self.real.heard_us:
             on_slot = mussel_id in self.docked().values()
             return self.real.estimate(mussel_id, self.clock.now_us, on_slot, self.drain_per_min(mussel_id)).battery_frac

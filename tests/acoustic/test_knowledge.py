@@ -31,3 +31,12 @@ def test_one_released_since_its_last_docked_report_is_believed_under_water() -> 
     assert believed_battery(view(MusselState.DOCKED), 30_000_000, DRAIN, released=True) == pytest.approx(0.57)
     # `released` says nothing of one that is not docked by its report.
     assert believed_battery(view(MusselState.FLOATING), 30_000_000, DRAIN, released=True) == 0.6
+
+
+def test_after_a_duty_change_the_run_down_starts_where_the_old_duty_left_it() -> None:
+    # Reported at 0 s; a sleep order at 20 s, when 0.6 - 20 x DRAIN was believed; a tenth of the drain since.
+    anchor = (20_000_000, 0.58)
+    assert believed_battery(view(MusselState.ACTIVE), 30_000_000, DRAIN / 10, anchor=anchor) == pytest.approx(0.579)
+    # A report newer than the change is the fresher knowledge: the run-down starts at the report.
+    fresh = view(MusselState.ACTIVE, battery=0.5, time_us=25_000_000)
+    assert believed_battery(fresh, 30_000_000, DRAIN / 10, anchor=anchor) == pytest.approx(0.4995)
