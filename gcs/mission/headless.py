@@ -55,7 +55,8 @@ def run_mission(
     world = lockstep_world(scenario, out_dir, options, append_logs=saved is not None, muted_logs=saved is not None)
     if folder is not None:
         write_endpoints(world, folder)
-    session = MissionSession(world, files, saved, replay=True, setup=setup)
+    session = MissionSession(world, files, saved, replay=True, setup=setup,
+                             checkpoint_period_s=checkpoint.LOCKSTEP_CHECKPOINT_PERIOD_S)
     try:
         if progress is not None:
             world.clock.scheduler.every(PROGRESS_PERIOD_S, lambda now_us: progress(us_to_s(now_us)), "progress",

@@ -45,16 +45,18 @@ WaitFn = Callable[[int], bool]  # wait for aPad `sysid` to be heard; False: give
 
 
 class MissionSession:
-    """One mission over `world`. `checkpoints`: save the mission there every `CHECKPOINT_PERIOD_S`
-    (removed once it ends). `saved`: resume from this checkpoint, by replaying to it (`replay`,
-    lockstep) or by restoring it; either way it must have been started with the same `setup`
+    """One mission over `world`. `checkpoints`: save the mission there every `checkpoint_period_s` of
+    mission time (removed once it ends). `saved`: resume from this checkpoint, by replaying to it
+    (`replay`, lockstep) or by restoring it; either way it must have been started with the same `setup`
     (`checkpoint.setup_digest`). `controls`: each aPad's `LoopControl` (the console's)."""
 
     def __init__(
         self, world: World, checkpoints: CheckpointFiles | None = None, saved: Checkpoint | None = None,
         replay: bool = False, controls: Mapping[int, LoopControl] | None = None, setup: str = "",
+        checkpoint_period_s: float = CHECKPOINT_PERIOD_S,
     ) -> None:
         self.world = world
+        self.checkpoint_period_s = checkpoint_period_s
         self.apad_ids = tuple(a.system_id for a in world.scenario.apads)
         self.loops: dict[int, EnergySharingLoop] = {}
         self.shares: FleetShares | None = None
@@ -107,8 +109,10 @@ class MissionSession:
         (several: each reason once). `finish` once the front end has written the results."""
         if self._checkpoints is not None:
             clock = self.world.clock
-            self._task = clock.scheduler.every(CHECKPOINT_PERIOD_S, self._checkpoint, "checkpoint",
-                                               clock.now_us + seconds_to_us(CHECKPOINT_PERIOD_S))
+            first_us = clock.now_us + seconds_to_us(self.checkpoint_period_s)
+            if self._replaying and self._saved is not None and self._saved.time_us > clock.now_us:
+                first_us = self._saved.time_us  # the replay stops where the checkpoint was, whatever its period
+            self._task = clock.scheduler.every(self.checkpoint_period_s, self._checkpoint, "checkpoint", first_us)
         if self.swarm:
             processes = Processes(self.world.clock)
             for sysid in self.apad_ids:

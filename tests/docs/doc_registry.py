@@ -203,6 +203,15 @@ REGISTRY: dict[str, Entry] = {
                                  "are the long run's)"),
     run.ACOUSTIC_BAY: Entry("runs", run.run_acoustic_bay, long_only="8 s of CPU; the same path is pool12-acoustic's "
                             "in the default run, and bay24's channel tests/acoustic/test_acoustic_mission.py's"),
+    run.ACOUSTIC_KEEP_ALIVE[0]: Entry("runs", run.run_acoustic_keep_alive,
+                                      ci="vil run missions/pool12-acoustic.toml --strategy keep_alive --seeds 1 "
+                                         "--duration 30m",
+                                      why="40 missions are 5 min of CPU; seed 1's first 30 minutes hold the sleep "
+                                          "orders and wakes whose belief was 1-5 % off before"),
+    run.ACOUSTIC_KEEP_ALIVE[1]: Entry("runs", run.run_acoustic_keep_alive,
+                                      ci="vil run missions/bay24-acoustic.toml --strategy keep_alive --seeds 1 "
+                                         "--duration 10m",
+                                      why="the same on the bay's frame, 10 minutes of seed 1"),
     swp.ACOUSTIC_SWEEP: Entry("sweeps", swp.run_acoustic_sweep, full=False,
                               ci=f"vil sweep {swp.ACOUSTIC_TINY} --out acoustic-tiny --workers 1",
                               why="720 missions (45 min on 2 cores): the spec's grid on pool12, one strategy and "
