@@ -24,8 +24,10 @@ Incoming events are queued and become the inputs of the next step, so the model 
 run in lockstep is deterministic. Refused surface commands are reported as STATUSTEXT warnings.
 
 A sleeping aMussel (ACTIVE on a wake schedule) speaks only when awake: its AMUSSEL_STATUS and
-AMUSSEL_SENSORS go out at the first publish after a wake (`fleet_sleep.publish_rows`); every other
-aMussel's go out at every publish, as before.
+AMUSSEL_SENSORS go out at the first publish after a wake (`fleet_sleep.publish_rows`). A depleted
+aMussel says so LAST_WORDS times more (its brown-out reports: enough that 40 % loss does not hide it),
+then its radio is off, as its acoustic modem is (`mussel_sim.modems`): a fleet that depleted costs the
+link and the GCS nothing. Every other aMussel's go out at every publish.
 """
 
 from __future__ import annotations
@@ -50,7 +52,7 @@ from mussel_sim.inbox_checks import invalid_field
 from mussel_sim.recorder import Recorder
 from mussel_sim.sensors import DummySensors, SensorField
 from mussel_sim.startconfig import MAX_MUSSEL_ID
-from mussel_sim.vocabulary import MusselCommand
+from mussel_sim.vocabulary import MusselCommand, MusselState
 
 FLEET_SYSTEM_ID = 251
 FLEET_COMPONENT_ID = 25
@@ -59,6 +61,7 @@ STATUSTEXT_MAX = 50
 # DOCK_SLOT_STATUS latch values that hold an aMussel (the aPad's words, read here as wire values).
 HOLDING_LATCHES = (mavlink.DOCK_LATCH_STATE_CLOSING, mavlink.DOCK_LATCH_STATE_LATCHED)
 SURFACE_DEPTH_M = 0.01  # this shallow an aMussel is at the surface, in WiFi's reach (floating and docked: 0 m)
+LAST_WORDS = 10  # publishes of each message a depleted aMussel still makes; 0.4 ** 10: 1e-4 all lost at 40 %
 
 
 # Where a co-located router takes whole batches: (message id, frames, columns by wire field name).
@@ -151,6 +154,7 @@ class FleetRunner:
         self._sleep: list[tuple[int, float, float]] = []
         self._wake: list[int] = []
         self._published_us: dict[int, int] = {}  # message id -> mission time of its last publish
+        self._depleted_publishes: dict[int, NDArray[np.int64]] = {}  # message id -> (n,) publishes since depleted
 
     # --- periodic tasks ----------------------------------------------------------------------------
 
@@ -227,12 +231,25 @@ class FleetRunner:
     def _speaking(self, spec: hot.HotSpec, now_us: int) -> NDArray[np.intp] | None:
         """The rows of the state that publish `spec` now (None: all): a sleeping aMussel only after a
         wake; in an acoustic scenario only those at the surface (`CommsConfig.wifi_at_surface_only`)."""
-        rows = publish_rows(self.state, self.params.theta, self._published_us.get(spec.msg_id), now_us)
+        rows = self._powered(spec.msg_id, publish_rows(self.state, self.params.theta,
+                                                        self._published_us.get(spec.msg_id), now_us))
         self._published_us[spec.msg_id] = now_us
         if not self.config.wifi_at_surface_only:
             return rows
         at_surface = np.flatnonzero(self.state.depth_m <= SURFACE_DEPTH_M)
         return at_surface if rows is None else np.intersect1d(rows, at_surface)
+
+    def _powered(self, msg_id: int, rows: NDArray[np.intp] | None) -> NDArray[np.intp] | None:
+        """`rows` (None: all) but the aMussels depleted for more than LAST_WORDS publishes of `msg_id`."""
+        depleted = self.state.state == MusselState.DEPLETED
+        before = self._depleted_publishes.get(msg_id)
+        count = np.where(depleted, (0 if before is None else before) + 1, 0)
+        self._depleted_publishes[msg_id] = count
+        off = count > LAST_WORDS
+        if not off.any():
+            return rows
+        on = np.flatnonzero(~off)
+        return on if rows is None else np.intersect1d(rows, on)
 
     def heard_acoustically(self, mussel_id: int, command: MusselCommand | None) -> None:
         """An aMussel's modem heard the GCS: a `command` for it (a call-up: SURFACE), or, with None,

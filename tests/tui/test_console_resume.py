@@ -49,7 +49,7 @@ def test_a_resumed_console_shows_the_history_and_releases_the_docked_before_call
     checkpoint.cut_logs(RunFolder(tmp_path), saved)
     docked = {int(i) for i, s in zip(saved.fleet_state.ids, saved.fleet_state.state, strict=True)
               if s == MusselState.DOCKED}
-    assert docked and saved.time_us > (CRASH_AT_S - 10) * 1e6
+    assert docked and saved.time_us > (CRASH_AT_S - checkpoint.LOCKSTEP_CHECKPOINT_PERIOD_S) * 1e6
 
     runner = ConsoleRunner(ConsoleConfig(scenario, sitl="memory", speed=40.0, out_dir=tmp_path, start_paused=True,
                                          epoch_us=LOCKSTEP_EPOCH_US, resume=ResumePoint(files, saved)))

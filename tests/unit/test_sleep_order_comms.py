@@ -11,7 +11,7 @@ import pytest
 from mavlink_dialect import Codec, mavlink
 from missiontime import VirtualClock
 from mussel_sim.behaviour import HOURLY_WAKE_AWAKE_S, HOURLY_WAKE_INTERVAL_S, duty_cycle_rate_per_min
-from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner
+from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, LAST_WORDS, CommsConfig, FleetRunner
 from mussel_sim.fleet_state import FleetParams, state_from_arrays
 from mussel_sim.geo import LocalFrame
 from mussel_sim.vocabulary import MusselState
@@ -102,3 +102,28 @@ def test_the_order_sits_in_the_dialects_private_block_clear_of_upstream_dialects
     assert 54000 <= msg_id <= 54099
     for upstream in ("ardupilotmega", "all"):
         assert msg_id not in importlib.import_module(f"pymavlink.dialects.v20.{upstream}").mavlink_map, upstream
+
+
+def test_a_depleted_amussel_says_so_a_few_times_then_its_radio_is_off() -> None:
+    """aMussel 5 depletes in its first step (eq. 1 at theta 30 takes 0.00052 a second); 3 and 8 do not."""
+    params = FleetParams(drift_half_width_m=0.0)
+    ids = [3, 5, 8]
+    state = state_from_arrays(ids, [0.0, 10.0, 20.0], np.zeros(3), [0.9, 0.0005, 0.9], params)
+    sent: list[bytes] = []
+    runner = FleetRunner(state, params, np.random.default_rng(0), FRAME, Codec(FLEET_SYSTEM_ID, FLEET_COMPONENT_ID),
+                         sent.append, config=CommsConfig(apad_ids=frozenset({APAD}), commanders=frozenset({GCS}),
+                                                         sensors_rate_hz=1.0))
+    clock = VirtualClock()
+    runner.register(clock.scheduler)
+    clock.sleep(60.0)
+    heard: dict[tuple[str, int], list[float]] = {}
+    for m in (m for f in sent for m in gcs_codec.decode(f)):
+        if m.get_type() in ("AMUSSEL_STATUS", "AMUSSEL_SENSORS"):
+            heard.setdefault((m.get_type(), m.mussel_id), []).append(m.time_us / 1e6)
+    status_5 = [m for f in sent for m in gcs_codec.decode(f) if m.get_type() == "AMUSSEL_STATUS" and m.mussel_id == 5]
+    # Published at 0 s (before its first step), then depleted from 1 s: that, LAST_WORDS times, then nothing.
+    assert heard[("AMUSSEL_STATUS", 5)] == [float(t) for t in range(LAST_WORDS + 1)]
+    assert [MusselState(m.state) for m in status_5[1:]] == [MusselState.DEPLETED] * LAST_WORDS
+    assert heard[("AMUSSEL_SENSORS", 5)] == [float(t) for t in range(LAST_WORDS + 1)]
+    for other in (3, 8):  # the living speak at every publish, 0..60 s
+        assert len(heard[("AMUSSEL_STATUS", other)]) == len(heard[("AMUSSEL_SENSORS", other)]) == 61
