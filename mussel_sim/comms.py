@@ -230,7 +230,8 @@ class FleetRunner:
 
     def _speaking(self, spec: hot.HotSpec, now_us: int) -> NDArray[np.intp] | None:
         """The rows of the state that publish `spec` now (None: all): a sleeping aMussel only after a
-        wake; in an acoustic scenario only those at the surface (`CommsConfig.wifi_at_surface_only`)."""
+        wake, a depleted one only its last words; in an acoustic scenario only those at the surface
+        (`CommsConfig.wifi_at_surface_only`)."""
         rows = self._powered(spec.msg_id, publish_rows(self.state, self.params.theta,
                                                         self._published_us.get(spec.msg_id), now_us))
         self._published_us[spec.msg_id] = now_us
