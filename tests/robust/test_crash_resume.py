@@ -122,12 +122,16 @@ def test_a_corrupt_checkpoint_is_one_line_and_exit_2_before_anything_runs(tmp_pa
     assert not (folder / "result.json").exists()  # nothing ran
 
 
+@pytest.mark.parametrize("crashed_period_s", [None, 10.0])
 def test_a_resume_cuts_what_the_crashed_run_logged_after_its_last_checkpoint_and_logs_it_once(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, crashed_period_s: float | None
 ) -> None:
     """The crashed run logged a minute past its last checkpoint; the resumed one replays to the
     checkpoint with its logs muted and goes on: every log is the uninterrupted run's, byte for byte,
-    but for the one `mission_resume` event, and so are result.json and traces.npz."""
+    but for the one `mission_resume` event, and so are result.json and traces.npz. `crashed_period_s`:
+    the crashed run checkpointed on another period (an older vil's 10 s, off the resumed run's grid)."""
+    if crashed_period_s is not None:
+        monkeypatch.setattr(checkpoint, "LOCKSTEP_CHECKPOINT_PERIOD_S", crashed_period_s)
     scenario = load_scenario("pool12").with_overrides(strategy="greedy", duration_s=900.0)
     whole, crashed = tmp_path / "whole", tmp_path / "crashed"
     real_save, at = checkpoint.save, {}
@@ -145,7 +149,9 @@ def test_a_resume_cuts_what_the_crashed_run_logged_after_its_last_checkpoint_and
 
     monkeypatch.setattr(checkpoint, "save", save_and_crash)
     run_mission(scenario, whole)
-    monkeypatch.setattr(checkpoint, "save", real_save)
+    monkeypatch.undo()  # the resumed run saves with vil's own functions and period
+    if crashed_period_s is not None:
+        assert round(at["t_s"]) % 60 != 0  # off the resumed run's grid of minutes
     before = (crashed / "events.jsonl").read_bytes()
     assert "logs" in at and len(before) > at["events_bytes"]  # events after the checkpoint were logged
     run_mission(scenario, crashed, resume=True)
