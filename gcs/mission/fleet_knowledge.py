@@ -75,7 +75,8 @@ class FleetKnowledge:
         self.acoustic = acoustic
         self.unreachable: set[int] = set()
         self.duties: dict[int, Duty] = dict(settings.duties)  # each aMussel's, and the sleep orders sent since
-        # Acoustic: the battery believed when an aMussel's duty last changed, and when (`believed_battery`)
+        # Heard now and then (acoustically, or a real aMussel): the battery believed when its duty last
+        # changed, and when (`believed_battery`, `RealFleet.estimate`)
         self._duty_changed: dict[int, tuple[int, float]] = {}
         self._default_duty = Duty(discharge_profile(settings.mussel_discharge).rate_per_min)
         self._log = log
@@ -94,7 +95,7 @@ class FleetKnowledge:
                    if self.battery(m) < threshold and self.heard_alive(m)]
         if self.real is not None:  # a real one's last report may be old: its estimate decides
             real = set(self.real.ids())
-            below = self.real.below(threshold, self.clock.now_us, self.drain_per_min)
+            below = self.real.below(threshold, self.clock.now_us, self.drain_per_min, self._duty_changed.get)
             ids = sorted({m for m in ids if m not in real} | set(below))
         out = []
         for m in ids:
@@ -190,9 +191,11 @@ class FleetKnowledge:
         return self.settings.duties.get(mussel_id, self._default_duty)
 
     def ordered(self, mussel_id: int, duty: Duty) -> None:
-        """A sleep order was sent: plan with it from now on (heard acoustically, the belief ran down at
-        the old duty until now, and runs down at the new one from here)."""
-        if self.acoustic is not None and mussel_id in self.api.mussels:
+        """A sleep order was sent: plan with it from now on (one heard now and then, acoustically or a
+        real aMussel, was believed run down at the old duty until now, and at the new one from here)."""
+        heard_now_and_then = mussel_id in self.api.mussels and (
+            self.acoustic is not None if self.api.mussels[mussel_id].simulated else self.real is not None)
+        if heard_now_and_then:
             self._duty_changed[mussel_id] = (self.clock.now_us, self.battery(mussel_id))
         self.duties[mussel_id] = duty
 
@@ -241,7 +244,8 @@ class FleetKnowledge:
                                     self._duty_changed.get(mussel_id))
         if self.real is not None and not view.simulated and mussel_id in self.real.heard_us:
             on_slot = mussel_id in self.docked().values()
-            return self.real.estimate(mussel_id, self.clock.now_us, on_slot, self.drain_per_min(mussel_id)).battery_frac
+            return self.real.estimate(mussel_id, self.clock.now_us, on_slot, self.drain_per_min(mussel_id),
+                                      self._duty_changed.get(mussel_id)).battery_frac
         return view.battery_frac
 
     def distance_to(self, mussel_id: int) -> float:

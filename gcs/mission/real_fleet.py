@@ -47,28 +47,36 @@ class RealFleet:
         return sorted(m for m in self.heard_us if m in self.table and not self.table[m].simulated)
 
     def estimate(self, mussel_id: int, now_us: int, on_slot: bool = False,
-                 drain_per_min: float | None = None) -> Estimate:
+                 drain_per_min: float | None = None, since: tuple[int, float] | None = None) -> Estimate:
         """Its battery now by the models; `on_slot`: the aPad reports it latched on one of its slots;
-        `drain_per_min`: what its duty uses deployed (None: the scenario's discharge profile)."""
+        `drain_per_min`: what its duty uses deployed (None: the scenario's discharge profile); `since`:
+        (mission us, battery) estimated when its duty last changed (a sleep order): after its report,
+        the discharge at the new duty runs from there."""
         view = self.table[mussel_id]
-        age_s = max(now_us - self.heard_us[mussel_id], 0) / 1e6
+        heard_us = self.heard_us[mussel_id]
+        age_s = max(now_us - heard_us, 0) / 1e6
         charging = on_slot or view.state == MusselState.DOCKED
         if view.state == MusselState.DEPLETED and not charging:
             battery = view.battery_frac
         else:  # eqs. (1)-(2) over the time since the report, in one step (charge: the band it was in)
+            start_frac, run_s = view.battery_frac, age_s
+            if since is not None and since[0] > heard_us and not charging:
+                start_frac, run_s = since[1], max(now_us - since[0], 0) / 1e6
             discharge = self.discharge if drain_per_min is None else DischargeProfile("duty", drain_per_min)
-            battery = float(step_battery(np.array([view.battery_frac]), np.array([charging]), discharge,
-                                         self.charge, self.theta, age_s)[0])
+            battery = float(step_battery(np.array([start_frac]), np.array([charging]), discharge,
+                                         self.charge, self.theta, run_s)[0])
         return Estimate(mussel_id, battery, view.battery_frac, age_s)
 
-    def below(self, threshold: float, now_us: int, drain_per_min: Callable[[int], float] | None = None) -> list[int]:
+    def below(self, threshold: float, now_us: int, drain_per_min: Callable[[int], float] | None = None,
+              since: Callable[[int], tuple[int, float] | None] | None = None) -> list[int]:
         """Real aMussels active by their last report, heard within MAX_REPORT_AGE_S, whose estimated
-        battery is below `threshold`; `drain_per_min`: each one's drain (None: the scenario's)."""
+        battery is below `threshold`; `drain_per_min`, `since`: each one's, as `estimate` takes them."""
         out = []
         for m in self.ids():
             if self.table[m].state != MusselState.ACTIVE:
                 continue
-            e = self.estimate(m, now_us, drain_per_min=None if drain_per_min is None else drain_per_min(m))
+            e = self.estimate(m, now_us, drain_per_min=None if drain_per_min is None else drain_per_min(m),
+                              since=None if since is None else since(m))
             if e.age_s <= MAX_REPORT_AGE_S and e.battery_frac < threshold:
                 out.append(m)
         return out

@@ -17,6 +17,7 @@ from gcs.mission.scenario import load_scenario
 from gcs.mission.world import LinkOptions, build_world
 from missiontime import PacedClock
 from mussel_sim.battery import discharge_profile
+from mussel_sim.vocabulary import MusselState
 
 pytestmark = pytest.mark.sitl
 ROOT = Path(__file__).resolve().parents[2]
@@ -51,14 +52,18 @@ def test_real_amussels_on_the_bridge_are_served_beside_the_simulated_fleet(tmp_p
         assert world.real is not None
         later_us = world.clock.now_us + 60_000_000  # a minute of mission time without a report
         off_slot, on_slot = world.real.estimate(101, later_us), world.real.estimate(101, later_us, on_slot=True)
-        # A sleep order sent to a real aMussel: the planner's estimate runs on the order's drain from then on.
+        # A sleep order sent to a real aMussel: the planner's estimate runs on the order's drain from then
+        # on, from what it estimated when the order went (no jump at the order).
         order = Duty.of_order(3600.0, 60.0)
-        loop.knows.ordered(101, order)
-        ordered_drain = loop.knows.drain_per_min(101)
-        asleep = world.real.estimate(101, later_us, drain_per_min=ordered_drain)
-        on = 101 in loop.knows.docked().values()
-        believed = loop.knows.battery(101)
-        by_order = world.real.estimate(101, world.clock.now_us, on, order.rate_per_min).battery_frac
+        sleeper = next(m for m in REAL if m not in loop.knows.docked().values())  # the one not on board
+        sleeper_state = world.api.mussels[sleeper].state
+        now_us = world.clock.now_us
+        unordered = loop.knows.battery(sleeper)
+        loop.knows.ordered(sleeper, order)
+        ordered_drain, believed = loop.knows.drain_per_min(sleeper), loop.knows.battery(sleeper)
+        asleep = world.real.estimate(sleeper, later_us, drain_per_min=ordered_drain, since=(now_us, believed))
+        from_report = world.real.estimate(sleeper, later_us, drain_per_min=ordered_drain)
+        sleeper_off = world.real.estimate(sleeper, later_us)
         dropped = dict(world.link.dropped)
         table = world.api.mussels
         simulated_5 = table[5].simulated
@@ -85,7 +90,10 @@ def test_real_amussels_on_the_bridge_are_served_beside_the_simulated_fleet(tmp_p
     assert off_slot.battery_frac == pytest.approx(max(0.0, 0.3 - drain))
     assert on_slot.battery_frac > 0.3
     assert ordered_drain == order.rate_per_min < discharge_profile(scenario.fleet.discharge).rate_per_min
-    assert off_slot.battery_frac < asleep.battery_frac < 0.3 and believed == by_order
+    assert believed == unordered and sleeper_state != MusselState.DOCKED
+    slept_min = (later_us - now_us) / 60e6 * scenario.mission.theta  # the order's drain from the order on
+    assert asleep.battery_frac == pytest.approx(max(0.0, believed - order.rate_per_min * slept_min))
+    assert sleeper_off.battery_frac < asleep.battery_frac < from_report.battery_frac  # not back to the report
 
 
 def test_an_id_both_real_and_simulated_is_refused_at_start(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
