@@ -228,3 +228,21 @@ class PtyConsole:
         self.kill()
         with contextlib.suppress(OSError):
             os.close(self.master)
+
+
+def restored_session(scenario: Any, folder: Path, saved: Any = None) -> Any:
+    """The console's way back, in process: the checkpoint in `folder` (or `saved`, one read from it and
+    altered), the logs cut back to it, a fresh lockstep world whose clock starts at its time, and the
+    session that restores it (not started). The caller closes the session and then its world."""
+    from gcs.mission.session import MissionSession
+    from gcs.mission.world import LinkOptions, build_world
+    from gcs.records import checkpoint
+    from gcs.records.run_folder import RunFolder
+    from missiontime import VirtualClock
+
+    files = checkpoint.CheckpointFiles(RunFolder(folder).checkpoint)
+    saved = files.read() if saved is None else saved
+    checkpoint.cut_logs(RunFolder(folder), saved)
+    world = build_world(scenario, VirtualClock(start_us=saved.time_us), folder, LinkOptions(), mission_start_us=0,
+                        append_logs=True)
+    return MissionSession(world, files, saved, setup=checkpoint.setup_digest(scenario))

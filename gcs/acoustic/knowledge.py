@@ -28,6 +28,12 @@ def age_s(view: MusselView, now_us: int) -> float:
     return max(now_us - view.time_us, 0) / US_PER_S
 
 
+def run_down_start(report_us: int, report_frac: float, anchor: tuple[int, float] | None) -> tuple[int, float]:
+    """Where an estimate's run-down starts, (mission us, battery): the report, or `anchor`, what was
+    believed when the aMussel's duty last changed (a sleep order), if that came after the report."""
+    return (report_us, report_frac) if anchor is None or anchor[0] <= report_us else anchor
+
+
 def believed_battery(view: MusselView, now_us: int, drain_per_s: float, released: bool = False,
                      anchor: tuple[int, float] | None = None) -> float:
     """Its battery now as the GCS can know it: under water, the report run down at `drain_per_s`
@@ -38,7 +44,7 @@ def believed_battery(view: MusselView, now_us: int, drain_per_s: float, released
     starts there, the old duty's having run to it."""
     if view.state not in UNDERWATER and not (released and view.state == MusselState.DOCKED):
         return view.battery_frac
-    since_us, battery = (view.time_us, view.battery_frac) if anchor is None or anchor[0] <= view.time_us else anchor
+    since_us, battery = run_down_start(view.time_us, view.battery_frac, anchor)
     return max(battery - drain_per_s * max(now_us - since_us, 0) / US_PER_S, 0.0)
 
 

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gcs.acoustic.knowledge import run_down_start
 from gcs.link.fleet_table import MusselTable
 from mussel_sim.battery import ChargeProfile, DischargeProfile, step_battery
 from mussel_sim.vocabulary import MusselState
@@ -47,11 +48,11 @@ class RealFleet:
         return sorted(m for m in self.heard_us if m in self.table and not self.table[m].simulated)
 
     def estimate(self, mussel_id: int, now_us: int, on_slot: bool = False,
-                 drain_per_min: float | None = None, since: tuple[int, float] | None = None) -> Estimate:
+                 drain_per_min: float | None = None, anchor: tuple[int, float] | None = None) -> Estimate:
         """Its battery now by the models; `on_slot`: the aPad reports it latched on one of its slots;
-        `drain_per_min`: what its duty uses deployed (None: the scenario's discharge profile); `since`:
+        `drain_per_min`: what its duty uses deployed (None: the scenario's discharge profile); `anchor`:
         (mission us, battery) estimated when its duty last changed (a sleep order): after its report,
-        the discharge at the new duty runs from there."""
+        the discharge at the new duty runs from there (`run_down_start`)."""
         view = self.table[mussel_id]
         heard_us = self.heard_us[mussel_id]
         age_s = max(now_us - heard_us, 0) / 1e6
@@ -59,24 +60,23 @@ class RealFleet:
         if view.state == MusselState.DEPLETED and not charging:
             battery = view.battery_frac
         else:  # eqs. (1)-(2) over the time since the report, in one step (charge: the band it was in)
-            start_frac, run_s = view.battery_frac, age_s
-            if since is not None and since[0] > heard_us and not charging:
-                start_frac, run_s = since[1], max(now_us - since[0], 0) / 1e6
+            start_us, start_frac = run_down_start(heard_us, view.battery_frac, None if charging else anchor)
+            run_s = max(now_us - start_us, 0) / 1e6
             discharge = self.discharge if drain_per_min is None else DischargeProfile("duty", drain_per_min)
             battery = float(step_battery(np.array([start_frac]), np.array([charging]), discharge,
                                          self.charge, self.theta, run_s)[0])
         return Estimate(mussel_id, battery, view.battery_frac, age_s)
 
     def below(self, threshold: float, now_us: int, drain_per_min: Callable[[int], float] | None = None,
-              since: Callable[[int], tuple[int, float] | None] | None = None) -> list[int]:
+              anchor: Callable[[int], tuple[int, float] | None] | None = None) -> list[int]:
         """Real aMussels active by their last report, heard within MAX_REPORT_AGE_S, whose estimated
-        battery is below `threshold`; `drain_per_min`, `since`: each one's, as `estimate` takes them."""
+        battery is below `threshold`; `drain_per_min`, `anchor`: each one's, as `estimate` takes them."""
         out = []
         for m in self.ids():
             if self.table[m].state != MusselState.ACTIVE:
                 continue
             e = self.estimate(m, now_us, drain_per_min=None if drain_per_min is None else drain_per_min(m),
-                              since=None if since is None else since(m))
+                              anchor=None if anchor is None else anchor(m))
             if e.age_s <= MAX_REPORT_AGE_S and e.battery_frac < threshold:
                 out.append(m)
         return out

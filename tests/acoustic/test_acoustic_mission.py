@@ -16,20 +16,16 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from testkit import scenario_variant
+from testkit import restored_session, scenario_variant
 
 from gcs.mission.acoustic_frame import scenario_frame
 from gcs.mission.headless import run_mission
 from gcs.mission.results import RunResult
 from gcs.mission.scenario import Scenario, load_scenario
-from gcs.mission.session import MissionSession
-from gcs.mission.world import LinkOptions, build_world
 from gcs.records import checkpoint
 from gcs.records.replay import read_events, read_tlog
 from gcs.records.report import write_report
-from gcs.records.run_folder import RunFolder
 from mavlink_dialect import mavlink
-from missiontime import VirtualClock
 from mussel_sim.comms import SURFACE_DEPTH_M
 
 Run = tuple[Scenario, RunResult, Path]
@@ -40,6 +36,25 @@ def acoustic_run(tmp_path: Path, minutes: float, **channel: float) -> Run:
     scenario = replace(POOL.with_overrides(duration_s=60.0 * minutes), acoustic=replace(POOL.acoustic, **channel))
     result = run_mission(scenario, tmp_path / "run")
     return scenario, result, Path(result.out_dir)
+
+
+def run_copied_at_a_checkpoint(scenario: Scenario, whole: Path, crashed: Path, at_s: float,
+                               monkeypatch: pytest.MonkeyPatch) -> int:
+    """Run `scenario` whole into `whole`, and copy its folder to `crashed` as a crash right after its
+    first checkpoint at or past `at_s` leaves it; that checkpoint's mission time (us)."""
+    real_save, taken = checkpoint.save, []
+
+    def save_and_copy(files: checkpoint.CheckpointFiles, ckpt: checkpoint.Checkpoint) -> None:
+        real_save(files, ckpt)
+        if ckpt.time_us >= at_s * 1e6 and not taken:
+            taken.append(ckpt.time_us)
+            shutil.copytree(whole, crashed)
+
+    monkeypatch.setattr(checkpoint, "save", save_and_copy)
+    run_mission(scenario, whole)
+    monkeypatch.setattr(checkpoint, "save", real_save)
+    assert taken
+    return taken[0]
 
 
 @pytest.fixture(scope="module")
@@ -131,18 +146,7 @@ def test_a_crashed_acoustic_mission_resumes_to_the_uninterrupted_result(tmp_path
     # mission to that checkpoint (the channel's draws included) and goes on.
     scenario = replace(POOL.with_overrides(duration_s=600.0), acoustic=replace(POOL.acoustic, noise_psd_db=104.0))
     whole, crashed = tmp_path / "whole", tmp_path / "crashed"
-    real_save, taken = checkpoint.save, []
-
-    def save_and_copy(files: checkpoint.CheckpointFiles, ckpt: checkpoint.Checkpoint) -> None:
-        real_save(files, ckpt)
-        if ckpt.time_us >= 300_000_000 and not taken:
-            taken.append(ckpt.time_us)
-            shutil.copytree(whole, crashed)
-
-    monkeypatch.setattr(checkpoint, "save", save_and_copy)
-    run_mission(scenario, whole)
-    monkeypatch.setattr(checkpoint, "save", real_save)
-    assert taken
+    run_copied_at_a_checkpoint(scenario, whole, crashed, 300.0, monkeypatch)
     run_mission(scenario, crashed, resume=True)
     a, b = (json.loads((d / "result.json").read_text()) for d in (crashed, whole))
     for r in (a, b):
@@ -158,23 +162,8 @@ def test_an_acoustic_mission_restored_from_a_checkpoint_hears_on_and_loses_nothi
     # empty) on what the restored registry last heard: it must hear on, call up on, and lose nothing.
     scenario = POOL.with_overrides(duration_s=900.0)  # restored while charging, the next collection after
     whole, crashed = tmp_path / "whole", tmp_path / "crashed"
-    real_save, taken = checkpoint.save, []
-
-    def save_and_copy(files: checkpoint.CheckpointFiles, ckpt: checkpoint.Checkpoint) -> None:
-        real_save(files, ckpt)
-        if ckpt.time_us >= 240_000_000 and not taken:
-            taken.append(ckpt.time_us)
-            shutil.copytree(whole, crashed)
-
-    monkeypatch.setattr(checkpoint, "save", save_and_copy)
-    run_mission(scenario, whole)
-    monkeypatch.setattr(checkpoint, "save", real_save)
-    files = checkpoint.CheckpointFiles(RunFolder(crashed).checkpoint)
-    saved = files.read()
-    checkpoint.cut_logs(RunFolder(crashed), saved)
-    world = build_world(scenario, VirtualClock(start_us=saved.time_us), crashed, LinkOptions(), mission_start_us=0,
-                        append_logs=True)
-    session = MissionSession(world, files, saved, setup=checkpoint.setup_digest(scenario))
+    saved_us = run_copied_at_a_checkpoint(scenario, whole, crashed, 240.0, monkeypatch)
+    session = restored_session(scenario, crashed)
     try:
         assert session.start()
         session.run()
@@ -182,9 +171,9 @@ def test_an_acoustic_mission_restored_from_a_checkpoint_hears_on_and_loses_nothi
         session.finish()
     finally:
         session.close()
-        world.close()
+        session.world.close()
     a = result.acoustic
-    resumed_s = 900.0 - saved.time_us / 1e6
+    resumed_s = 900.0 - saved_us / 1e6
     assert result.end_reason == "mission time" and result.misplaced == []
     frames = resumed_s / scenario_frame(scenario).frame_s
     assert a["counts"]["reports_heard"] > 0.8 * frames * 6  # at least half the fleet heard in each frame

@@ -61,7 +61,7 @@ def test_real_amussels_on_the_bridge_are_served_beside_the_simulated_fleet(tmp_p
         unordered = loop.knows.battery(sleeper)
         loop.knows.ordered(sleeper, order)
         ordered_drain, believed = loop.knows.drain_per_min(sleeper), loop.knows.battery(sleeper)
-        asleep = world.real.estimate(sleeper, later_us, drain_per_min=ordered_drain, since=(now_us, believed))
+        asleep = world.real.estimate(sleeper, later_us, drain_per_min=ordered_drain, anchor=(now_us, believed))
         from_report = world.real.estimate(sleeper, later_us, drain_per_min=ordered_drain)
         sleeper_off = world.real.estimate(sleeper, later_us)
         dropped = dict(world.link.dropped)

@@ -9,16 +9,14 @@ import threading
 from pathlib import Path
 
 import pytest
+from testkit import restored_session
 
 from gcs.console.runner import ConsoleConfig, ConsoleRunner
 from gcs.mission.control import EndReason
 from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
-from gcs.mission.session import MissionSession
-from gcs.mission.world import LinkOptions, build_world
 from gcs.records import checkpoint
 from gcs.records.run_folder import RunFolder
-from missiontime import VirtualClock
 
 pytestmark = pytest.mark.sitl
 
@@ -42,10 +40,7 @@ def test_a_restored_swarm_does_not_restart_a_loop_that_had_ended(tmp_path: Path,
     statuses = dict(saved.loop_statuses)
     statuses[2] = dataclasses.replace(statuses[2], end_reason=EndReason.APAD_BATTERY)
     saved = dataclasses.replace(saved, loop_statuses=statuses, retired=frozenset({2}))
-    checkpoint.cut_logs(RunFolder(tmp_path), saved)
-    world = build_world(scenario, VirtualClock(start_us=saved.time_us), tmp_path, LinkOptions(), mission_start_us=0,
-                        append_logs=True)
-    session = MissionSession(world, files, saved, setup=checkpoint.setup_digest(scenario))
+    session = restored_session(scenario, tmp_path, saved)
     try:
         assert session.start()
         assert session.watch is not None and session.watch.retired == {2}
@@ -53,7 +48,7 @@ def test_a_restored_swarm_does_not_restart_a_loop_that_had_ended(tmp_path: Path,
         session.finish()
     finally:
         session.close()
-        world.close()
+        session.world.close()
     events = [json.loads(line) for line in RunFolder(tmp_path).events.read_text().splitlines()]
     after = events[len(RunFolder(tmp_path).events.read_bytes()[: saved.events_bytes].splitlines()):]
     assert [e["apad"] for e in after if e["event"] == "mission_resume"] == [1]
