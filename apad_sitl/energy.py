@@ -77,8 +77,8 @@ class EnergyMeter:
             self.apad.energy.drawn_wh += drawn
             self._set_volts(self.apad.state.battery_v - drawn / p.batt_capacity_wh * VOLT_RANGE)
 
-    def step(self, dt_s: float) -> None:
-        """Home charging over the last `dt_s` seconds."""
+    def step(self, dt_s: float) -> float:
+        """Home charging over the last `dt_s` seconds; returns the Wh it charged."""
         state, p = self.apad.state, self.apad.params
         home = math.hypot(state.x_m, state.y_m) <= p.home_radius_m and state.ground_speed_mps < HOME_STILL_MPS
         charging = home and p.home_charge_w > 0.0 and state.battery_v < BATTERY_FULL_V
@@ -90,6 +90,12 @@ class EnergyMeter:
                      * p.batt_capacity_wh)
             self.apad.energy.home_wh += wh
             self._set_volts(state.battery_v + wh / p.batt_capacity_wh * VOLT_RANGE)
+            return wh
+        return 0.0
+
+    def refilled(self, wh: float) -> None:
+        """A step of a hull held full at home (`apad_sitl.rest`): the charger put back `wh`."""
+        self.apad.energy.home_wh += wh
 
     def could_charge(self) -> bool:
         """Whether the hull is where and as still as home charging needs (a rest there would charge)."""

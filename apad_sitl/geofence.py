@@ -4,10 +4,12 @@ outside it are refused (an aMussel released on land is lost)."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from mussel_sim.geo import LocalFrame
+
+KNOWN_FIXES = 4096  # the fixes a geofence remembers the answer for
 
 
 @dataclass(frozen=True)
@@ -16,6 +18,8 @@ class Geofence:
 
     polygon: Any  # shapely Polygon, prepared
     frame: LocalFrame  # the metres the polygon is in
+    # (lat, lon) -> inside: a planner asks about the same fixes again and again (a sleeper's last one)
+    _known: dict[tuple[float, float], bool] = field(default_factory=dict, compare=False, repr=False)
 
     @staticmethod
     def of(ring_deg: Sequence[tuple[float, float]], frame: LocalFrame) -> Geofence:
@@ -38,6 +42,16 @@ class Geofence:
 
         return bool(shapely.intersects_xy(self.polygon, x_m, y_m))
 
+    @property
+    def remembered(self) -> int:
+        """How many fixes' answers it keeps now (at most KNOWN_FIXES)."""
+        return len(self._known)
+
     def contains_deg(self, lat_deg: float, lon_deg: float) -> bool:
-        x, y = self.frame.to_local(lat_deg, lon_deg)
-        return self.contains(float(x), float(y))
+        known = self._known.get((lat_deg, lon_deg))
+        if known is None:
+            if len(self._known) >= KNOWN_FIXES:
+                self._known.clear()  # bounded: a long mission's drifting fixes start it again
+            x, y = self.frame.to_local(lat_deg, lon_deg)
+            known = self._known[(lat_deg, lon_deg)] = self.contains(float(x), float(y))
+        return known

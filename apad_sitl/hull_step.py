@@ -22,16 +22,22 @@ def step_hull(apad: ApadState, energy: EnergyMeter, mussels: MusselFixTable,
     if rest is not None:
         if rest.key == key and rest.dt_s == dt_s:
             rest.steps += 1  # nothing that moves the hull changed: one more step in closed form
+            if rest.refill_wh is not None:
+                energy.refilled(rest.refill_wh)  # held full at home: what the charger put back this step
             return
         apad.state = apad.state  # something did: the rest's state, stepped again from here
     before = apad.state
     setpoint = prim.velocity_setpoint(primitive, before, p) if apad.armed else (0.0, 0.0)
     apad.state = state = veh.step(before, setpoint, p, current_mps, dt_s)
-    energy.step(dt_s)
+    home_wh = energy.step(dt_s)
     apad.set_primitive(prim.step(primitive, state.x_m, state.y_m, mussels, p, dt_s))
-    # A fixed point (holding at the hold point in slack water, no latch timer running, not
-    # charging at home): rest until the primitive, the parameters, arming or the current change,
-    # or a battery draw writes the state (apad_sitl.rest).
-    if (apad.primitive is primitive and apad.state is state and rest_mod.at_rest(before, state)
-            and not energy.could_charge()):
-        apad.rest = rest_mod.Rest(state, p, dt_s, key)
+    # A fixed point (holding at the hold point in slack water, no latch timer running; away from the
+    # home charger, or at it with the battery held full): rest until the primitive, the parameters,
+    # arming or the current change, or a battery draw writes the state (apad_sitl.rest).
+    if apad.primitive is not primitive or not rest_mod.at_rest(before, apad.state):
+        return
+    if not energy.could_charge():
+        if apad.state is state:
+            apad.rest = rest_mod.Rest(state, p, dt_s, key)
+    elif apad.state.battery_v == before.battery_v:  # the charger put back exactly what the step drained
+        apad.rest = rest_mod.Rest(apad.state, p, dt_s, key, refill_wh=home_wh)

@@ -8,6 +8,11 @@ small to move the hull). Once one step leaves the hull as it found it but for th
 after n more steps is the origin with n drains taken, clamped at empty, in closed form. The result
 equals stepping to float rounding (a product for a sum of n terms; tests/unit/test_sitl_rest.py).
 
+At its home charger with the battery full, the hull reaches a fixed point of the whole step: the
+charger puts back exactly what the step drained (the battery ends each step where it began). The
+rest then drains nothing (`refill_wh`: the home energy each step puts back, which the core still
+adds to the counters step by step, so they are what stepping makes to the last bit).
+
 Pure: no clock, no I/O; `dt_s` is the physics step the rest was found at.
 """
 
@@ -37,14 +42,17 @@ class Rest:
     `steps` counts the physics steps of `dt_s` taken since; `state()` is the hull after them.
     """
 
-    __slots__ = ("_cache", "_drain_v", "dt_s", "key", "origin", "steps")
+    __slots__ = ("_cache", "_drain_v", "dt_s", "key", "origin", "refill_wh", "steps")
 
-    def __init__(self, origin: VehicleState, params: ApadParams, dt_s: float, key: tuple[object, ...] = ()) -> None:
+    def __init__(self, origin: VehicleState, params: ApadParams, dt_s: float, key: tuple[object, ...] = (),
+                 refill_wh: float | None = None) -> None:
         self.origin = origin
         self.dt_s = dt_s
         self.key = key  # what it holds for (the core's primitive, parameters, arming, current): a change ends it
         self.steps = 0
-        self._drain_v = drain_v(params, origin.thrust_mps2, dt_s)
+        # Not None: held full at the home charger, which puts back this much each step (nothing drains).
+        self.refill_wh = refill_wh
+        self._drain_v = 0.0 if refill_wh is not None else drain_v(params, origin.thrust_mps2, dt_s)
         self._cache = (0, origin)
 
     def state(self) -> VehicleState:

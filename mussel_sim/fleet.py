@@ -172,7 +172,7 @@ def step(
         table, profile, next_wake, unknown_orders = apply_orders(state, inputs, table, profile, params.theta)
     sleepers = Sleepers.of(state, table, profile, next_wake, params.theta, time_us)
     has_commands = (inputs.release_ids.size + inputs.dock_ids.size + inputs.sink_ids.size + inputs.surface_ids.size
-                    + unknown_orders.size + inputs.wake_ids.size + (sleepers is not None and sleepers.any_held))
+                    + unknown_orders.size + inputs.wake_ids.size + (sleepers is not None and sleepers.any_held_awake()))
     applied = (
         _apply_commands(state, inputs, params, st, timer, dock_apad, dock_slot, sleepers, unknown_orders)
         if has_commands else _NOTHING

@@ -94,9 +94,11 @@ class Sleepers:
                 woke, wakes = woke[wakes > 0], wakes[wakes > 0]
         return cls(state.ids, table, profile, next_wake, state.surface_held, t0, t1, woke, wakes)
 
-    @property
-    def any_held(self) -> bool:
-        return bool(self.held.any())
+    def any_held_awake(self) -> bool:
+        """Whether a held call-up is let go in this step: its aMussel awake at some time of it (a
+        sleeper's call-up waits for minutes of steps in which nothing is to be done for it)."""
+        held = np.flatnonzero(self.held)
+        return bool(held.size) and bool(self.awake(held).any())
 
     def _write(self) -> NDArray[np.bool_]:
         if not self.held_changed:

@@ -8,6 +8,7 @@ few kilometres a mission covers (NOTES.md).
 
 from __future__ import annotations
 
+import functools
 import re
 import warnings
 from dataclasses import dataclass, field
@@ -79,6 +80,13 @@ def distance_m(
         np.asarray(lon2_deg, float), np.asarray(lat2_deg, float),
     )
     return np.asarray(dist, float)
+
+
+@functools.lru_cache(maxsize=4096)
+def pair_distance_m(lat1_deg: float, lon1_deg: float, lat2_deg: float, lon2_deg: float) -> float:
+    """`distance_m` of one pair, remembered: a planner asks for the same pairs again and again (an aPad
+    holding, a sleeper's last fix), and each call into the geodesic costs tens of microseconds."""
+    return float(distance_m(lat1_deg, lon1_deg, lat2_deg, lon2_deg))
 
 
 def planar_distance_m(

@@ -163,10 +163,12 @@ class MusselTable(Mapping[int, MusselView]):
 
     def select(self, states: tuple[MusselState, ...], battery_below: float | None = None) -> list[int]:
         """Ids in one of `states` (and below a battery fraction), lowest id first."""
-        mask = np.isin(self.state, np.array([int(s) for s in states], np.uint8))
+        wanted = np.zeros(256, bool)  # a lookup by state (np.isin is made for large sets)
+        wanted[[int(s) for s in states]] = True
+        mask = wanted[self.state]
         if battery_below is not None:
             mask &= self.battery_frac < battery_below
-        return sorted(int(i) for i in self.ids[mask])
+        return np.sort(self.ids[mask]).tolist()
 
 
 def batch_rejections(b: MusselBatch) -> dict[str, NDArray[np.bool_]]:

@@ -17,9 +17,9 @@ from gcs.api import CommandError, GeofenceError, Location
 from gcs.mission.control import EndReason, LoopControl, LoopLog, LoopStatus, MissionEnded, Phase
 from gcs.mission.fleet_knowledge import FleetKnowledge
 from gcs.mission.swarm import route_conflicts
-from gcs.mission.telemetry_pace import HOLDING_PHASES, TelemetryPace
+from gcs.mission.telemetry_pace import HOLDING_PHASES, PLANNING_PHASES, TelemetryPace
 from missiontime import seconds_to_us, us_to_s
-from mussel_sim.geo import distance_m
+from mussel_sim.geo import pair_distance_m
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
 # A Go To not reported done by GOTO_SLACK_S + GOTO_SLOWNESS x the trip at the aPad's speed is sent again.
@@ -55,8 +55,9 @@ class ApadActions:
         A Go To preempted on the aPad (its link-loss failsafe switched to Hold) is commanded again
         once we hear it; one that takes far longer than the trip should is commanded again too.
         At most `goto_attempts` commands, then the loop gives up on this target (an event)."""
+        self._moving()
         here = self.api.position(self.apad_id)
-        distance = float(distance_m(here.lat, here.lon, target.lat, target.lon))
+        distance = pair_distance_m(here.lat, here.lon, target.lat, target.lon)
         self.status.cost_m += distance
         trip_limit_s = GOTO_SLACK_S + GOTO_SLOWNESS * distance / self.settings.apad_speed_mps
         if self.knows.shares is not None and self.api.inside_geofence(target):
@@ -118,6 +119,7 @@ class ApadActions:
         """Dock and wait for the latch. The slot's own report decides, not the ACK or the primitive:
         an ACK or a slot report lost on the way back, or a failsafe Hold over the dock, leave the
         latch closing; so the end is confirmed by asking the aPad for the slot."""
+        self._moving()
         try:
             self.api.docking(True, slot, mussel_id, self.apad_id)
         except CommandError as exc:
@@ -218,15 +220,29 @@ class ApadActions:
 
     # --- waiting, ending, pausing -----------------------------------------------------------
 
-    def wait_until(self, done: Callable[[], bool], timeout_s: float | None = None, interruptible: bool = True) -> bool:
+    def wait_until(self, done: Callable[[], bool], timeout_s: float | None = None, interruptible: bool = True,
+                   holding: bool = False) -> bool:
+        """Wait (polling) until `done`; False at `timeout_s`. In a holding phase, or `holding` (it holds
+        in place meanwhile, e.g. above an aMussel on its way up), with slow telemetry."""
         deadline = None if timeout_s is None else self.clock.time() + timeout_s
-        if self.status.phase in HOLDING_PHASES and self.link_up() and not done():
+        if (holding or self.status.phase in HOLDING_PHASES) and self.link_up() and not done():
             self.pace.hold()  # it holds in place until `done`: slow telemetry meanwhile
         while not done():
             if deadline is not None and self.clock.time() >= deadline:
                 return False
             self.sleep(self.settings.poll_s, interruptible)
         return True
+
+    def _moving(self) -> None:
+        """Fast telemetry again before a command that moves the aPad (after a holding wait in a phase)."""
+        if self.pace.holding and self.link_up():  # a silent aPad would not answer: asked at the next change
+            self.pace.move()
+
+    def hold_for(self, dt_s: float) -> None:
+        """Wait `dt_s` holding in place (a strategy that takes nobody yet): slow telemetry meanwhile."""
+        if self.status.phase in HOLDING_PHASES and self.link_up():
+            self.pace.hold()
+        self.sleep(dt_s)
 
     def sleep(self, dt_s: float, interruptible: bool = True) -> None:
         if interruptible:
@@ -306,5 +322,5 @@ class ApadActions:
             self._phase_since_s = now
             self.status.phase = phase
             self._log("phase", phase=str(phase))
-        if phase not in HOLDING_PHASES and self.link_up():  # a silent aPad would not answer: asked at the next change
+        if phase not in HOLDING_PHASES | PLANNING_PHASES and self.link_up():  # a silent aPad: asked at the next change
             self.pace.move()  # fast telemetry from the first command of a phase that acts

@@ -23,7 +23,7 @@ from gcs.mission.strategies import Outlook, traits
 from gcs.mission.swarm import FleetShares, orphans
 from missiontime import Clock
 from mussel_sim.battery import charge_profile, discharge_profile, sim_minutes
-from mussel_sim.geo import distance_m
+from mussel_sim.geo import pair_distance_m
 from mussel_sim.vocabulary import MusselState
 
 if TYPE_CHECKING:
@@ -250,7 +250,7 @@ class FleetKnowledge:
 
     def distance_to(self, mussel_id: int) -> float:
         here, there = self.api.position(self.apad_id), self.api.get_location(mussel_id)
-        return float(distance_m(here.lat, here.lon, there.lat, there.lon))
+        return pair_distance_m(here.lat, here.lon, there.lat, there.lon)
 
     def note_home(self, mussel_id: int) -> None:
         """A real aMussel goes back where it was first found (a simulated one: its start)."""

@@ -139,7 +139,7 @@ def collect(crew: Crew, route: list[int]) -> None:
                      why=RESHARED if not knows.serves(mussel_id) else "no aPad within acoustic range")
             continue
         if not act.wait_until(functools.partial(_floating_or_depleted, knows, mussel_id),
-                              knows.call_up_wait_s(mussel_id), interruptible=False):
+                              knows.call_up_wait_s(mussel_id), interruptible=False, holding=True):
             if knows.taken_over(mussel_id):
                 continue
             crew.log("skip", mussel=mussel_id, why="did not surface", state=knows.state(mussel_id).name)

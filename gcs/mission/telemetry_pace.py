@@ -40,6 +40,9 @@ HOLDING_TELEMETRY_HZ = {
 MOVING_TELEMETRY_HZ = {msg_id: MISSION_TELEMETRY_HZ[msg_id] for msg_id in HOLDING_TELEMETRY_HZ}
 # The loop's phases in which the aPad holds where it is.
 HOLDING_PHASES = frozenset({Phase.IDLE_WAIT, Phase.CHARGING_WAIT})
+# Phases that only think (no command, no mission time): the pace stays as it was. A plan that takes
+# nobody leaves the aPad holding; the phase that acts on a plan asks for fast telemetry itself.
+PLANNING_PHASES = frozenset({Phase.PLAN_COLLECT, Phase.PLAN_REDEPLOY})
 PACE_RETRIES = 1  # one resend (1 s, then 1.5 s): a silent link costs the loop at most 2.5 s per message
 
 

@@ -45,7 +45,7 @@ def rounds(crew: Crew) -> None:
         collect(crew, route)
     elif not crew.knows.docked():  # the strategy takes none of the pool yet: look again later
         crew.act.set_phase(Phase.IDLE_WAIT)
-        crew.act.sleep(REPLAN_S)
+        crew.act.hold_for(REPLAN_S)
     if crew.knows.docked():
         charge_and_redeploy(crew)
 

@@ -1,6 +1,7 @@
 """The GCS paces the aPad's telemetry by activity (issue 20, idle time costs little): slow while the
-loop holds in place, fast while it moves, asked with SET_MESSAGE_INTERVAL. Checked on the real bytes
-the GCS recorded (its .tlog): the requests and ACKs, and the GLOBAL_POSITION_INT the aPad then sent.
+loop holds in place (its holding phases, above a called-up aMussel until it floats, while a strategy
+takes nobody), fast while it moves, asked with SET_MESSAGE_INTERVAL. Checked on the real bytes the
+GCS recorded (its .tlog): the requests and ACKs, and the GLOBAL_POSITION_INT the aPad then sent.
 """
 
 from __future__ import annotations
@@ -13,9 +14,10 @@ from typing import Any
 import pytest
 
 from gcs.link.telemetry import GCS_SYSTEM_ID
+from gcs.mission.control import Phase
 from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
-from gcs.mission.telemetry_pace import HOLDING_PHASES, HOLDING_TELEMETRY_HZ, MOVING_TELEMETRY_HZ
+from gcs.mission.telemetry_pace import HOLDING_PHASES, HOLDING_TELEMETRY_HZ, MOVING_TELEMETRY_HZ, PLANNING_PHASES
 from gcs.mission.world import LOCKSTEP_EPOCH_US
 from gcs.records.run_folder import RunFolder
 from mavlink_dialect import Codec, mavlink, tlog
@@ -40,11 +42,16 @@ def pool12_run(tmp_path_factory: pytest.TempPathFactory) -> RunFolder:
     return RunFolder(out)
 
 
+def position_requests(run: RunFolder) -> list[tuple[float, int, float]]:
+    """(mission seconds, message id, interval us) of each SET_MESSAGE_INTERVAL the GCS sent for the position."""
+    return [(t, int(m.param1), m.param2) for t, m in decoded(run.gcs_tlog)
+            if m.get_type() == "COMMAND_LONG" and m.get_srcSystem() == GCS_SYSTEM_ID
+            and m.command == mavlink.MAV_CMD_SET_MESSAGE_INTERVAL and int(m.param1) == GPI]
+
+
 def test_the_gcs_asks_slow_while_holding_and_fast_while_moving(pool12_run: RunFolder) -> None:
     msgs = decoded(pool12_run.gcs_tlog)
-    asked = [(t, int(m.param1), m.param2) for t, m in msgs
-             if m.get_type() == "COMMAND_LONG" and m.get_srcSystem() == GCS_SYSTEM_ID
-             and m.command == mavlink.MAV_CMD_SET_MESSAGE_INTERVAL and int(m.param1) == GPI]
+    asked = position_requests(pool12_run)
     acks = [m for _, m in msgs if m.get_type() == "COMMAND_ACK" and m.command == mavlink.MAV_CMD_SET_MESSAGE_INTERVAL]
     assert acks and all(a.result == mavlink.MAV_RESULT_ACCEPTED for a in acks)
     holding_us, moving_us = US / HOLDING_TELEMETRY_HZ[GPI], US / MOVING_TELEMETRY_HZ[GPI]
@@ -53,14 +60,24 @@ def test_the_gcs_asks_slow_while_holding_and_fast_while_moving(pool12_run: RunFo
     assert intervals[0] == moving_us and holding_us in intervals and intervals.count(moving_us) >= 2
     assert all(a != b for a, b in pairwise(intervals[1:]))
 
-    # Slow asked only in a holding phase of the loop, fast only in one that acts.
+    # Slow asked only in a holding phase of the loop or above an aMussel called up (collect, between
+    # its call-up and the next move), fast only in a phase that acts, never while planning.
     events = [json.loads(line) for line in pool12_run.events.read_text().splitlines()]
     phases = [(e["t_s"], e["phase"]) for e in events if e.get("event") == "phase"]
+    call_ups = [e["t_s"] for e in events if e.get("event") == "call_up"]
     assert any(p in HOLDING_PHASES for _, p in phases) and any(p not in HOLDING_PHASES for _, p in phases)
+    slow_above_one = 0
     for t_asked, _, interval in asked[1:]:
-        # The phase the loop was in when it asked: slow from a wait of a holding phase, fast as another began.
-        phase = [p for t, p in phases if t <= round(t_asked, 3)][-1]
-        assert interval == (holding_us if phase in HOLDING_PHASES else moving_us), (t_asked, phase)
+        since, phase = [(t, p) for t, p in phases if t <= round(t_asked, 3)][-1]
+        assert phase not in PLANNING_PHASES, (t_asked, phase)
+        if interval == moving_us:
+            assert phase not in HOLDING_PHASES, (t_asked, phase)
+        else:
+            assert interval == holding_us
+            called_up = phase == Phase.COLLECT and any(since <= t <= round(t_asked, 3) for t in call_ups)
+            assert phase in HOLDING_PHASES or called_up, (t_asked, phase)
+            slow_above_one += called_up
+    assert slow_above_one >= 3  # pool12's aMussels rise for 20 s each: the aPad waits above them slowly
 
 
 def test_the_apad_reports_its_position_at_the_rate_asked(pool12_run: RunFolder) -> None:
@@ -79,3 +96,24 @@ def test_the_apad_reports_its_position_at_the_rate_asked(pool12_run: RunFolder) 
             assert gap == pytest.approx(period_s, abs=1e-6), (t0, period_s, gaps)
         seen[period_s] += sum(1 for gap in gaps if gap == pytest.approx(period_s, abs=1e-6))
     assert seen[holding_s] >= 10 and seen[moving_s] >= 100
+
+
+def test_a_strategy_that_takes_nobody_leaves_the_apad_reporting_slowly(tmp_path: Path) -> None:
+    """The loop asks the strategy again every REPLAN_S, holding meanwhile: planning does not speed the
+    telemetry up, and the aPad reports its position at the holding rate from the first wait on."""
+    (tmp_path / "patient.py").write_text("def nobody(inp, weights):\n    return {a: [] for a in inp.apads}\n")
+    out = tmp_path / "run"
+    run_mission(load_scenario("pool12").with_overrides(strategy=f"{tmp_path / 'patient.py'}:nobody",
+                                                      duration_s=900.0), out)  # not too late to call up
+    run = RunFolder(out)
+    events = [json.loads(line) for line in run.events.read_text().splitlines()]
+    assert sum(e.get("phase") == Phase.PLAN_COLLECT for e in events) >= 20  # asked again and again
+    asked = position_requests(run)
+    holding_us, moving_us = US / HOLDING_TELEMETRY_HZ[GPI], US / MOVING_TELEMETRY_HZ[GPI]
+    end_s = next(e["t_s"] for e in events if e.get("phase") == Phase.ENDED)
+    # Slow once, fast again only when the loop ends (it leaves the aPad with the rates it found).
+    assert [(interval, t == end_s) for t, _, interval in asked[1:]] == [(holding_us, False), (moving_us, True)]
+    positions = [t for t, m in decoded(run.gcs_tlog)
+                 if m.get_type() == "GLOBAL_POSITION_INT" and m.get_srcSystem() == 1 and t > asked[1][0] + 5.0]
+    assert len(positions) >= 50
+    assert all(round(b - a, 6) == 1 / HOLDING_TELEMETRY_HZ[GPI] for a, b in pairwise(positions))

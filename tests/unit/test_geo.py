@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from pyproj import Transformer
 
-from mussel_sim.geo import LocalFrame
+from apad_sitl.geofence import KNOWN_FIXES, Geofence
+from gcs.mission.strategies.routing import metres_matrix
+from mussel_sim.geo import LocalFrame, distance_m, pair_distance_m
 
 
 def test_local_frame_matches_from_crs_bit_for_bit() -> None:
@@ -29,3 +32,32 @@ def test_local_frame_matches_from_crs_bit_for_bit() -> None:
         assert sx.shape == () and (float(sx), float(sy)) == (rx[0], ry[0])
         slat, slon = frame.to_geodetic(np.float64(x[1] * 1.5), float(y[1]))
         assert (float(slat), float(slon)) == (rlat[1], rlon[1])
+
+
+# --- remembered answers: the planner asks the same questions while it waits ---------------------
+
+def test_remembered_distances_and_matrices_are_the_geodesics_own() -> None:
+    rng = np.random.default_rng(7)
+    lat, lon = 43.93 + rng.random(9) * 0.01, 15.43 + rng.random(9) * 0.01
+    fresh = np.array([[float(distance_m(a, b, c, d)) for c, d in zip(lat, lon, strict=True)]
+                      for a, b in zip(lat, lon, strict=True)])
+    for _ in range(2):  # the first call computes, the second remembers: the same answer both times
+        metres = metres_matrix(lat.copy(), lon.copy())
+        assert np.array_equal(metres, fresh)
+        assert pair_distance_m(float(lat[0]), float(lon[0]), float(lat[1]), float(lon[1])) == fresh[0, 1]
+    with pytest.raises(ValueError):
+        metres[0, 1] = 0.0  # shared between callers: nobody may change it
+
+
+def test_a_geofence_remembers_its_answers_and_forgets_them_at_its_bound() -> None:
+    frame = LocalFrame(43.94, 15.44)
+    square = [frame.to_geodetic(x, y) for x, y in ((0.0, 0.0), (100.0, 0.0), (100.0, 100.0), (0.0, 100.0))]
+    fence = Geofence.of([(float(a), float(b)) for a, b in square], frame)
+    rng = np.random.default_rng(3)
+    points = [tuple(map(float, frame.to_geodetic(x, y))) for x, y in rng.uniform(-50.0, 150.0, (KNOWN_FIXES + 50, 2))]
+    for lat, lon in points:
+        x, y = frame.to_local(lat, lon)
+        want = 0.0 <= float(x) <= 100.0 and 0.0 <= float(y) <= 100.0
+        assert fence.contains_deg(lat, lon) == want
+        assert fence.contains_deg(lat, lon) == want  # asked again: remembered
+    assert 0 < fence.remembered <= KNOWN_FIXES  # bounded however long the mission

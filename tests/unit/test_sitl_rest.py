@@ -17,10 +17,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from apad_sitl import primitives as prim
+from apad_sitl.docking import MusselFixTable
 from apad_sitl.endpoint import SitlVehicle
+from apad_sitl.energy import EnergyMeter
+from apad_sitl.hull_step import step_hull
 from apad_sitl.params import ApadParams
 from apad_sitl.rest import Rest, at_rest
-from apad_sitl.vehicle import BATTERY_EMPTY_V, VehicleState, step
+from apad_sitl.state import ApadState
+from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V, VehicleState, step
 from mavlink_dialect import Codec, mavlink, memory_pair
 from missiontime import Scheduler, VirtualClock
 from mussel_sim.geo import LocalFrame
@@ -146,3 +150,40 @@ def test_a_command_or_a_battery_draw_ends_the_rest() -> None:
     v.run(10.0)
     assert any(m.get_type() == "COMMAND_ACK" and m.result == mavlink.MAV_RESULT_ACCEPTED for m in v.inbox)
     assert v.vehicle.apad.rest is None and v.vehicle.state.y_m > before.y_m + 1.0
+
+
+def _at_home(battery_v: float, charge_w: float) -> tuple[ApadState, EnergyMeter]:
+    apad = ApadState(replace(ApadParams(), home_charge_w=charge_w))
+    apad.state = VehicleState(x_m=0.5, y_m=-0.5, battery_v=battery_v)  # within the charger's 2 m, still
+    return apad, EnergyMeter(apad)
+
+
+@settings(max_examples=20, deadline=None)
+@given(below_full_v=st.floats(0.0, 0.05), charge_w=st.floats(60.0, 400.0), n=st.integers(1, 8_000))
+def test_a_hull_held_full_at_home_rests_and_counts_what_stepping_counts(below_full_v: float, charge_w: float,
+                                                                          n: int) -> None:
+    """At the home charger the hull charges (stepped) until the battery is held full, then rests: the
+    battery, the charging flag, home charges and home Wh stay exactly what plain stepping makes."""
+    rested, rested_meter = _at_home(BATTERY_FULL_V - below_full_v, charge_w)
+    stepped_, stepped_meter = _at_home(BATTERY_FULL_V - below_full_v, charge_w)
+    fixes = MusselFixTable(LocalFrame(*HOME))
+    for _ in range(n):
+        step_hull(rested, rested_meter, fixes, STILL, DT)
+        before = stepped_.state
+        stepped_.state = step(before, (0.0, 0.0), stepped_.params, STILL, DT)
+        stepped_meter.step(DT)
+    assert rested.state == stepped_.state
+    assert rested.energy == stepped_.energy  # home Wh to the last bit, the charging flag, home charges
+    params = rested.params
+    charge_vph = params.home_charge_w / params.batt_capacity_wh * (BATTERY_FULL_V - BATTERY_EMPTY_V)
+    net_vph = charge_vph - params.batt_drain_idle_vph
+    if n > 3600 / DT * below_full_v / net_vph + 10:  # charged up, and a step more
+        assert rested.rest is not None and rested.rest.refill_wh is not None, "held full at home: at rest"
+
+
+def test_a_hull_at_home_below_full_does_not_rest() -> None:
+    apad, meter = _at_home(BATTERY_FULL_V - 2.0, 150.0)
+    fixes = MusselFixTable(LocalFrame(*HOME))
+    for _ in range(100):
+        step_hull(apad, meter, fixes, STILL, DT)
+    assert apad.rest is None and meter.counters.charging  # still charging: every step changes the battery

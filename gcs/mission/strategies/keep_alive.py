@@ -15,6 +15,7 @@ sample an hour instead of monitoring all the time; `samples_taken` / `samples_sc
 from __future__ import annotations
 
 import itertools
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -78,27 +79,36 @@ def leg_s(inp: ScheduleInput) -> float:
     return leg_m / inp.outlook.speed_mps + inp.outlook.stop_s
 
 
-def round_s(inp: ScheduleInput) -> float:
-    """Mission seconds one round takes: fetching `slots` aMussels, charging them from PICKUP_FRAC, and
-    taking each back."""
-    return float(inp.outlook.charge_time_s(PICKUP_FRAC)) + 2 * inp.slots * leg_s(inp)
+@dataclass(frozen=True)
+class Queue:
+    """The aPad's queue over one schedule's aMussels: a fetch (`leg_s`) and a round (fetching `slots`
+    aMussels, charging them from PICKUP_FRAC and taking each back), in mission seconds. Made once per
+    schedule: the trial drains below change who is due when, never the legs."""
 
+    inp: ScheduleInput
+    leg_s: float
+    round_s: float
 
-def due_s(inp: ScheduleInput, drain_per_s: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """With these drains: each aMussel's time to depletion, and when the aPad would dock it if it takes
-    them least time to depletion first, `slots` a round, from `start_s`. Shapes (n,)."""
-    ttd = inp.battery_frac / drain_per_s
-    rank = np.empty(len(ttd), np.int64)
-    rank[np.argsort(ttd, kind="stable")] = np.arange(len(ttd))
-    slots = max(inp.slots, 1)
-    due = inp.start_s + (rank // slots).astype(np.float64) * round_s(inp) + (rank % slots + 1) * leg_s(inp)
-    return ttd, np.asarray(due, np.float64)
+    @staticmethod
+    def of(inp: ScheduleInput) -> Queue:
+        leg = leg_s(inp)
+        return Queue(inp, leg, float(inp.outlook.charge_time_s(PICKUP_FRAC)) + 2 * inp.slots * leg)
 
+    def due_s(self, drain_per_s: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """With these drains: each aMussel's time to depletion, and when the aPad would dock it if it
+        takes them least time to depletion first, `slots` a round, from `start_s`. Shapes (n,)."""
+        inp = self.inp
+        ttd = inp.battery_frac / drain_per_s
+        rank = np.empty(len(ttd), np.int64)
+        rank[np.argsort(ttd, kind="stable")] = np.arange(len(ttd))
+        slots = max(inp.slots, 1)
+        due = inp.start_s + (rank // slots).astype(np.float64) * self.round_s + (rank % slots + 1) * self.leg_s
+        return ttd, np.asarray(due, np.float64)
 
-def _doomed(inp: ScheduleInput, drain: NDArray[np.float64], awake: NDArray[np.bool_]) -> NDArray[np.bool_]:
-    """Awake aMussels that would empty before their round (or the end) comes."""
-    ttd, due = due_s(inp, drain)
-    return awake & (ttd < np.minimum(due, inp.outlook.time_left_s) + MARGIN_S)
+    def doomed(self, drain: NDArray[np.float64], awake: NDArray[np.bool_]) -> NDArray[np.bool_]:
+        """Awake aMussels that would empty before their round (or the end) comes."""
+        ttd, due = self.due_s(drain)
+        return awake & (ttd < np.minimum(due, self.inp.outlook.time_left_s) + MARGIN_S)
 
 
 @sleep_scheduler(CollectStrategy.KEEP_ALIVE)
@@ -107,10 +117,11 @@ def keep_alive_schedule(inp: ScheduleInput) -> dict[int, bool]:
     first, wake each sleeper holding WAKE_FRAC if nobody awake would be doomed by it."""
     asleep_drain = duty_cycle_rate_per_min(  # the fleet's model of the sleep order
         SLEEP_INTERVAL_S, SLEEP_AWAKE_S) * sim_minutes(inp.outlook.theta, 1.0)
+    queue = Queue.of(inp)
     awake = inp.orderable & ~inp.asleep
     drain = np.asarray(inp.drain_per_s, np.float64).copy()
     for _ in range(len(drain)):  # each pass sends at least one more to sleep, or stops
-        doomed = _doomed(inp, drain, awake)
+        doomed = queue.doomed(drain, awake)
         if not doomed.any():
             break
         awake &= ~doomed
@@ -120,7 +131,7 @@ def keep_alive_schedule(inp: ScheduleInput) -> dict[int, bool]:
             continue
         trial_awake, trial_drain = awake.copy(), drain.copy()
         trial_awake[k], trial_drain[k] = True, inp.awake_drain_per_s[k]
-        if not _doomed(inp, trial_drain, trial_awake).any():
+        if not queue.doomed(trial_drain, trial_awake).any():
             awake, drain = trial_awake, trial_drain
     was_awake = inp.orderable & ~inp.asleep
     changed = inp.orderable & (awake != was_awake)

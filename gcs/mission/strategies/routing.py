@@ -11,6 +11,8 @@ exact in tens of milliseconds.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -23,9 +25,20 @@ WORK_LIMIT = 5.0
 
 
 def metres_matrix(lat_deg: NDArray[np.float64], lon_deg: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Geodesic metres between every pair of points. Shape (n, n)."""
-    i, j = np.meshgrid(np.arange(len(lat_deg)), np.arange(len(lat_deg)), indexing="ij")
-    return distance_m(lat_deg[i].ravel(), lon_deg[i].ravel(), lat_deg[j].ravel(), lon_deg[j].ravel()).reshape(i.shape)
+    """Geodesic metres between every pair of points. Shape (n, n); read-only. Remembered for the last
+    point sets: a waiting aPad's strategy asks again for the same fixes every few seconds, and the
+    geodesic's n^2 pairs are most of what a plan costs then."""
+    return _metres_of(np.ascontiguousarray(lat_deg, np.float64).tobytes(),
+                      np.ascontiguousarray(lon_deg, np.float64).tobytes())
+
+
+@functools.lru_cache(maxsize=64)  # each aPad's share and routes; thread-safe (a sweep's worker threads)
+def _metres_of(lat_bytes: bytes, lon_bytes: bytes) -> NDArray[np.float64]:
+    lat, lon = np.frombuffer(lat_bytes, np.float64), np.frombuffer(lon_bytes, np.float64)
+    i, j = np.meshgrid(np.arange(len(lat)), np.arange(len(lat)), indexing="ij")
+    metres = distance_m(lat[i].ravel(), lon[i].ravel(), lat[j].ravel(), lon[j].ravel()).reshape(i.shape)
+    metres.flags.writeable = False
+    return metres
 
 
 def best_route(start: tuple[float, float], lat_deg: NDArray[np.float64], lon_deg: NDArray[np.float64],
