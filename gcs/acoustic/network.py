@@ -25,7 +25,7 @@ from acoustic.nanomodem.ports import BytePort, pipe
 from acoustic.nanomodem.sea import Sea
 from acoustic.params import AcousticParams
 from acoustic.tdma import TdmaFrame, tdma_frame
-from gcs.acoustic.knowledge import KnowledgeLedger, age_s, believed_battery
+from gcs.acoustic.knowledge import KnowledgeLedger, age_s
 from gcs.acoustic.uplink import AcousticUplink
 from gcs.link.registry import VehicleRegistry
 from gcs.records.events import EventLog
@@ -41,12 +41,12 @@ CHANNEL_SEED = 21  # the channel's draws, apart from the fleet's and the placeme
 
 class AcousticNetwork:
     def __init__(self, emulator: Attached | None, modems: MusselModems, uplink: AcousticUplink, ledger: KnowledgeLedger,
-                 registry: VehicleRegistry, fleet: FleetRunner, default_drain_per_s: float) -> None:
+                 registry: VehicleRegistry, fleet: FleetRunner) -> None:
         self.emulator, self.modems, self.uplink, self.ledger = emulator, modems, uplink, ledger
         self.registry, self.fleet = registry, fleet
-        # How the planner believes an aMussel's battery (its loop sets it: its own drains, sleep orders included).
+        # How the planner believes an aMussel's battery (its loop sets it: its own drains, sleep orders
+        # included). None: no loop plans yet, so there is no belief to sample.
         self.belief: Callable[[int], float] | None = None
-        self._default_drain_per_s = default_drain_per_s
         self._task: Task | None = None
 
     @property
@@ -56,7 +56,7 @@ class AcousticNetwork:
     @classmethod
     def build(cls, clock: Clock, fleet: FleetRunner, registry: VehicleRegistry, events: EventLog,
               params: AcousticParams, home_deg: tuple[float, float], apad_ids: list[int], seed: int,
-              drain_per_s: float, area_range_m: float, unit: tuple[BytePort, Sea] | None = None) -> AcousticNetwork:
+              area_range_m: float, unit: tuple[BytePort, Sea] | None = None) -> AcousticNetwork:
         """The network on `clock`, from mission time now: the GCS's unit at the first aPad's home
         (`home_deg`, latitude and longitude), a slot for each aMussel and aPad (`apad_ids`), the channel's
         draws from `seed`; `drain_per_s`, the drain believed of an aMussel before its loop says
@@ -84,7 +84,7 @@ class AcousticNetwork:
         modems.register(clock.scheduler, clock.now_us)
         uplink = AcousticUplink(ModemDriver(port, clock, params.sound_speed_mps), registry, clock, events, tdma)
         uplink.register(clock.scheduler)
-        network = cls(emulator, modems, uplink, KnowledgeLedger(fleet.state.ids), registry, fleet, drain_per_s)
+        network = cls(emulator, modems, uplink, KnowledgeLedger(fleet.state.ids), registry, fleet)
         network._task = clock.scheduler.every(SAMPLE_S, network.sample, "acoustic-knowledge", clock.now_us)
         return network
 
@@ -96,19 +96,18 @@ class AcousticNetwork:
             close()
 
     def sample(self, now_us: int) -> None:
-        """Belief against truth now, for every aMussel of the fleet."""
+        """Belief against truth now, for every aMussel of the fleet; nothing before a loop plans (a
+        restored mission's first instants: the loop that knows its sleep orders is not built yet)."""
+        belief_of = self.belief
+        if belief_of is None:
+            return
         s = self.fleet.state
         ids = s.ids.tolist()
         table = self.registry.mussels
         known = np.array([m in table for m in ids], dtype=bool)
-        belief = np.array([self._believed(m, now_us) if k else 0.0 for m, k in zip(ids, known, strict=True)])
+        belief = np.array([belief_of(m) if k else 0.0 for m, k in zip(ids, known, strict=True)])
         age = np.array([age_s(table[m], now_us) if k else 0.0 for m, k in zip(ids, known, strict=True)])
         self.ledger.sample(known, belief, s.battery_frac, age)
-
-    def _believed(self, mussel_id: int, now_us: int) -> float:
-        if self.belief is not None:
-            return self.belief(mussel_id)
-        return believed_battery(self.registry.mussels[mussel_id], now_us, self._default_drain_per_s)
 
     def summary(self) -> dict[str, object]:
         channel = {} if self.emulator is None else dict(self.emulator.core.medium.counts)  # else: in `vil modem`

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import TYPE_CHECKING
 
+from gcs.mission.duty import OrdersSent
 from gcs.mission.energy_budget import EnergyBudget
 from gcs.mission.scenario import MissionConfig
 from gcs.records.events import EventLog
@@ -72,6 +73,7 @@ class LoopStatus:
     apad_time_us: dict[str, int] = field(default_factory=dict)
     strategy_failures: int = 0  # planning steps the strategy failed (cautious planned them instead)
     home_charges: int = 0  # times the aPad went home and charged (gcs.mission.home_charge)
+    orders: OrdersSent = field(default_factory=OrdersSent)  # the sleep orders sent (FleetKnowledge plans on them)
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ aMussel's own drain and the mission time it can next hear a call-up (`mussel_sim
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from gcs.mission.scenario import Scenario
 from gcs.mission.scenario_models import fleet_params
@@ -52,6 +52,17 @@ class Duty:
     def longest_wait_s(self, theta: float) -> float:
         """The longest a call-up may wait for its wake, mission seconds (0: always on)."""
         return self.interval_s / theta
+
+
+@dataclass
+class OrdersSent:
+    """What one loop's sleep orders changed: each ordered aMussel's duty since (over its scenario
+    profile), and for one heard only now and then (acoustically, or a real aMussel) the mission time and
+    the battery believed when its duty changed, from which its run-down goes on. Part of the loop's
+    status, so a checkpoint keeps it and a restored mission plans on the orders sent before the crash."""
+
+    duties: dict[int, Duty] = field(default_factory=dict)
+    changed: dict[int, tuple[int, float]] = field(default_factory=dict)
 
 
 def scenario_duties(scenario: Scenario, ids: list[int]) -> dict[int, Duty]:

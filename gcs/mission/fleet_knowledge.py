@@ -17,7 +17,7 @@ from gcs.acoustic.knowledge import age_s, believed_battery
 from gcs.api import ApadApi, Location
 from gcs.link.telemetry import SlotView
 from gcs.mission.control import LoopLog, LoopSettings
-from gcs.mission.duty import Duty
+from gcs.mission.duty import Duty, OrdersSent
 from gcs.mission.real_fleet import MAX_REPORT_AGE_S, RealFleet
 from gcs.mission.strategies import Outlook, traits
 from gcs.mission.swarm import FleetShares, orphans
@@ -59,12 +59,13 @@ class FleetKnowledge:
     def __init__(
         self, api: ApadApi, clock: Clock, settings: LoopSettings, homes: dict[int, Location], apad_id: int,
         log: LoopLog, shares: FleetShares | None = None, real: RealFleet | None = None,
-        acoustic: AcousticNetwork | None = None,
+        acoustic: AcousticNetwork | None = None, orders: OrdersSent | None = None,
     ) -> None:
         """`homes`: where each aMussel goes back to (filled in for real ones as they are first heard);
         `shares`: with several aPads, the one record of who serves which aMussel; `real`: estimates of
         real aMussels between their sparse reports; `acoustic`: the acoustic network, through which
-        submerged aMussels are heard (in their TDMA slots) and called up."""
+        submerged aMussels are heard (in their TDMA slots) and called up; `orders`: the sleep orders
+        sent so far (the loop's status keeps them; a restored mission's come from its checkpoint)."""
         self.api = api
         self.clock = clock
         self.settings = settings
@@ -74,10 +75,7 @@ class FleetKnowledge:
         self.real = real
         self.acoustic = acoustic
         self.unreachable: set[int] = set()
-        self.duties: dict[int, Duty] = dict(settings.duties)  # each aMussel's, and the sleep orders sent since
-        # Heard now and then (acoustically, or a real aMussel): the battery believed when its duty last
-        # changed, and when (`believed_battery`, `RealFleet.estimate`)
-        self._duty_changed: dict[int, tuple[int, float]] = {}
+        self.orders = orders if orders is not None else OrdersSent()
         self._default_duty = Duty(discharge_profile(settings.mussel_discharge).rate_per_min)
         self._log = log
 
@@ -95,7 +93,7 @@ class FleetKnowledge:
                    if self.battery(m) < threshold and self.heard_alive(m)]
         if self.real is not None:  # a real one's last report may be old: its estimate decides
             real = set(self.real.ids())
-            below = self.real.below(threshold, self.clock.now_us, self.drain_per_min, self._duty_changed.get)
+            below = self.real.below(threshold, self.clock.now_us, self.drain_per_min, self.orders.changed.get)
             ids = sorted({m for m in ids if m not in real} | set(below))
         out = []
         for m in ids:
@@ -183,7 +181,8 @@ class FleetKnowledge:
 
     def duty(self, mussel_id: int) -> Duty:
         """What it does deployed, as known: its scenario profile or the last sleep order sent to it."""
-        return self.duties.get(mussel_id, self._default_duty)
+        ordered = self.orders.duties.get(mussel_id)
+        return ordered if ordered is not None else self.profile_duty(mussel_id)
 
     def profile_duty(self, mussel_id: int) -> Duty:
         """What its scenario profile makes it do, whatever was ordered since (a real aMussel, not in the
@@ -196,8 +195,8 @@ class FleetKnowledge:
         heard_now_and_then = mussel_id in self.api.mussels and (
             self.acoustic is not None if self.api.mussels[mussel_id].simulated else self.real is not None)
         if heard_now_and_then:
-            self._duty_changed[mussel_id] = (self.clock.now_us, self.battery(mussel_id))
-        self.duties[mussel_id] = duty
+            self.orders.changed[mussel_id] = (self.clock.now_us, self.battery(mussel_id))
+        self.orders.duties[mussel_id] = duty
 
     def drain_per_s(self, mussel_id: int) -> float:
         return self.duty(mussel_id).drain_per_s(self.settings.mission.theta)
@@ -241,11 +240,11 @@ class FleetKnowledge:
         if self.acoustic is not None and view.simulated:
             released = view.state == MusselState.DOCKED and mussel_id not in self.docked().values()
             return believed_battery(view, self.clock.now_us, self.drain_per_s(mussel_id), released,
-                                    self._duty_changed.get(mussel_id))
+                                    self.orders.changed.get(mussel_id))
         if self.real is not None and not view.simulated and mussel_id in self.real.heard_us:
             on_slot = mussel_id in self.docked().values()
             return self.real.estimate(mussel_id, self.clock.now_us, on_slot, self.drain_per_min(mussel_id),
-                                      self._duty_changed.get(mussel_id)).battery_frac
+                                      self.orders.changed.get(mussel_id)).battery_frac
         return view.battery_frac
 
     def distance_to(self, mussel_id: int) -> float:

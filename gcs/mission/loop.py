@@ -55,7 +55,8 @@ class EnergySharingLoop:
         self.control = control or LoopControl()
         self.status = status or LoopStatus(strategy=settings.mission.collect_strategy)
         log = LoopLog(events or EventLog(), clock, apad_id if shares is not None else None)
-        self.knows = FleetKnowledge(api, clock, settings, homes, apad_id, log, shares, real, acoustic)
+        self.knows = FleetKnowledge(api, clock, settings, homes, apad_id, log, shares, real, acoustic,
+                                    self.status.orders)
         self.act = ApadActions(self.knows, self.control, self.status, log)
         self.crew = Crew(self.knows, self.act, self.status, self.control, log)
 

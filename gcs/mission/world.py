@@ -44,7 +44,7 @@ from gcs.records.run_folder import RunFolder
 from mavlink_dialect import Codec, Transport, mavlink, memory_pair, open_transport, signing
 from mavlink_dialect.transport import UdpTransport
 from missiontime import Clock, VirtualClock, seconds_to_us
-from mussel_sim.battery import charge_profile, discharge_profile, sim_minutes
+from mussel_sim.battery import charge_profile, discharge_profile
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner
 from mussel_sim.day_ledger import day_us
 from mussel_sim.fleet_state import initial_state
@@ -249,10 +249,9 @@ def build_world(
     world.mute_logs(muted_logs)
     if scenario.acoustic.enabled:
         home = scenario.apads[0]
-        drain = planning_profile(scenario).discharge.rate_per_min * sim_minutes(scenario.mission.theta, 1.0)
         world.acoustic = AcousticNetwork.build(
             clock, fleet, link.registry, events, scenario.acoustic, (home.home_lat_deg, home.home_lon_deg),
-            [a.system_id for a in scenario.apads], scenario.seed, drain, area_range_m(scenario),
+            [a.system_id for a in scenario.apads], scenario.seed, area_range_m(scenario),
             serial_unit(options, clock))
     world.real = RealFleet(link.registry.mussels, link.registry.mussel_heard_us,
                            discharge_profile(scenario.fleet.discharge), charge_profile(scenario.fleet.charge),

@@ -25,6 +25,7 @@ from gcs.mission.scenario import Scenario, load_scenario
 from gcs.records import checkpoint
 from gcs.records.replay import read_events, read_tlog
 from gcs.records.report import write_report
+from gcs.records.run_folder import RunFolder
 from mavlink_dialect import mavlink
 from mussel_sim.comms import SURFACE_DEPTH_M
 
@@ -181,3 +182,33 @@ def test_an_acoustic_mission_restored_from_a_checkpoint_hears_on_and_loses_nothi
     k = a["knowledge"]
     assert k["samples"] == pytest.approx(resumed_s / 10, abs=2)
     assert k["age_max_s"] < 2 * scenario_frame(scenario).frame_s and k["battery_error_max"] < 0.01
+
+
+def test_a_restored_mission_plans_on_the_sleep_orders_sent_before_the_crash(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # keep_alive puts four aMussels to sleep at 439 s (seed 1). Restored at 600 s, the loop must know
+    # them asleep: believed run down at the sleep order's drain from where it was believed when the
+    # order went (not the always-on profile's, 14x faster), and not ordered to sleep a second time.
+    scenario = POOL.with_overrides(strategy="keep_alive")  # the 40 minutes: a shorter mission orders fewer
+    whole, crashed = tmp_path / "whole", tmp_path / "crashed"
+    run_copied_at_a_checkpoint(scenario, whole, crashed, 600.0, monkeypatch)
+    saved = checkpoint.CheckpointFiles(RunFolder(crashed).checkpoint).read()
+    asleep = {m for m, duty in saved.loop_statuses[1].orders.duties.items() if duty.asleep}
+    assert len(asleep) >= 2 and set(saved.loop_statuses[1].orders.changed) >= asleep
+    session = restored_session(scenario, crashed)
+    try:
+        assert session.start()
+        session.run()
+        result = session.result(0.0)
+        session.finish()
+    finally:
+        session.close()
+        session.world.close()
+    assert result.end_reason == "mission time" and result.misplaced == []
+    assert result.acoustic["knowledge"]["battery_error_max"] < 0.01
+    orders = [e.fields for e in read_events(RunFolder(crashed).events) if e.kind == "sleep_order"]
+    assert len(orders) > len(asleep)  # some after the restore too
+    last: dict[int, float] = {}
+    for order in orders:  # before the crash and after the restore: never the same order twice in a row
+        assert last.get(order["mussel"]) != order["interval_s"], order
+        last[order["mussel"]] = order["interval_s"]
