@@ -36,12 +36,14 @@ class Cost:
     wall_s: float
     cpu_s: float
     end_reason: str
+    uptime: dict[str, float]  # avg / min %: what the day did, to set beside the runs before a change
 
     @property
     def line(self) -> str:
         hours = self.mission_s / 3600.0
         return (f"  {self.name:13s} {hours:5.2f} h mission: {self.wall_s:8.2f} s wall, {self.cpu_s:8.2f} s CPU, "
-                f"RTF {self.mission_s / self.wall_s:7,.0f}; ended on {self.end_reason!r}")
+                f"RTF {self.mission_s / self.wall_s:7,.0f}; ended on {self.end_reason!r}; "
+                f"uptime {self.uptime['avg']:.2f} / {self.uptime['min']:.2f} %")
 
 
 def cost(name: str, mission_s: float, folder: bool) -> Cost:
@@ -51,7 +53,7 @@ def cost(name: str, mission_s: float, folder: bool) -> Cost:
         wall, cpu = time.perf_counter(), time.process_time()
         result = run_mission(scenario, Path(tmp) / "run" if folder else None)
         wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
-    return Cost(name, mission_s, wall, cpu, result.end_reason)
+    return Cost(name, mission_s, wall, cpu, result.end_reason, dict(result.uptime))
 
 
 def ratio(long: Cost, short: Cost, bound: float) -> str:
