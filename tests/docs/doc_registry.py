@@ -123,7 +123,7 @@ REGISTRY: dict[str, Entry] = {
     tls.MAKE_BENCH: Entry("tools", tls.run_make_bench, ci="make -n -o .venv/.installed bench",
                           full="make -o .venv/.installed bench",
                           why="every benchmark at full size takes minutes: the dry run shows what runs, and each "
-                              "of the six below runs on its own; " + DEV_MAKE),
+                              "of the seven below runs on its own; " + DEV_MAKE),
     tls.THROUGHPUT: Entry("tools", tls.run_throughput, ci=tls.THROUGHPUT + " --count 2000",
                           why="50,000 messages per figure take 10 s; 2,000 print the same tables"),
     tls.FLEET_STEP: Entry("tools", tls.run_fleet_step),
@@ -135,6 +135,9 @@ REGISTRY: dict[str, Entry] = {
                          long_only="6 s of CPU, and no flag makes it smaller; drawing the console is tests/tui's"),
     tls.LONG_MISSION: Entry("tools", tls.run_long_mission, ci=tls.LONG_MISSION + " --short 1 --long 6",
                             why="a 4-hour mission is 20 s of CPU: 6 minutes against 1, the same ratio of 6"),
+    tls.MISSION_COST: Entry("tools", tls.run_mission_cost, ci=tls.MISSION_COST + " --only pool12 --day-h 1",
+                            why="three days of missions are twenty minutes of CPU: pool12's hour against its 40 "
+                                "minutes prints the same lines"),
     tls.STARTUP: Entry("tools", tls.run_startup, ci=tls.STARTUP + " --repeat 1",
                        why="best of 5 fresh processes each; one shows the same rows"),
     # README: A scenario of your own

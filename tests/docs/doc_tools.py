@@ -21,6 +21,7 @@ FLEET_STEP = ".venv/bin/python bench/fleet_step.py"
 SCENARIO_SPEED = ".venv/bin/python bench/scenario_speed.py"
 TUI_FRAME = ".venv/bin/python bench/tui_frame.py"
 LONG_MISSION = ".venv/bin/python bench/long_mission.py"
+MISSION_COST = ".venv/bin/python bench/mission_cost.py"
 STARTUP = ".venv/bin/python bench/startup.py"
 REPORT_LATEST = "vil report runs/latest"
 REPORT_AB = "vil report runs/A runs/B -o compare/"
@@ -70,12 +71,13 @@ def run_make_test(w: Work) -> None:
 
 
 def run_make_bench(w: Work) -> None:
-    """`make bench` runs every bench/*.py (the README's six among them); full: they all succeed."""
+    """`make bench` runs every bench/*.py (the README's seven among them); full: they all succeed."""
     first_use(w, "bench")
     done = w.sh(w.line(MAKE_BENCH), timeout_s=3600)
     if not w.full:
         assert "for b in bench/*.py; do .venv/bin/python $b || exit 1; done" in done.stdout, done.stdout
-    listed = {line.split()[-1] for line in (THROUGHPUT, FLEET_STEP, SCENARIO_SPEED, TUI_FRAME, LONG_MISSION, STARTUP)}
+    listed = {line.split()[-1]
+              for line in (THROUGHPUT, FLEET_STEP, SCENARIO_SPEED, TUI_FRAME, LONG_MISSION, MISSION_COST, STARTUP)}
     assert listed <= {f"bench/{p.name}" for p in (ROOT / "bench").glob("*.py")}
 
 
@@ -131,6 +133,15 @@ def run_long_mission(w: Work) -> None:
     out = bench(w, LONG_MISSION)
     short, long = ("40", "240") if w.full else re.findall(r"--short (\d+) --long (\d+)", w.line(LONG_MISSION))[0]
     assert f"{short} min mission:" in out and f"{long} min mission:" in out, out
+
+
+def run_mission_cost(w: Work) -> None:
+    """a day's wall time against 40 minutes' (CI: pool12, an hour against 40 minutes)."""
+    out = bench(w, MISSION_COST, "Cost against mission time", "Ratios")
+    day_h = re.findall(r"--day-h (\S+)", w.line(MISSION_COST))
+    hours = float(day_h[0]) if day_h else 24.0
+    assert f"{hours:5.2f} h mission:" in out and "ended on 'mission time'" in out, out
+    assert re.search(rf"pool12 {hours:g} h / pool12 40 min: wall +[\d.]+x", out), out
 
 
 def run_startup(w: Work) -> None:
