@@ -13,6 +13,10 @@ The model (assumptions; the numbers are `ApadParams`, docs/long_term.md says why
   of its slots, so the energy passed is the aMussel model's, whatever its time scale (theta).
 - At home (within `home_radius_m` of its home, slower than HOME_STILL_MPS) the jack charges the
   battery at `home_charge_w` until full; BATTERY_STATUS says CHARGING meanwhile.
+- A slot's inductive link passes at most LINK_MAX_W: a report claiming more gain than that over the
+  mission time since the aMussel's last report is believed only up to it. The aMussels' own reports
+  stay far below (the shipped scenarios' charging, theta-scaled, passes 39 W at its fastest);
+  a hostile burst of made-up reports cannot empty the battery in an instant.
 
 Pure bookkeeping over the aPad's state: the core feeds it the statuses it hears and calls `step`
 with each physics step's `dt_s`.
@@ -21,7 +25,7 @@ with each physics step's `dt_s`.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import replace
 
 from apad_sitl.energy_counters import EnergyCounters
@@ -30,15 +34,18 @@ from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V
 from apad_sitl.vocabulary import Latch
 
 HOME_STILL_MPS = 0.05  # slower than this over ground: the hull can be plugged in
+LINK_MAX_W = 500.0  # what one slot's inductive link can pass, at most (a bound on what reports may claim)
 VOLT_RANGE = BATTERY_FULL_V - BATTERY_EMPTY_V
 
 
 class EnergyMeter:
     """The aPad's energy part: aMussels' gains drawn from its battery, and home charging."""
 
-    def __init__(self, apad: ApadState) -> None:
+    def __init__(self, apad: ApadState, now_us: Callable[[], int]) -> None:
+        """`now_us`: the vehicle's mission time (how much a link could pass since a report)."""
         self.apad = apad
-        self._last: dict[int, float] = {}  # latched aMussel -> its battery when last heard
+        self._now_us = now_us
+        self._last: dict[int, tuple[float, int]] = {}  # latched aMussel -> its battery when last heard, and when
         self._source: dict[int, int] = {}  # latched aMussel -> the system that reports it (the first heard)
 
     @property
@@ -60,7 +67,7 @@ class EnergyMeter:
             self._source.pop(mussel_id, None)
         if not latched:
             return
-        p = self.apad.params
+        p, now_us = self.apad.params, self._now_us()
         drawn = 0.0
         for mussel_id, battery, source in reports:
             if mussel_id not in latched or not math.isfinite(battery):
@@ -68,9 +75,10 @@ class EnergyMeter:
             if self._source.setdefault(mussel_id, source) != source:
                 continue
             before = self._last.get(mussel_id)
-            self._last[mussel_id] = battery
-            if before is not None and battery > before:
-                gained_wh = (battery - before) * p.mussel_battery_wh
+            self._last[mussel_id] = (battery, now_us)
+            if before is not None and battery > before[0]:
+                link_wh = LINK_MAX_W * max(now_us - before[1], 0) / 3.6e9  # what the link could pass since
+                gained_wh = min((battery - before[0]) * p.mussel_battery_wh, link_wh)
                 self.apad.energy.passed_wh += gained_wh
                 drawn += gained_wh / p.charge_efficiency
         if drawn:
