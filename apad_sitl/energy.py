@@ -13,10 +13,9 @@ The model (assumptions; the numbers are `ApadParams`, docs/long_term.md says why
   of its slots, so the energy passed is the aMussel model's, whatever its time scale (theta).
 - At home (within `home_radius_m` of its home, slower than HOME_STILL_MPS) the jack charges the
   battery at `home_charge_w` until full; BATTERY_STATUS says CHARGING meanwhile.
-- A slot's inductive link passes at most LINK_MAX_W: a report claiming more gain than that over the
-  mission time since the aMussel's last report is believed only up to it. The aMussels' own reports
-  stay far below (the shipped scenarios' charging, theta-scaled, passes 39 W at its fastest);
-  a hostile burst of made-up reports cannot empty the battery in an instant.
+- A latched aMussel's gain is what it reports above the most it reported since it latched (a
+  high-water mark): charging only ever rises, so its own reports pass exactly their rises, and a
+  hostile run of made-up reports swinging between empty and full passes at most one battery a latch.
 
 Pure bookkeeping over the aPad's state: the core feeds it the statuses it hears and calls `step`
 with each physics step's `dt_s`.
@@ -25,7 +24,7 @@ with each physics step's `dt_s`.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from dataclasses import replace
 
 from apad_sitl.energy_counters import EnergyCounters
@@ -34,18 +33,15 @@ from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V
 from apad_sitl.vocabulary import Latch
 
 HOME_STILL_MPS = 0.05  # slower than this over ground: the hull can be plugged in
-LINK_MAX_W = 500.0  # what one slot's inductive link can pass, at most (a bound on what reports may claim)
 VOLT_RANGE = BATTERY_FULL_V - BATTERY_EMPTY_V
 
 
 class EnergyMeter:
     """The aPad's energy part: aMussels' gains drawn from its battery, and home charging."""
 
-    def __init__(self, apad: ApadState, now_us: Callable[[], int]) -> None:
-        """`now_us`: the vehicle's mission time (how much a link could pass since a report)."""
+    def __init__(self, apad: ApadState) -> None:
         self.apad = apad
-        self._now_us = now_us
-        self._last: dict[int, tuple[float, int]] = {}  # latched aMussel -> its battery when last heard, and when
+        self._high: dict[int, float] = {}  # latched aMussel -> the most it reported since it latched
         self._source: dict[int, int] = {}  # latched aMussel -> the system that reports it (the first heard)
 
     @property
@@ -55,30 +51,30 @@ class EnergyMeter:
     @property
     def listening(self) -> bool:
         """Whether an aMussel is latched here (a batch of statuses is only read for it then)."""
-        return bool(self._latched() or self._last)
+        return bool(self._latched() or self._high)
 
     def heard(self, reports: Iterable[tuple[int, float, int]]) -> None:
-        """(aMussel id, battery 0..1, sending system) as heard: a rise of one latched here is drawn
-        from the battery. Only the system that first reported it since it latched is believed: a
-        stranger's status claiming a jump would otherwise drain the battery (a spoof)."""
+        """(aMussel id, battery 0..1, sending system) as heard: a rise of one latched here above the
+        most it reported since it latched is drawn from the battery. Only the system that first
+        reported it since it latched is believed, and only its new highs: a stranger's reports
+        swinging between empty and full would otherwise drain the battery (a spoof)."""
         latched = self._latched()
-        for mussel_id in [m for m in self._last if m not in latched]:
-            del self._last[mussel_id]  # released: its next docking starts afresh
+        for mussel_id in [m for m in self._high if m not in latched]:
+            del self._high[mussel_id]  # released: its next docking starts afresh
             self._source.pop(mussel_id, None)
         if not latched:
             return
-        p, now_us = self.apad.params, self._now_us()
+        p = self.apad.params
         drawn = 0.0
         for mussel_id, battery, source in reports:
             if mussel_id not in latched or not math.isfinite(battery):
                 continue
             if self._source.setdefault(mussel_id, source) != source:
                 continue
-            before = self._last.get(mussel_id)
-            self._last[mussel_id] = (battery, now_us)
-            if before is not None and battery > before[0]:
-                link_wh = LINK_MAX_W * max(now_us - before[1], 0) / 3.6e9  # what the link could pass since
-                gained_wh = min((battery - before[0]) * p.mussel_battery_wh, link_wh)
+            high = self._high.get(mussel_id)
+            self._high[mussel_id] = battery if high is None else max(high, battery)
+            if high is not None and battery > high:
+                gained_wh = (battery - high) * p.mussel_battery_wh
                 self.apad.energy.passed_wh += gained_wh
                 drawn += gained_wh / p.charge_efficiency
         if drawn:

@@ -59,9 +59,9 @@ class AcousticNetwork:
               area_range_m: float, unit: tuple[BytePort, Sea] | None = None) -> AcousticNetwork:
         """The network on `clock`, from mission time now: the GCS's unit at the first aPad's home
         (`home_deg`, latitude and longitude), a slot for each aMussel and aPad (`apad_ids`), the channel's
-        draws from `seed`; `drain_per_s`, the drain believed of an aMussel before its loop says
-        (`belief`). `unit`: the GCS's modem on a serial port and the sea its remote units are on
-        (`vil gcs --modem --sea`); None: both emulated in-process (lockstep)."""
+        draws from `seed`; belief against truth is sampled once a loop gives its `belief`. `unit`: the
+        GCS's modem on a serial port and the sea its remote units are on (`vil gcs --modem --sea`);
+        None: both emulated in-process (lockstep)."""
         ids = [int(m) for m in fleet.state.ids]  # sorted: the medium's nodes follow the fleet's rows
         if ids and (ids[0] <= GCS_ADDRESS or ids[-1] > MAX_ADDRESS):
             raise ValueError(f"acoustic scenarios need aMussel ids 1..{MAX_ADDRESS} (the nanomodem's addresses)")

@@ -44,6 +44,10 @@ HOLDING_PHASES = frozenset({Phase.IDLE_WAIT, Phase.CHARGING_WAIT})
 # nobody leaves the aPad holding; the phase that acts on a plan asks for fast telemetry itself.
 PLANNING_PHASES = frozenset({Phase.PLAN_COLLECT, Phase.PLAN_REDEPLOY})
 PACE_RETRIES = 1  # one resend (1 s, then 1.5 s): a silent link costs the loop at most 2.5 s per message
+# A wait in a phase that acts (above a called-up aMussel) is paced slow only if it is expected to last
+# longer than this: two rounds of requests (slow, then fast again) are not worth a short wait, and on a
+# lossy link each may cost the loop seconds (PACE_RETRIES).
+PACE_WORTH_S = 60.0
 
 
 class TelemetryPace:

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from testkit import scenario_variant
 
 from gcs.link.telemetry import GCS_SYSTEM_ID
 from gcs.mission.control import Phase
@@ -60,24 +61,42 @@ def test_the_gcs_asks_slow_while_holding_and_fast_while_moving(pool12_run: RunFo
     assert intervals[0] == moving_us and holding_us in intervals and intervals.count(moving_us) >= 2
     assert all(a != b for a, b in pairwise(intervals[1:]))
 
-    # Slow asked only in a holding phase of the loop or above an aMussel called up (collect, between
-    # its call-up and the next move), fast only in a phase that acts, never while planning.
+    # Slow asked only in a holding phase of the loop, fast only in one that acts, never while planning:
+    # pool12's aMussels are always on, so the wait above one (its 20-s rise) is not worth pacing.
     events = [json.loads(line) for line in pool12_run.events.read_text().splitlines()]
     phases = [(e["t_s"], e["phase"]) for e in events if e.get("event") == "phase"]
-    call_ups = [e["t_s"] for e in events if e.get("event") == "call_up"]
     assert any(p in HOLDING_PHASES for _, p in phases) and any(p not in HOLDING_PHASES for _, p in phases)
-    slow_above_one = 0
     for t_asked, _, interval in asked[1:]:
-        since, phase = [(t, p) for t, p in phases if t <= round(t_asked, 3)][-1]
+        phase = [p for t, p in phases if t <= round(t_asked, 3)][-1]
         assert phase not in PLANNING_PHASES, (t_asked, phase)
-        if interval == moving_us:
-            assert phase not in HOLDING_PHASES, (t_asked, phase)
-        else:
-            assert interval == holding_us
-            called_up = phase == Phase.COLLECT and any(since <= t <= round(t_asked, 3) for t in call_ups)
-            assert phase in HOLDING_PHASES or called_up, (t_asked, phase)
-            slow_above_one += called_up
-    assert slow_above_one >= 3  # pool12's aMussels rise for 20 s each: the aPad waits above them slowly
+        assert interval == (holding_us if phase in HOLDING_PHASES else moving_us), (t_asked, phase)
+
+
+def test_above_a_sleeper_called_up_the_apad_reports_slowly_until_it_moves_again(tmp_path: Path) -> None:
+    """A sleeper rises only at its wake (up to two minutes at theta 30): the aPad holds above it with slow
+    telemetry, and asks for fast telemetry again before it closes in and docks."""
+    path = scenario_variant("pool12", tmp_path / "pool12-sleep.toml", {"[fleet]": '[fleet]\nprofile = "hourly_wake"'})
+    out = tmp_path / "run"
+    run_mission(load_scenario(path).with_overrides(duration_s=480.0), out)
+    run = RunFolder(out)
+    events = [json.loads(line) for line in run.events.read_text().splitlines()]
+    phases = [(e["t_s"], e["phase"]) for e in events if e.get("event") == "phase"]
+    call_ups = [e["t_s"] for e in events if e.get("event") == "call_up"]
+    docks = [e["t_s"] for e in events if e.get("event") == "docked"]
+    asked = position_requests(run)
+    holding_us, moving_us = US / HOLDING_TELEMETRY_HZ[GPI], US / MOVING_TELEMETRY_HZ[GPI]
+    above = 0
+    for (t_asked, _, interval), (t_next, _, next_interval) in pairwise(asked[1:]):
+        phase = [p for t, p in phases if t <= round(t_asked, 3)][-1]
+        if interval != holding_us or phase != Phase.COLLECT:
+            continue
+        # Slow in collect: waiting for the aMussel called up last (none docked since), fast again before
+        # the next dock.
+        called = max(t for t in call_ups if t <= round(t_asked, 3))
+        assert not [t for t in docks if called < t <= t_asked], (t_asked, called)  # (one docks as the next is called)
+        assert next_interval == moving_us and not [t for t in docks if t_asked <= t < t_next], (t_asked, t_next)
+        above += 1
+    assert above >= 2 and len(docks) >= 2
 
 
 def test_the_apad_reports_its_position_at_the_rate_asked(pool12_run: RunFolder) -> None:

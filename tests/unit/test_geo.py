@@ -47,6 +47,12 @@ def test_remembered_distances_and_matrices_are_the_geodesics_own() -> None:
         assert pair_distance_m(float(lat[0]), float(lon[0]), float(lat[1]), float(lon[1])) == fresh[0, 1]
     with pytest.raises(ValueError):
         metres[0, 1] = 0.0  # shared between callers: nobody may change it
+    shifted = lon + 0.001  # the same latitudes, other longitudes: another answer, not the one remembered
+    points = list(zip(lat, shifted, strict=True))
+    want = np.array([[float(distance_m(a, b, c, d)) for c, d in points] for a, b in points])
+    assert np.array_equal(metres_matrix(lat, shifted), want)
+    assert pair_distance_m(float(lat[0]), float(shifted[0]), float(lat[1]), float(lon[1])) == float(
+        distance_m(lat[0], shifted[0], lat[1], lon[1]))
 
 
 def test_a_geofence_remembers_its_answers_and_forgets_them_at_its_bound() -> None:

@@ -155,7 +155,7 @@ def test_a_command_or_a_battery_draw_ends_the_rest() -> None:
 def _at_home(battery_v: float, charge_w: float) -> tuple[ApadState, EnergyMeter]:
     apad = ApadState(replace(ApadParams(), home_charge_w=charge_w))
     apad.state = VehicleState(x_m=0.5, y_m=-0.5, battery_v=battery_v)  # within the charger's 2 m, still
-    return apad, EnergyMeter(apad, lambda: 0)  # no aMussel aboard: the meter's clock is never read
+    return apad, EnergyMeter(apad)
 
 
 @settings(max_examples=20, deadline=None)
