@@ -133,7 +133,7 @@ class SitlVehicle:
         self.streams = Streams(self, apad, self.commands, self.frame, system_id, rates_hz, target_e7)
         self.modes = Modes(self, apad, self.commands)
         self.navigation = Navigation(self, apad, self.commands, self.frame, self.geofence, target_e7)
-        self.energy = EnergyMeter(apad)
+        self.energy = EnergyMeter(apad, self.dropped)
         self.docking = Docking(self, apad, self.commands, self.mussels, self.geofence, self.energy.heard)
         self.param_server = ParamServer(self, apad)
         self.mission_protocol = MissionProtocol(self)

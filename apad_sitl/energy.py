@@ -24,10 +24,12 @@ with each physics step's `dt_s`.
 from __future__ import annotations
 
 import math
+from collections import Counter
 from collections.abc import Iterable
 from dataclasses import replace
 
 from apad_sitl.energy_counters import EnergyCounters
+from apad_sitl.host import invalid_reason
 from apad_sitl.state import ApadState
 from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V
 from apad_sitl.vocabulary import Latch
@@ -39,8 +41,10 @@ VOLT_RANGE = BATTERY_FULL_V - BATTERY_EMPTY_V
 class EnergyMeter:
     """The aPad's energy part: aMussels' gains drawn from its battery, and home charging."""
 
-    def __init__(self, apad: ApadState) -> None:
+    def __init__(self, apad: ApadState, dropped: Counter[str] | None = None) -> None:
+        """`dropped`: the vehicle's drop counter (a latched aMussel's battery out of 0..1 is counted there)."""
         self.apad = apad
+        self.dropped: Counter[str] = dropped if dropped is not None else Counter()
         self._high: dict[int, float] = {}  # latched aMussel -> the most it reported since it latched
         self._source: dict[int, int] = {}  # latched aMussel -> the system that reports it (the first heard)
 
@@ -67,7 +71,10 @@ class EnergyMeter:
         p = self.apad.params
         drawn = 0.0
         for mussel_id, battery, source in reports:
-            if mussel_id not in latched or not math.isfinite(battery):
+            if mussel_id not in latched:
+                continue
+            if not 0.0 <= battery <= 1.0:  # NaN fails too: the high-water bound holds for a battery only
+                self.dropped[invalid_reason("AMUSSEL_STATUS", "battery")] += 1
                 continue
             if self._source.setdefault(mussel_id, source) != source:
                 continue

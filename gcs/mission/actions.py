@@ -17,7 +17,7 @@ from gcs.api import CommandError, GeofenceError, Location
 from gcs.mission.control import EndReason, LoopControl, LoopLog, LoopStatus, MissionEnded, Phase
 from gcs.mission.fleet_knowledge import FleetKnowledge
 from gcs.mission.swarm import route_conflicts
-from gcs.mission.telemetry_pace import HOLDING_PHASES, PLANNING_PHASES, TelemetryPace
+from gcs.mission.telemetry_pace import HOLDING_PHASES, PACE_WORTH_S, PLANNING_PHASES, TelemetryPace
 from missiontime import seconds_to_us, us_to_s
 from mussel_sim.geo import pair_distance_m
 from mussel_sim.vocabulary import MusselCommand, MusselState
@@ -221,11 +221,13 @@ class ApadActions:
     # --- waiting, ending, pausing -----------------------------------------------------------
 
     def wait_until(self, done: Callable[[], bool], timeout_s: float | None = None, interruptible: bool = True,
-                   holding: bool = False) -> bool:
-        """Wait (polling) until `done`; False at `timeout_s`. In a holding phase, or `holding` (it holds
-        in place meanwhile, e.g. above an aMussel on its way up), with slow telemetry."""
+                   holding_for_s: float = 0.0) -> bool:
+        """Wait (polling) until `done`; False at `timeout_s`. With slow telemetry in a holding phase, or
+        when it holds in place for about `holding_for_s` (above an aMussel on its way up) and that is
+        worth two rounds of requests (`PACE_WORTH_S`)."""
         deadline = None if timeout_s is None else self.clock.time() + timeout_s
-        if (holding or self.status.phase in HOLDING_PHASES) and self.link_up() and not done():
+        holding = holding_for_s > PACE_WORTH_S or self.status.phase in HOLDING_PHASES
+        if holding and self.link_up() and not done():
             self.pace.hold()  # it holds in place until `done`: slow telemetry meanwhile
         while not done():
             if deadline is not None and self.clock.time() >= deadline:

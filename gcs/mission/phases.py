@@ -21,7 +21,6 @@ from gcs.mission.crew import Crew
 from gcs.mission.fleet_knowledge import FleetKnowledge
 from gcs.mission.home_charge import needs_home
 from gcs.mission.strategies import CollectStrategy, PlanInput, StrategyError, plan
-from gcs.mission.telemetry_pace import PACE_WORTH_S
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
 RESHARED = "another aPad's since the fleet was re-shared"
@@ -139,9 +138,9 @@ def collect(crew: Crew, route: list[int]) -> None:
             crew.log("skip", mussel=mussel_id,
                      why=RESHARED if not knows.serves(mussel_id) else "no aPad within acoustic range")
             continue
-        long_wait = knows.wake_in_s(mussel_id) + crew.settings.mussel_surfacing_s > PACE_WORTH_S  # a sleeper
+        rise_s = knows.wake_in_s(mussel_id) + crew.settings.mussel_surfacing_s  # a sleeper's wake first
         if not act.wait_until(functools.partial(_floating_or_depleted, knows, mussel_id),
-                              knows.call_up_wait_s(mussel_id), interruptible=False, holding=long_wait):
+                              knows.call_up_wait_s(mussel_id), interruptible=False, holding_for_s=rise_s):
             if knows.taken_over(mussel_id):
                 continue
             crew.log("skip", mussel=mussel_id, why="did not surface", state=knows.state(mussel_id).name)

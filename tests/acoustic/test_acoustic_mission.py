@@ -58,6 +58,20 @@ def run_copied_at_a_checkpoint(scenario: Scenario, whole: Path, crashed: Path, a
     return taken[0]
 
 
+def run_restored(scenario: Scenario, crashed: Path) -> RunResult:
+    """The console's way back in process (`testkit.restored_session`), run to the mission's end."""
+    session = restored_session(scenario, crashed)
+    try:
+        assert session.start()
+        session.run()
+        result = session.result(0.0)
+        session.finish()
+    finally:
+        session.close()
+        session.world.close()
+    return result
+
+
 @pytest.fixture(scope="module")
 def noisy(tmp_path_factory: pytest.TempPathFactory) -> Run:
     # Ambient noise 54 dB over the default: about a third of the reports across the pool are lost.
@@ -164,15 +178,7 @@ def test_an_acoustic_mission_restored_from_a_checkpoint_hears_on_and_loses_nothi
     scenario = POOL.with_overrides(duration_s=900.0)  # restored while charging, the next collection after
     whole, crashed = tmp_path / "whole", tmp_path / "crashed"
     saved_us = run_copied_at_a_checkpoint(scenario, whole, crashed, 240.0, monkeypatch)
-    session = restored_session(scenario, crashed)
-    try:
-        assert session.start()
-        session.run()
-        result = session.result(0.0)
-        session.finish()
-    finally:
-        session.close()
-        session.world.close()
+    result = run_restored(scenario, crashed)
     a = result.acoustic
     resumed_s = 900.0 - saved_us / 1e6
     assert result.end_reason == "mission time" and result.misplaced == []
@@ -195,15 +201,7 @@ def test_a_restored_mission_plans_on_the_sleep_orders_sent_before_the_crash(
     saved = checkpoint.CheckpointFiles(RunFolder(crashed).checkpoint).read()
     asleep = {m for m, duty in saved.loop_statuses[1].orders.duties.items() if duty.asleep}
     assert len(asleep) >= 2 and set(saved.loop_statuses[1].orders.changed) >= asleep
-    session = restored_session(scenario, crashed)
-    try:
-        assert session.start()
-        session.run()
-        result = session.result(0.0)
-        session.finish()
-    finally:
-        session.close()
-        session.world.close()
+    result = run_restored(scenario, crashed)
     assert result.end_reason == "mission time" and result.misplaced == []
     assert result.acoustic["knowledge"]["battery_error_max"] < 0.01
     orders = [e.fields for e in read_events(RunFolder(crashed).events) if e.kind == "sleep_order"]

@@ -54,6 +54,14 @@ def test_a_hostile_run_of_reports_passes_at_most_one_battery_a_latch() -> None:
     assert apad.state.battery_v == pytest.approx(BATTERY_FULL_V - 7.4 / 0.6 / 400.0 * RANGE_V)
 
 
+def test_a_battery_out_of_its_range_is_counted_and_passes_nothing() -> None:
+    apad = _apad(batt_capacity_wh=400.0, mussel_battery_wh=7.4)
+    meter = EnergyMeter(apad)
+    meter.heard([(7, 0.2, 100), (7, 1e9, 100), (7, float("nan"), 100), (7, -0.5, 100), (3, 5.0, 100)])
+    assert apad.energy.passed_wh == 0.0 and apad.state.battery_v == BATTERY_FULL_V
+    assert meter.dropped == {"invalid:AMUSSEL_STATUS:battery": 3}  # 3 is not aboard: not the meter's to judge
+
+
 def test_at_home_and_still_the_charger_fills_the_battery_and_stops_when_full() -> None:
     apad = _apad(batt_capacity_wh=100.0, home_charge_w=100.0, home_radius_m=2.0)
     apad.state = replace(apad.state, battery_v=BATTERY_EMPTY_V + RANGE_V / 2, x_m=1.0)
