@@ -46,6 +46,10 @@ class TdmaFrame:
     def frame_s(self) -> float:
         return self.slot_s * len(self.slots)
 
+    @property
+    def apad_ids(self) -> tuple[int, ...]:
+        return tuple(s.node_id for s in self.slots if s.owner is Owner.APAD)
+
     def slot_of(self, owner: Owner, node_id: int) -> Slot:
         """The slot of one aMussel or aPad (KeyError if it has none)."""
         for slot in self.slots:

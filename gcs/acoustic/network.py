@@ -13,7 +13,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from typing import Protocol
 
 import numpy as np
 
@@ -39,14 +39,22 @@ SAMPLE_S = 10.0  # belief against truth, sampled this often (mission seconds)
 CHANNEL_SEED = 21  # the channel's draws, apart from the fleet's and the placement's for the same seed
 
 
+class Planner(Protocol):
+    """What the ledger reads of one aPad's loop (`gcs.mission.fleet_knowledge.FleetKnowledge`)."""
+
+    def battery(self, mussel_id: int) -> float: ...
+
+    def serves(self, mussel_id: int) -> bool: ...
+
+
 class AcousticNetwork:
     def __init__(self, emulator: Attached | None, modems: MusselModems, uplink: AcousticUplink, ledger: KnowledgeLedger,
                  registry: VehicleRegistry, fleet: FleetRunner) -> None:
         self.emulator, self.modems, self.uplink, self.ledger = emulator, modems, uplink, ledger
         self.registry, self.fleet = registry, fleet
-        # How the planner believes an aMussel's battery (its loop sets it: its own drains, sleep orders
-        # included). None: no loop plans yet, so there is no belief to sample.
-        self.belief: Callable[[int], float] | None = None
+        # Each aPad's loop's view of the fleet (its own drains, sleep orders included), as it plans;
+        # none yet: no loop plans, so there is no belief to sample.
+        self.planners: dict[int, Planner] = {}
         self._task: Task | None = None
 
     @property
@@ -59,7 +67,7 @@ class AcousticNetwork:
               area_range_m: float, unit: tuple[BytePort, Sea] | None = None) -> AcousticNetwork:
         """The network on `clock`, from mission time now: the GCS's unit at the first aPad's home
         (`home_deg`, latitude and longitude), a slot for each aMussel and aPad (`apad_ids`), the channel's
-        draws from `seed`; belief against truth is sampled once a loop gives its `belief`. `unit`: the
+        draws from `seed`; belief against truth is sampled once a loop `plans`. `unit`: the
         GCS's modem on a serial port and the sea its remote units are on (`vil gcs --modem --sea`);
         None: both emulated in-process (lockstep)."""
         ids = [int(m) for m in fleet.state.ids]  # sorted: the medium's nodes follow the fleet's rows
@@ -97,17 +105,30 @@ class AcousticNetwork:
 
     def sample(self, now_us: int) -> None:
         """Belief against truth now, for every aMussel of the fleet; nothing before a loop plans (a
-        restored mission's first instants: the loop that knows its sleep orders is not built yet)."""
-        belief_of = self.belief
-        if belief_of is None:
-            return
+        restored mission's first instants: the loop that knows its sleep orders is not built yet) or
+        after the mission's end."""
+        end_us = self.fleet.end_us
+        if not self.planners or (end_us is not None and now_us > end_us):
+            return  # past the mission's end the fleet's model stops (uptime's span) while the loops wind up
         s = self.fleet.state
         ids = s.ids.tolist()
         table = self.registry.mussels
         known = np.array([m in table for m in ids], dtype=bool)
-        belief = np.array([belief_of(m) if k else 0.0 for m, k in zip(ids, known, strict=True)])
+        belief = np.array([self.belief(m) if k else 0.0 for m, k in zip(ids, known, strict=True)])
         age = np.array([age_s(table[m], now_us) if k else 0.0 for m, k in zip(ids, known, strict=True)])
         self.ledger.sample(known, belief, s.battery_frac, age)
+
+    def plans(self, apad_id: int, planner: Planner) -> None:
+        """aPad `apad_id`'s loop plans on `planner`'s belief from now on (belief against truth)."""
+        self.planners[apad_id] = planner
+
+    def belief(self, mussel_id: int) -> float:
+        """The battery the planner believes: as the aPad serving that aMussel believes it (with
+        several), else the first aPad's loop."""
+        for planner in self.planners.values():
+            if planner.serves(mussel_id):
+                return planner.battery(mussel_id)
+        return next(iter(self.planners.values())).battery(mussel_id)
 
     def summary(self) -> dict[str, object]:
         channel = {} if self.emulator is None else dict(self.emulator.core.medium.counts)  # else: in `vil modem`

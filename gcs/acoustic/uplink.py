@@ -15,9 +15,10 @@ from __future__ import annotations
 import math
 from collections import Counter
 from collections.abc import Callable
+from enum import Enum
 
 from acoustic.airtime import airtime_s
-from acoustic.nanomodem.driver import ModemDriver
+from acoustic.nanomodem.driver import ModemDriver, Result
 from acoustic.nanomodem.ports import PipeEnd
 from acoustic.orders import CALL_UP, CALL_UP_TRIES
 from acoustic.status_packet import SIZE, PacketError, unpack
@@ -32,7 +33,14 @@ from mussel_sim.vocabulary import MusselState
 
 REPORT_AIRTIME_US = seconds_to_us(airtime_s(SIZE))
 SLOT_WAIT_STEP_US = 1_000_000  # a wait for the aPad's slot passes in steps this long (a quit is heard between)
+MODEM_BUSY_POLL_S = 0.5  # another aPad's loop waiting for the unit looks this often
 ACOUSTIC_SOURCE = 0  # the registry's sender of what was heard acoustically (not a MAVLink system)
+
+
+class CallUp(Enum):
+    ACKED = "acked"  # its modem acknowledged the call-up
+    UNACKED = "unacked"  # no acknowledgement after every try: it may still have heard one
+    ABANDONED = "abandoned"  # no longer wanted at a slot (believed empty or gone silent): not sent
 
 
 class AcousticUplink:
@@ -41,6 +49,7 @@ class AcousticUplink:
         self.driver, self.registry, self.clock, self.events, self.tdma = driver, registry, clock, events, tdma
         self.counts: Counter[str] = Counter()  # reports folded in, call-up outcomes
         self.dropped: Counter[str] = Counter()  # packets heard and not taken, by reason
+        self.holder: int | None = None  # the aPad whose exchange is on the unit now
 
     def register(self, scheduler: Scheduler) -> None:
         """Read as a poller of the scheduler: on an in-process pipe only when the emulator wrote (its
@@ -98,37 +107,69 @@ class AcousticUplink:
         return len(packets)
 
     # ---- call-ups
-    def call_up(self, mussel_id: int, asleep: bool, apad_id: int, wait: Callable[[float], None] | None = None) -> bool:
-        """Call an aMussel up in aPad `apad_id`'s TDMA slots (the GCS's unit speaks for it); True once
+    def call_up(self, mussel_id: int, asleep: bool, apad_id: int, wait: Callable[[float], None] | None = None,
+                wanted: Callable[[], bool] | None = None) -> CallUp:
+        """Call an aMussel up in aPad `apad_id`'s TDMA slots (the GCS's unit speaks for it): ACKED once
         its modem acknowledged the call-up. Each packet waits for the start of the aPad's next slot, so
         it crosses no aMussel's report on the water. `wait`: how to pass time (default the clock's
-        sleep): a mission loop's own, which ends the call-up by raising when the operator quits."""
-        sleep = wait or self.clock.sleep
-        self.driver.sleep = sleep
-        try:
-            return self._call_up(mussel_id, asleep, apad_id, sleep)
-        finally:
-            self.driver.sleep = self.clock.sleep
+        sleep): a mission loop's own, which ends the call-up by raising when the operator quits.
+        `wanted`: asked at each slot before a packet goes; False abandons the call-up (a slot can be a
+        frame away, minutes in a large fleet: the aMussel may have been believed empty meanwhile).
 
-    def _call_up(self, mussel_id: int, asleep: bool, apad_id: int, sleep: Callable[[float], None]) -> bool:
+        With several aPads their loops share the one unit: an exchange (a ping, an acknowledged
+        unicast) holds it until its answer or its bound, and another aPad's waits for it to be free
+        and then for its own next slot (counted: `modem_busy_waits`)."""
+        sleep = wait or self.clock.sleep
         if asleep:
-            self._wait_for_slot(apad_id, sleep)
-            woken = self.driver.ping(mussel_id)
+            woken = self._exchange(apad_id, sleep, lambda: self.driver.ping(mussel_id), wanted)
+            if woken is None:
+                return self._abandoned(mussel_id, apad_id)
             self.counts["wake_pings"] += 1
             if not woken.ok:
                 self.counts[f"wake_ping:{woken.outcome.value}"] += 1
         for attempt in range(1, CALL_UP_TRIES + 1):
-            self._wait_for_slot(apad_id, sleep)
-            result = self.driver.unicast_ack(mussel_id, CALL_UP)
+            result = self._exchange(apad_id, sleep, lambda: self.driver.unicast_ack(mussel_id, CALL_UP), wanted)
+            if result is None:
+                return self._abandoned(mussel_id, apad_id)
             self.counts["call_up_sent"] += 1
             if result.ok:
                 self.counts["call_ups_acked"] += 1
                 self.counts["call_up_retries"] += attempt - 1
-                return True
+                return CallUp.ACKED
             self.counts[f"call_up:{result.outcome.value}"] += 1
         self.counts["call_ups_unacked"] += 1
-        self.events.emit(self.clock.time(), "call_up_unacked", mussel=mussel_id, tries=CALL_UP_TRIES)
-        return False
+        self.events.emit(self.clock.time(), "call_up_unacked", mussel=mussel_id, tries=CALL_UP_TRIES,
+                         **self._apad_field(apad_id))
+        return CallUp.UNACKED
+
+    def _abandoned(self, mussel_id: int, apad_id: int) -> CallUp:
+        self.counts["call_ups_abandoned"] += 1
+        self.events.emit(self.clock.time(), "call_up_abandoned", mussel=mussel_id, **self._apad_field(apad_id))
+        return CallUp.ABANDONED
+
+    def _apad_field(self, apad_id: int) -> dict[str, int]:
+        return {"apad": apad_id} if len(self.tdma.apad_ids) > 1 else {}
+
+    def _exchange(self, apad_id: int, sleep: Callable[[float], None], command: Callable[[], Result],
+                  wanted: Callable[[], bool] | None) -> Result | None:
+        """`command` on the unit at the start of one of `apad_id`'s slots, holding the unit meanwhile;
+        None if it is no longer `wanted`, now or at that slot."""
+        if wanted is not None and not wanted():
+            return None
+        while True:
+            while self.holder is not None:
+                sleep(MODEM_BUSY_POLL_S)
+            self._wait_for_slot(apad_id, sleep)
+            if self.holder is None:
+                break
+            self.counts["modem_busy_waits"] += 1  # another aPad's exchange began meanwhile: the next slot
+        if wanted is not None and not wanted():
+            return None
+        self.holder, self.driver.sleep = apad_id, sleep
+        try:
+            return command()
+        finally:
+            self.holder, self.driver.sleep = None, self.clock.sleep
 
     def _wait_for_slot(self, apad_id: int, sleep: Callable[[float], None]) -> None:
         start_us = math.ceil(self.tdma.next_slot_start_s(Owner.APAD, apad_id, self.clock.time()) * US_PER_S)

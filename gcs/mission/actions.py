@@ -13,6 +13,7 @@ from collections.abc import Callable
 from functools import partial
 
 from apad_sitl.vocabulary import Latch, Progress
+from gcs.acoustic.uplink import CallUp
 from gcs.api import CommandError, GeofenceError, Location
 from gcs.mission.control import EndReason, LoopControl, LoopLog, LoopStatus, MissionEnded, Phase
 from gcs.mission.fleet_knowledge import FleetKnowledge
@@ -312,8 +313,13 @@ class ApadActions:
             self.command(self.api.command_mussel, mussel_id, MusselCommand.SURFACE, self.apad_id)
             self._log("call_up", mussel=mussel_id, distance_m=round(distance, 2))
         else:  # over the water, acknowledged, retried; a sleeper pinged awake first
-            acked = acoustic.uplink.call_up(mussel_id, self.knows.wake_in_s(mussel_id) > 0, self.apad_id, self._wait)
-            self._log("call_up", mussel=mussel_id, distance_m=round(distance, 2), acoustic=True, acked=acked)
+            outcome = acoustic.uplink.call_up(mussel_id, self.knows.wake_in_s(mussel_id) > 0, self.apad_id, self._wait,
+                                              wanted=partial(self.knows.heard_alive, mussel_id))
+            if outcome is CallUp.ABANDONED:  # believed empty while the aPad's slot came round
+                self.knows.release(mussel_id)
+                return False
+            self._log("call_up", mussel=mussel_id, distance_m=round(distance, 2), acoustic=True,
+                      acked=outcome is CallUp.ACKED)
         return True
 
     def set_phase(self, phase: Phase) -> None:

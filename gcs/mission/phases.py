@@ -24,6 +24,7 @@ from gcs.mission.strategies import CollectStrategy, PlanInput, StrategyError, pl
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
 RESHARED = "another aPad's since the fleet was re-shared"
+GONE_QUIET = "believed empty or unheard too long (acoustic)"
 
 
 # --- collection ---------------------------------------------------------------------------------
@@ -129,14 +130,17 @@ def collect(crew: Crew, route: list[int]) -> None:
             crew.log("skip", mussel=mussel_id, why=RESHARED)
             continue
         called = act.call_up_if_in_range(mussel_id)
+        if not called and not knows.heard_alive(mussel_id):  # planned on a report since run down to empty
+            crew.log("skip", mussel=mussel_id, why=GONE_QUIET)
+            continue
         # From a call-up on, the waits ignore the mission end: the margin above leaves time to finish.
         if not act.go_to(api.get_location(mussel_id), interruptible=not called):
             if called:
                 act.sink(mussel_id)
             continue
         if not called and not act.call_up_if_in_range(mussel_id):
-            crew.log("skip", mussel=mussel_id,
-                     why=RESHARED if not knows.serves(mussel_id) else "no aPad within acoustic range")
+            crew.log("skip", mussel=mussel_id, why=RESHARED if not knows.serves(mussel_id) else
+                     GONE_QUIET if not knows.heard_alive(mussel_id) else "no aPad within acoustic range")
             continue
         rise_s = knows.wake_in_s(mussel_id) + crew.settings.mussel_surfacing_s  # a sleeper's wake first
         if not act.wait_until(functools.partial(_floating_or_depleted, knows, mussel_id),

@@ -258,8 +258,6 @@ def read_scenario(root: Fields, path: Path) -> Scenario:
         raise root.fail("apad", f"system ids must differ, got {ids}")
     acoustic = read_acoustic(root.sub("acoustic", about="the acoustic channel, TDMA and the nanomodem "
                                       "(docs/acoustic.md); off unless enabled"))
-    if acoustic.enabled and len(apads) > 1:  # one GCS unit, one loop's call-ups at a time
-        raise root.fail("acoustic", f"the acoustic channel takes one aPad for now, got {len(apads)}")
     if acoustic.enabled and fleet.count > 255:
         raise root.fail("acoustic", f"the nanomodem's addresses allow 255 aMussels, got {fleet.count}")
     root.done()

@@ -12,6 +12,7 @@ and the accounting reports it held there.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -94,6 +95,18 @@ class FleetShares:
             self.first = new
         self.reshares += 1
 
+    def join(self, joiners: dict[int, int]) -> None:
+        """aMussels heard for the first time (`joiners`: aMussel id -> aPad) join those aPads' shares;
+        nobody else moves. The sharing the mission started with grows with them until the first re-share."""
+        assert self.partition is not None  # joining needs a sharing
+        old = self.partition
+        grown = Partition({a: sorted(ids + [m for m, j in joiners.items() if j == a]) for a, ids in old.shares.items()},
+                          old.centres)
+        if self.first is self.partition:
+            self.first = grown
+        self.partition = grown
+        self.owner |= joiners
+
 
 class SwarmWatch:
     """A periodic task on the world's clock: re-shares the fleet when the usable aPads change."""
@@ -133,13 +146,44 @@ class SwarmWatch:
 
     def check(self, now_us: int) -> None:
         usable = self.usable_now(now_us)
-        if usable == self.shares.usable or not usable:
+        if not usable:
+            return
+        if usable == self.shares.usable:
+            self.join_newcomers()
             return
         lost, back = sorted(self.shares.usable - usable), sorted(usable - self.shares.usable)
         self.reshare(usable)
         shares = self.shares.partition.shares if self.shares.partition else {}
         self.events.emit(self.clock.time(), "reshare", usable=sorted(usable), lost=lost, back=back,
                          shares={str(a): ids for a, ids in shares.items()})
+
+    def join_newcomers(self) -> None:
+        """aMussels first heard after the sharing (acoustically, in their TDMA slots; a real one as it
+        comes in range) each join the share of the nearest centre with room, an even share of all
+        known; the shares already made stay as they are."""
+        table, shares = self.registry.mussels, self.shares
+        new = np.array(sorted(set(table) - shares.owner.keys()), np.int64)
+        if not len(new) or shares.partition is None:
+            return
+        centres = shares.partition.centres
+        apads = sorted(a for a in shares.usable if a in centres)
+        if not apads:
+            return
+        counts = {a: len(shares.partition.shares.get(a, [])) for a in apads}
+        room = math.ceil((sum(len(ids) for ids in shares.partition.shares.values()) + len(new)) / len(apads))
+        rows = table.rows(new)
+        x, y = self.frame.to_local(table.lat_e7[rows] / 1e7, table.lon_e7[rows] / 1e7)
+        joiners: dict[int, int] = {}
+        for m, mx, my in zip(new.tolist(), np.atleast_1d(x).tolist(), np.atleast_1d(y).tolist(), strict=True):
+            open_ = [a for a in apads if counts[a] < room] or apads
+            apad = min(open_, key=lambda a: (math.hypot(centres[a][0] - mx, centres[a][1] - my), a))
+            joiners[m] = apad
+            counts[apad] += 1
+        shares.join(joiners)
+        self.events.emit(self.clock.time(), "joined", shares={str(a): sorted(m for m, j in joiners.items() if j == a)
+                                                              for a in apads if a in joiners.values()})
+        for hook in self.on_reshare:
+            hook(shares)
 
     def reshare(self, usable: frozenset[int]) -> None:
         """Partition every aMussel heard among `usable` (positions as last reported)."""

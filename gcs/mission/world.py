@@ -154,7 +154,7 @@ class World:
         loop = EnergySharingLoop(api, clock, settings, self.homes, a.system_id, self.events, control, shares,
                                  self.real, status, self.acoustic)
         if self.acoustic is not None:
-            self.acoustic.belief = loop.knows.battery  # belief against truth, as this loop plans with it
+            self.acoustic.plans(a.system_id, loop.knows)  # belief against truth, as this loop plans with it
         return loop
 
     def mute_logs(self, muted: bool) -> None:

@@ -210,3 +210,47 @@ def test_a_restored_mission_plans_on_the_sleep_orders_sent_before_the_crash(
     for order in orders:  # before the crash and after the restore: never the same order twice in a row
         assert last.get(order["mussel"]) != order["interval_s"], order
         last[order["mussel"]] = order["interval_s"]
+
+
+POOL_X2 = load_scenario("missions/pool12x2.toml")
+
+
+def two_apad_acoustic(minutes: float) -> Scenario:
+    """pool12x2 (two aPads, one at each end of the pool) with the sea between them."""
+    return replace(POOL_X2.with_overrides(duration_s=60.0 * minutes), acoustic=replace(POOL_X2.acoustic, enabled=True))
+
+
+def test_two_apads_share_the_fleet_as_it_is_heard_and_call_up_over_the_water(tmp_path: Path) -> None:
+    # At the start the GCS has heard no aMussel: the fleet is shared among the aPads as each is first
+    # heard in its TDMA slot (the nearest aPad with room), and both aPads call up through the one unit.
+    result = run_mission(two_apad_acoustic(20.0), tmp_path / "run")
+    events = read_events(Path(result.out_dir) / "events.jsonl")
+    shares = {row["sysid"]: row["mussels"] for row in result.apads}
+    assert sorted(shares[1] + shares[2]) == list(range(1, 13)) and len(shares[1]) == len(shares[2]) == 6
+    joined = [e.fields["shares"] for e in events if e.kind == "joined"]
+    assert sorted(m for j in joined for ids in j.values() for m in ids) == list(range(1, 13))  # each joined once
+    called = [e.fields for e in events if e.kind == "call_up"]
+    assert {c["apad"] for c in called} == {1, 2}
+    assert all(c["acoustic"] and c["acked"] and c["mussel"] in shares[c["apad"]] for c in called)
+    counts = result.acoustic["counts"]
+    assert counts["call_up_sent"] == counts["call_ups_acked"] == len(called)
+    assert len(result.acoustic["slots"]) == 14  # 12 aMussels and the 2 aPads
+    k = result.acoustic["knowledge"]
+    assert {p["mussel_id"] for p in k["per_mussel"]} == set(range(1, 13)) and k["battery_error_max"] < 0.01
+    assert result.misplaced == [] and all(m.state_s.get("depleted", 0.0) == 0.0 for m in result.mussels)
+
+
+def test_a_crashed_two_apad_acoustic_mission_resumes_to_the_uninterrupted_result(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # Killed past 5 minutes on a noisy channel (call-ups retried, reports lost): the resume replays both
+    # loops, the shared unit and the channel's draws to the checkpoint and goes on to the same result.
+    scenario = two_apad_acoustic(10.0)
+    scenario = replace(scenario, acoustic=replace(scenario.acoustic, noise_psd_db=104.0))
+    whole, crashed = tmp_path / "whole", tmp_path / "crashed"
+    run_copied_at_a_checkpoint(scenario, whole, crashed, 300.0, monkeypatch)
+    run_mission(scenario, crashed, resume=True)
+    a, b = (json.loads((d / "result.json").read_text()) for d in (crashed, whole))
+    for r in (a, b):
+        del r["wall_s"], r["out_dir"]
+    assert a["acoustic"]["counts"]["call_up_retries"] > 0 and a["acoustic"]["channel"]["packet_error"] > 0
+    assert {e["sysid"] for e in a["apads"]} == {1, 2} and a == b

@@ -206,6 +206,10 @@ REGISTRY: dict[str, Entry] = {
                                  "are the long run's)"),
     run.ACOUSTIC_BAY: Entry("runs", run.run_acoustic_bay, long_only="8 s of CPU; the same path is pool12-acoustic's "
                             "in the default run, and bay24's channel tests/acoustic/test_acoustic_mission.py's"),
+    run.ACOUSTIC_BAY120: Entry("runs", run.run_acoustic_bay120,
+                               long_only="25-40 s of CPU; the same path (several aPads on the one unit, shares as "
+                                         "heard) is tests/acoustic/test_acoustic_mission.py's pool12x2 runs and "
+                                         "test_uplink_shared.py's, in the default run"),
     run.ACOUSTIC_KEEP_ALIVE[0]: Entry("runs", run.run_acoustic_keep_alive,
                                       ci="vil run missions/pool12-acoustic.toml --strategy keep_alive --seeds 1 "
                                          "--duration 30m",

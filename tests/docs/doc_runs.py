@@ -363,6 +363,7 @@ def run_fuzz_modem(w: Work) -> None:
 
 ACOUSTIC_POOL = "vil run missions/pool12-acoustic.toml"
 ACOUSTIC_BAY = "vil run missions/bay24-acoustic.toml"
+ACOUSTIC_BAY120 = "vil run missions/bay120-acoustic.toml"
 ACOUSTIC_LINE = re.compile(
     r"(\S+) (\S+) s1: acoustic: TDMA frame ([\d.]+) s, ([\d,]+) of ([\d,]+) reports heard, knowledge ([\d.]+) s old "
     r"\(median; max (\d+) s\), battery estimate off by ([\d.]+) % \(max ([\d.]+) %\), call-ups acknowledged "
@@ -397,6 +398,11 @@ def run_acoustic_pool(w: Work) -> None:
 def run_acoustic_bay(w: Work) -> None:
     """the same for bay24's row (its frame: 33.81 s)."""
     _acoustic_run(w, ACOUSTIC_BAY, "33.81")
+
+
+def run_acoustic_bay120(w: Work) -> None:
+    """the same for bay120's row (five aPads on the GCS's one unit; its frame: 169.05 s)."""
+    _acoustic_run(w, ACOUSTIC_BAY120, "169.05")
 
 
 ACOUSTIC_KEEP_ALIVE = ("vil run missions/pool12-acoustic.toml --strategy keep_alive --seeds 20 --jobs 2",

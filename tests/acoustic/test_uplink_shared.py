@@ -1,0 +1,95 @@
+"""Several aPads' loops share the GCS's one nanomodem: an exchange (ping, acknowledged unicast) holds the
+unit until its answer, and another aPad's call-up waits for it and then for that aPad's own next slot.
+Real bytes through the emulator, its pipe and the driver; the loops as `missiontime.processes` scripts
+on one virtual clock, as a swarm mission runs them."""
+
+from __future__ import annotations
+
+from functools import partial
+from itertools import pairwise
+
+import numpy as np
+import pytest
+
+from acoustic.nanomodem.driver import ModemDriver, Result
+from acoustic.nanomodem.emulator import ModemEmulator, RemoteUnit
+from acoustic.nanomodem.lockstep import attach
+from acoustic.nanomodem.ports import pipe
+from acoustic.orders import CALL_UP_TRIES
+from acoustic.params import AcousticParams
+from acoustic.tdma import Owner, tdma_frame
+from gcs.acoustic.uplink import AcousticUplink, CallUp
+from gcs.link.registry import VehicleRegistry
+from gcs.records.events import EventLog
+from missiontime import Clock
+from missiontime.clocks import VirtualClock
+from missiontime.processes import Processes
+
+
+def test_two_apads_calling_up_at_once_take_turns_on_the_unit() -> None:
+    # aPad 1 calls up an aMussel 5 km off (out of range: each try waits for #TO, about 4 s, longer than
+    # a slot), aPad 2 one 20 m off, both at once. aPad 2's slot comes while aPad 1's answer is awaited.
+    params = AcousticParams()
+    clock = VirtualClock()
+    remotes = (RemoteUnit(7, (5000.0, 0.0, 3.0)), RemoteUnit(8, (-20.0, 0.0, 3.0)))
+    gcs_end, modem_end = pipe()
+    attach(ModemEmulator(params, remotes, np.random.default_rng(1)), modem_end, clock)
+    tdma = tdma_frame([7, 8], [1, 2], 50.0, params)  # the aPads' slots are the last two, back to back
+    events = EventLog()
+    uplink = AcousticUplink(ModemDriver(gcs_end, clock), VehicleRegistry(), clock, events, tdma)
+    uplink.register(clock.scheduler)
+    exchanges: list[tuple[int, float, float]] = []  # (aPad, start, end) of each exchange on the unit
+    real_unicast_ack = uplink.driver.unicast_ack
+
+    def timed_unicast_ack(address: int, data: bytes) -> Result:
+        holder = uplink.holder
+        assert holder is not None  # nobody speaks on the unit without holding it
+        start = clock.time()
+        result = real_unicast_ack(address, data)
+        exchanges.append((holder, start, clock.time()))
+        return result
+
+    uplink.driver.unicast_ack = timed_unicast_ack  # type: ignore[method-assign]
+    processes = Processes(clock)
+    handles = {apad: processes.spawn(f"apad{apad}", partial(call_up, uplink, mussel, apad))
+               for apad, mussel in ((1, 7), (2, 8))}
+    processes.run()
+
+    assert handles[1].result is CallUp.UNACKED and handles[2].result is CallUp.ACKED
+    assert uplink.counts["call_ups_unacked"] == 1 and uplink.counts["call_ups_acked"] == 1
+    assert uplink.counts["modem_busy_waits"] == CALL_UP_TRIES  # each of aPad 1's tries outlasts a slot
+    assert [e.fields for e in events.events if e.kind == "call_up_unacked"] == [
+        {"mussel": 7, "tries": CALL_UP_TRIES, "apad": 1}]
+    assert all(end - start > tdma.slot_s for apad, start, end in exchanges if apad == 1)
+    for (_, _, end), (_, start, _) in pairwise(exchanges):
+        assert start >= end  # one exchange on the unit at a time
+    for apad, start, _ in exchanges:  # each at the start of one of its aPad's slots
+        assert start == pytest.approx(tdma.next_slot_start_s(Owner.APAD, apad, start - 1e-3), abs=1e-6)
+    assert [apad for apad, _, _ in exchanges] == [1] * CALL_UP_TRIES + [2]
+    assert not uplink.driver.dropped and not uplink.dropped  # no reply taken by the wrong exchange
+
+
+def test_a_call_up_no_longer_wanted_when_its_slot_comes_is_abandoned_unsent() -> None:
+    # A fleet's frame can be minutes long: an aMussel believed near empty when the call-up was decided
+    # may be believed empty by the aPad's slot. Nothing goes on the water then, and the loop is told.
+    params = AcousticParams()
+    clock = VirtualClock()
+    core = ModemEmulator(params, (RemoteUnit(7, (20.0, 0.0, 3.0)),), np.random.default_rng(1))
+    gcs_end, modem_end = pipe()
+    attach(core, modem_end, clock)
+    tdma = tdma_frame([7], [1], 50.0, params)
+    events = EventLog()
+    uplink = AcousticUplink(ModemDriver(gcs_end, clock), VehicleRegistry(), clock, events, tdma)
+    uplink.register(clock.scheduler)
+    slot_s = tdma.next_slot_start_s(Owner.APAD, 1, 0.0)
+    assert slot_s > 1.0
+    outcome = uplink.call_up(7, True, 1, wanted=lambda: clock.time() < slot_s - 0.5)  # a sleeper: ping first
+    assert outcome is CallUp.ABANDONED and clock.time() == pytest.approx(slot_s, abs=1e-6)
+    assert uplink.counts == {"call_ups_abandoned": 1}  # no ping, no call-up sent
+    assert not any(core.medium.counts.values())  # nothing on the water
+    assert [(e.kind, e.fields) for e in events.events] == [("call_up_abandoned", {"mussel": 7})]
+    assert uplink.call_up(7, False, 1) is CallUp.ACKED  # wanted by default: sent and acknowledged
+
+
+def call_up(uplink: AcousticUplink, mussel: int, apad: int, own: Clock) -> CallUp:
+    return uplink.call_up(mussel, False, apad, own.sleep)
