@@ -66,3 +66,40 @@ def test_the_fleet_table_shows_the_age_of_what_was_heard_and_marks_stale_amussel
 def table_text(app: LiveConsole) -> str:
     """The fleet table's rows as text (the right-hand panel of each screen line)."""
     return "\n".join(line.split("││")[-1] for line in screen_text(app).splitlines() if "││" in line)
+
+
+def test_a_two_apad_acoustic_console_shares_the_fleet_as_it_is_heard() -> None:
+    # pool12x2 with the sea between them: at the start the GCS has heard nobody, so nobody has an aPad;
+    # each aMussel joins a share when it is first heard in its slot, and the table says whose it is.
+    pool_x2 = load_scenario("missions/pool12x2.toml")
+    runner = ConsoleRunner(ConsoleConfig(replace(pool_x2, acoustic=replace(pool_x2.acoustic, enabled=True)),
+                                         sitl="memory", speed=10.0))  # a frame (18.6 s) in about 2 s
+    app = LiveConsole(runner)
+    joined_first: list[int] = []
+
+    def every_amussel_shared() -> bool:
+        snap = runner.snapshot
+        if snap is None or len(snap.apads) != 2:
+            return False
+        if not joined_first:
+            joined_first.append(sum(len(a.share) for a in snap.apads))
+        return sorted(m for a in snap.apads for m in a.share) == list(range(1, 13))
+
+    async def scenario_run() -> None:
+        async with app.run_test(size=SIZE) as pilot:
+            await wait_for(pilot, every_amussel_shared, timeout_s=120.0)
+            snap = runner.snapshot
+            assert snap is not None
+            shares = {a.system_id: set(a.share) for a in snap.apads}
+            assert len(shares[1]) == len(shares[2]) == 6  # the nearest aPad with room, an even share
+            owner = dict(zip(snap.mussel_ids.tolist(), snap.owner.tolist(), strict=True))
+            assert all(owner[m] == apad for apad, ids in shares.items() for m in ids)
+            await wait_for(pilot, lambda: "heard" in screen_text(app) and "share 6" in screen_text(app))
+            await pilot.press("Q")
+            await wait_for(pilot, runner.finished.is_set, timeout_s=30.0)
+
+    asyncio.run(scenario_run())
+    assert joined_first and joined_first[0] < 12  # shared as heard, not all at the start
+    assert runner.world is not None
+    joined = [e for e in runner.world.events.events if e.kind == "joined"]
+    assert sorted(m for e in joined for ids in e.fields["shares"].values() for m in ids) == list(range(1, 13))
