@@ -61,6 +61,10 @@ STATUSTEXT_MAX = 50
 # DOCK_SLOT_STATUS latch values that hold an aMussel (the aPad's words, read here as wire values).
 HOLDING_LATCHES = (mavlink.DOCK_LATCH_STATE_CLOSING, mavlink.DOCK_LATCH_STATE_LATCHED)
 SURFACE_DEPTH_M = 0.01  # this shallow an aMussel is at the surface, in WiFi's reach (floating and docked: 0 m)
+# Woken by the acoustic ping, an aMussel listens this long (mission time) for the call-up that follows:
+# the GCS sends it right after the ping's answer, within the aPad's slot (about a second). A few
+# seconds' margin; not drawn from the battery (the duty cycle's mean drain stands for its wakes).
+PING_LISTEN_US = 5 * US_PER_S
 LAST_WORDS = 10  # publishes of each message a depleted aMussel still makes; 0.4 ** 10: 1e-4 all lost at 40 %
 
 
@@ -153,6 +157,7 @@ class FleetRunner:
         self._release: list[int] = []
         self._sleep: list[tuple[int, float, float]] = []
         self._wake: list[int] = []
+        self._listening_until_us: dict[int, int] = {}  # pinged awake: listening for a call-up until then
         self._published_us: dict[int, int] = {}  # message id -> mission time of its last publish
         self._depleted_publishes: dict[int, NDArray[np.int64]] = {}  # message id -> (n,) publishes since depleted
 
@@ -254,14 +259,20 @@ class FleetRunner:
 
     def heard_acoustically(self, mussel_id: int, command: MusselCommand | None) -> None:
         """An aMussel's modem heard the GCS: a `command` for it (a call-up: SURFACE), or, with None,
-        the wake-up ping. Taken at the next step like a command over MAVLink; an id not ours is counted."""
+        the wake-up ping. Taken at the next step like a command over MAVLink; an id not ours is counted.
+        A pinged aMussel stays awake `PING_LISTEN_S` for the call-up that follows: heard in that time,
+        it is taken at once (the ping woke it) instead of held for its next scheduled wake."""
         if mussel_id not in self._ids:
             self.dropped["invalid:acoustic:mussel_id"] += 1
             return
+        now_us = self.state.time_us
         if command is None:
             self._wake.append(mussel_id)
-        else:
-            (self._surface if command == MusselCommand.SURFACE else self._sink).append(mussel_id)
+            self._listening_until_us[mussel_id] = now_us + PING_LISTEN_US
+            return
+        if command == MusselCommand.SURFACE and self._listening_until_us.pop(mussel_id, -1) >= now_us:
+            self._wake.append(mussel_id)  # in the step with the call-up: held as asleep, then let go at once
+        (self._surface if command == MusselCommand.SURFACE else self._sink).append(mussel_id)
 
     def _send_batch(self, spec: hot.HotSpec, columns: dict[str, Any]) -> None:
         """One message per aMussel, packed as a batch: byte for byte what one-by-one encoding makes."""

@@ -5,8 +5,8 @@
   aMussel (a `MusselView` folded into the registry, as an AMUSSEL_STATUS would be), timed when it
   was sent (its arrival less its airtime). A packet that is not a report, or a report older than
   what is known (WiFi from the surface overtook it), is dropped and counted by reason (`dropped`).
-- **Call-ups.** `call_up` pings a sleeper awake, then sends the call-up as an acknowledged unicast,
-  retried to `CALL_UP_TRIES`; each outcome is counted, and one never acknowledged is an event
+- **Call-ups.** `call_up` sends the call-up as an acknowledged unicast (to a sleeper right after a
+  wake-up ping, in the same slot), retried to `CALL_UP_TRIES`; each outcome is counted, and one never acknowledged is an event
   (`call_up_unacked`): the aMussel may still have heard it, so the loop's surfacing wait decides.
 """
 
@@ -16,6 +16,7 @@ import math
 from collections import Counter
 from collections.abc import Callable
 from enum import Enum
+from functools import partial
 
 from acoustic.airtime import airtime_s
 from acoustic.nanomodem.driver import ModemDriver, Result
@@ -110,8 +111,9 @@ class AcousticUplink:
     def call_up(self, mussel_id: int, asleep: bool, apad_id: int, wait: Callable[[float], None] | None = None,
                 wanted: Callable[[], bool] | None = None) -> CallUp:
         """Call an aMussel up in aPad `apad_id`'s TDMA slots (the GCS's unit speaks for it): ACKED once
-        its modem acknowledged the call-up. Each packet waits for the start of the aPad's next slot, so
-        it crosses no aMussel's report on the water. `wait`: how to pass time (default the clock's
+        its modem acknowledged the call-up. Each try waits for the start of the aPad's next slot, so it
+        crosses no aMussel's report on the water; a sleeper's (`asleep`) is its wake-up ping and then
+        at once the call-up. `wait`: how to pass time (default the clock's
         sleep): a mission loop's own, which ends the call-up by raising when the operator quits.
         `wanted`: asked at each slot before a packet goes; False abandons the call-up (a slot can be a
         frame away, minutes in a large fleet: the aMussel may have been believed empty meanwhile).
@@ -120,15 +122,8 @@ class AcousticUplink:
         unicast) holds it until its answer or its bound, and another aPad's waits for it to be free
         and then for its own next slot (counted: `modem_busy_waits`)."""
         sleep = wait or self.clock.sleep
-        if asleep:
-            woken = self._exchange(apad_id, sleep, lambda: self.driver.ping(mussel_id), wanted)
-            if woken is None:
-                return self._abandoned(mussel_id, apad_id)
-            self.counts["wake_pings"] += 1
-            if not woken.ok:
-                self.counts[f"wake_ping:{woken.outcome.value}"] += 1
         for attempt in range(1, CALL_UP_TRIES + 1):
-            result = self._exchange(apad_id, sleep, lambda: self.driver.unicast_ack(mussel_id, CALL_UP), wanted)
+            result = self._exchange(apad_id, sleep, partial(self._wake_and_call, mussel_id, asleep), wanted)
             if result is None:
                 return self._abandoned(mussel_id, apad_id)
             self.counts["call_up_sent"] += 1
@@ -141,6 +136,17 @@ class AcousticUplink:
         self.events.emit(self.clock.time(), "call_up_unacked", mussel=mussel_id, tries=CALL_UP_TRIES,
                          **self._apad_field(apad_id))
         return CallUp.UNACKED
+
+    def _wake_and_call(self, mussel_id: int, asleep: bool) -> Result:
+        """One try, on the unit in one turn: a sleeper's wake-up ping, then at once the call-up (woken, it
+        listens for it a few seconds: `mussel_sim.comms.PING_LISTEN_US`). Unanswered, the call-up goes
+        all the same: an aMussel that hears it asleep rises at its next scheduled wake."""
+        if asleep:
+            woken = self.driver.ping(mussel_id)
+            self.counts["wake_pings"] += 1
+            if not woken.ok:
+                self.counts[f"wake_ping:{woken.outcome.value}"] += 1
+        return self.driver.unicast_ack(mussel_id, CALL_UP)
 
     def _abandoned(self, mussel_id: int, apad_id: int) -> CallUp:
         self.counts["call_ups_abandoned"] += 1

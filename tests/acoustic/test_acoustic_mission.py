@@ -15,6 +15,7 @@ import shutil
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import pytest
 from testkit import restored_session, scenario_variant
 
@@ -129,7 +130,8 @@ def test_a_sea_that_carries_nothing_gets_no_call_up_though_the_truth_has_amussel
 
 def test_a_sleeping_amussel_is_pinged_awake_before_its_call_up(tmp_path: Path) -> None:
     # Eight aMussels on the hourly-wake profile in the bay: each is heard only after a wake, and the
-    # GCS pings one awake (the wake-up ping) before it calls it up.
+    # GCS pings one awake (the wake-up ping) before it calls it up: woken, it takes the call-up at once
+    # and rises, instead of waiting for its next scheduled wake (every 120 s of mission time here).
     path = scenario_variant("bay-capacity", tmp_path / "sleepers.toml", {
         "count = 8": 'count = 8\nprofile = "hourly_wake"',
         "start_battery = [0.6, 1.0]": "start_battery = [0.05, 0.2]",
@@ -142,6 +144,15 @@ def test_a_sleeping_amussel_is_pinged_awake_before_its_call_up(tmp_path: Path) -
     assert fleet["silent:asleep"] > 0  # asleep in most of its slots
     assert counts["wake_pings"] > 0 and fleet["heard:ping"] > 0
     assert fleet["heard:unicast_ack"] > 0 and result.cycles >= 1 and not result.misplaced
+    traces = np.load(Path(result.out_dir) / "traces.npz")
+    row = {int(m): k for k, m in enumerate(traces["ids"])}
+    step_s = traces["step_time_us"] / 1e6
+    names = [str(n) for n in traces["state_names"]]
+    acked = [e for e in read_events(Path(result.out_dir) / "events.jsonl") if e.kind == "call_up" and e.fields["acked"]]
+    assert acked
+    for e in acked:  # the step after the acknowledgement, it is on its way up (or up already)
+        after = int(np.searchsorted(step_s, e.t_s + 2.0))
+        assert names[int(traces["battery_state"][after, row[e.fields["mussel"]]])] != "active", e
 
 
 def test_the_report_shows_belief_against_truth(noisy: Run, tmp_path: Path) -> None:
