@@ -32,7 +32,10 @@ from mavlink_dialect import tlog
 pytestmark = [pytest.mark.sitl, pytest.mark.slow]
 
 VIL = [sys.executable, "-m", "gcs.cli"]
-ARGS = ["run", "pool12", "--strategy", "greedy", "--duration", "1h", "--jobs", "1"]
+# Half an hour (the kill falls in its second third) is as long a mission as the kill and the resume need.
+DURATION_S = 1800
+KILL_AFTER_S = 600
+ARGS = ["run", "pool12", "--strategy", "greedy", "--duration", f"{DURATION_S}s", "--jobs", "1"]
 
 
 def test_sigkill_mid_mission_then_resume_completes_with_every_mussel_accounted_for(tmp_path: Path) -> None:
@@ -46,7 +49,7 @@ def test_sigkill_mid_mission_then_resume_completes_with_every_mussel_accounted_f
     try:
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:  # wait until the mission is well under way
-            if ckpt.exists() and load(ckpt).time_us > 1200 * 1_000_000:
+            if ckpt.exists() and load(ckpt).time_us > KILL_AFTER_S * 1_000_000:
                 break
             assert proc.poll() is None, err.read_text()
             time.sleep(0.05)
@@ -55,14 +58,14 @@ def test_sigkill_mid_mission_then_resume_completes_with_every_mussel_accounted_f
         proc.wait(10)
     assert proc.returncode == -signal.SIGKILL
     killed_at_s = load(ckpt).time_us / 1e6
-    assert 1200 < killed_at_s < 3600
+    assert KILL_AFTER_S < killed_at_s < DURATION_S
     assert not (run_dir / "result.json").exists()
 
     done = subprocess.run([*VIL, *ARGS, "--out", str(out), "--resume", "--json", str(tmp_path / "r.json")],
                           capture_output=True, text=True, timeout=120, env=env)
     assert done.returncode == 0, done.stderr
     r = json.loads((tmp_path / "r.json").read_text())
-    assert r["end_reason"] == "mission time" and r["duration_s"] == 3600
+    assert r["end_reason"] == "mission time" and r["duration_s"] == DURATION_S
     assert len(r["whereabouts"]) == 12 and [w for w in r["whereabouts"] if w["where"] == "lost"] == []
     events = [json.loads(x) for x in (run_dir / "events.jsonl").read_text().splitlines()]
     kinds = [e["event"] for e in events]
@@ -82,7 +85,7 @@ def test_sigkill_mid_mission_then_resume_completes_with_every_mussel_accounted_f
     # The uptime record spans the whole mission, one step a second: the steps after the resume keep
     # the rhythm of those before it (no long first step, none lost).
     traces = np.load(run_dir / "traces.npz")
-    assert np.array_equal(traces["step_time_us"], np.arange(1, 3601) * 1_000_000)
+    assert np.array_equal(traces["step_time_us"], np.arange(1, DURATION_S + 1) * 1_000_000)
 
 
 def test_resume_without_a_checkpoint_is_one_line_and_exit_2(tmp_path: Path) -> None:

@@ -32,7 +32,7 @@ def _vil(cwd: Path, *args: str) -> subprocess.CompletedProcess[str]:
 
 
 def test_ctrl_c_of_vil_run_is_one_line_with_the_command_that_resumes_it(tmp_path: Path) -> None:
-    args = ["run", "pool12", "--strategy", "greedy", "--duration", "20min", "--out", "out"]
+    args = ["run", "pool12", "--strategy", "greedy", "--duration", "10min", "--out", "out"]
     folder = RunFolder(tmp_path / "out" / "pool12-greedy-seed1-run1")
     proc = subprocess.Popen([*VIL, *args], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env={**os.environ, "PYTHONPATH": str(ROOT)})
@@ -86,7 +86,7 @@ def test_ctrl_c_of_several_runs_to_the_process_group_then_the_printed_command_fi
     """Ctrl-C in a terminal reaches every process of the job (the parallel runs' workers too): one
     line; the printed command keeps the run that had finished, resumes the one that kept a
     checkpoint and runs the others."""
-    args = ["run", "--duration", "20min", "--out", "out", "--jobs", "1"]  # Table II: four runs, one at a time
+    args = ["run", "--duration", "10min", "--out", "out", "--jobs", "1"]  # Table II: four runs, one at a time
     proc = subprocess.Popen([*VIL, *args], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env={**os.environ, "PYTHONPATH": str(ROOT)}, start_new_session=True)
     out = tmp_path / "out"

@@ -9,6 +9,7 @@ import socket
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -20,14 +21,20 @@ pytestmark = [pytest.mark.sitl, pytest.mark.slow]
 
 
 
-def exchange(sock: socket.socket, codec: Codec, port: int, msg: mavlink.MAVLink_message, seconds: float) -> list:
-    sock.sendto(codec.encode(msg), ("127.0.0.1", port))
-    got = []
+def collect(sock: socket.socket, codec: Codec, seconds: float, until: Callable[[list], bool] | None = None) -> list:
+    """What arrives for `seconds`, or until `until(what arrived)` holds (a wait for an answer, not for silence)."""
+    got: list = []
     deadline = time.monotonic() + seconds
-    while time.monotonic() < deadline:
+    while time.monotonic() < deadline and not (until is not None and until(got)):
         with contextlib.suppress(TimeoutError):
             got.extend(codec.decode(sock.recvfrom(65535)[0]))
     return got
+
+
+def exchange(sock: socket.socket, codec: Codec, port: int, msg: mavlink.MAVLink_message, seconds: float,
+             until: Callable[[list], bool] | None = None) -> list:
+    sock.sendto(codec.encode(msg), ("127.0.0.1", port))
+    return collect(sock, codec, seconds, until)
 
 
 def test_a_signing_sitl_process_ignores_a_stray_unsigned_gcs(tmp_path: Path) -> None:
@@ -104,8 +111,12 @@ def answers(got: list) -> list:
 
 
 def param(sock: socket.socket, codec: Codec, port: int, name: bytes) -> float | None:
-    got = exchange(sock, codec, port, mavlink.MAVLink_param_request_read_message(1, 1, name, -1), 1.0)
-    values = [m.param_value for m in got if m.get_type() == "PARAM_VALUE" and m.param_id == name.decode()]
+    def named(got: list) -> list[float]:
+        return [m.param_value for m in got if m.get_type() == "PARAM_VALUE" and m.param_id == name.decode()]
+
+    got = exchange(sock, codec, port, mavlink.MAVLink_param_request_read_message(1, 1, name, -1), 1.0,
+                   until=lambda got: bool(named(got)))
+    values = named(got)
     return values[-1] if values else None
 
 
@@ -123,13 +134,11 @@ def test_signed_frames_captured_before_an_apad_restart_are_refused_after_it(tmp_
             for msg in session_frames():
                 captured.append(gcs.encode(msg))
                 sock.sendto(captured[-1], ("127.0.0.1", port))
-            deadline = time.monotonic() + 2.0
-            while time.monotonic() < deadline:
-                with contextlib.suppress(TimeoutError):
-                    got.extend(gcs.decode(sock.recvfrom(65535)[0]))
+            got = collect(sock, gcs, 2.0, until=lambda got: len(answers(got)) >= 10)
             assert len(answers(got)) >= 10  # the session itself was obeyed
             assert param(sock, gcs, port, b"FS_GCS_ENABLE") == 0.0
-            time.sleep(1.2)  # past a save: with kill -9 what the file holds is up to a second old
+            if stop == "kill":
+                time.sleep(1.2)  # past a save: with kill -9 what the file holds is up to a second old
     finally:
         if stop == "kill":
             proc.kill()

@@ -28,9 +28,10 @@ def test_listing1_goes_to_amussel_24_and_docks_it_in_slot_2(tmp_path: Path) -> N
     """Run twice against the same aPad: the second Dock finds slot 2 holding aMussel 24 and is refused
     in words (it used to be accepted with nothing to report, and the script waited forever)."""
     port = free_udp_port()
+    # A brisk aPad (the defaults' 0.25 m/s^2 made the 4-m Go To take 6 s): the same Go To, then Dock.
     sitl = subprocess.Popen(
-        [sys.executable, "-m", "apad_sitl", "--listen", f"udp:127.0.0.1:{port}", "--param", "DOCK_TIME=2",
-         "--param", "SPEED_MAX=1.0", "--duration", "60s", "--log-dir", str(tmp_path)],
+        [sys.executable, "-m", "apad_sitl", "--listen", f"udp:127.0.0.1:{port}", "--param", "DOCK_TIME=1",
+         "--param", "SPEED_MAX=2.0", "--param", "ACCEL_MAX=1.0", "--duration", "60s", "--log-dir", str(tmp_path)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )
     try:

@@ -90,7 +90,7 @@ def test_the_same_command_twice_gives_identical_json_in_two_folders(tmp_path: Pa
     outputs, folders = [], []
     for k in range(2):
         out = tmp_path / f"r{k}.json"
-        done = vil("run", "pool12", "--strategy", "greedy", "--seed", "3", "--duration", "15m",
+        done = vil("run", "pool12", "--strategy", "greedy", "--seed", "3", "--duration", "5m",
                    "--json", str(out), "--out", str(tmp_path / "runs"), cwd=tmp_path)
         assert done.returncode == 0, done.stderr
         result = json.loads(out.read_text())
@@ -105,7 +105,7 @@ def test_the_same_command_twice_gives_identical_json_in_two_folders(tmp_path: Pa
     keys = {"scenario", "strategy", "seed", "theta", "duration_s", "uptime", "cost_m", "active_avg", "wall_s",
             "mussels"}
     assert keys <= set(result)
-    assert result["duration_s"] == 900.0 and result["seed"] == 3 and len(result["mussels"]) == 12
+    assert result["duration_s"] == 300.0 and result["seed"] == 3 and len(result["mussels"]) == 12
     assert set(result["mussels"][0]) >= {"id", "start_battery", "uptime_pct"}
     run_dir = folders[1]
     assert (run_dir / "gcs.tlog").stat().st_size > 0 and (run_dir / "events.jsonl").stat().st_size > 0
@@ -139,7 +139,7 @@ def test_a_broken_scenario_file_names_file_and_field(tmp_path: Path) -> None:
 
 def test_seed_statistics_cover_every_strategy_and_report_the_shape(tmp_path: Path) -> None:
     out = tmp_path / "seeds.json"
-    done = vil("run", "pool12", "--seeds", "3", "--duration", "10m", "--jobs", "2", "--json", str(out),
+    done = vil("run", "pool12", "--seeds", "3", "--duration", "4m", "--jobs", "2", "--json", str(out),
                "--out", str(tmp_path / "runs"), cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert "Shape of Table II, seed by seed" in done.stdout and "greedy beats no charging" in done.stdout
