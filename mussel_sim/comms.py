@@ -62,7 +62,7 @@ STATUSTEXT_MAX = 50
 HOLDING_LATCHES = (mavlink.DOCK_LATCH_STATE_CLOSING, mavlink.DOCK_LATCH_STATE_LATCHED)
 SURFACE_DEPTH_M = 0.01  # this shallow an aMussel is at the surface, in WiFi's reach (floating and docked: 0 m)
 # Woken by the acoustic ping, an aMussel listens this long (mission time) for the call-up that follows:
-# the GCS sends it right after the ping's answer, within the aPad's slot (about a second). A few
+# the GCS sends it right after the ping's answer, within the aPad's slot (under a second later). A few
 # seconds' margin; not drawn from the battery (the duty cycle's mean drain stands for its wakes).
 PING_LISTEN_US = 5 * US_PER_S
 LAST_WORDS = 10  # publishes of each message a depleted aMussel still makes; 0.4 ** 10: 1e-4 all lost at 40 %
@@ -260,8 +260,9 @@ class FleetRunner:
     def heard_acoustically(self, mussel_id: int, command: MusselCommand | None) -> None:
         """An aMussel's modem heard the GCS: a `command` for it (a call-up: SURFACE), or, with None,
         the wake-up ping. Taken at the next step like a command over MAVLink; an id not ours is counted.
-        A pinged aMussel stays awake `PING_LISTEN_S` for the call-up that follows: heard in that time,
-        it is taken at once (the ping woke it) instead of held for its next scheduled wake."""
+        A pinged aMussel stays awake `PING_LISTEN_US` (from the fleet's last step: 5 to 6 s) for the
+        call-up that follows: heard in that time, it is taken at once (the ping woke it) instead of
+        held for its next scheduled wake."""
         if mussel_id not in self._ids:
             self.dropped["invalid:acoustic:mussel_id"] += 1
             return

@@ -46,6 +46,8 @@ class Planner(Protocol):
 
     def serves(self, mussel_id: int) -> bool: ...
 
+    def claimed(self, mussel_id: int) -> bool: ...
+
 
 class AcousticNetwork:
     def __init__(self, emulator: Attached | None, modems: MusselModems, uplink: AcousticUplink, ledger: KnowledgeLedger,
@@ -124,11 +126,12 @@ class AcousticNetwork:
 
     def belief(self, mussel_id: int) -> float:
         """The battery the planner believes: as the aPad serving that aMussel believes it (with
-        several), else the first aPad's loop."""
-        for planner in self.planners.values():
-            if planner.serves(mussel_id):
-                return planner.battery(mussel_id)
-        return next(iter(self.planners.values())).battery(mussel_id)
+        several), or the aPad holding a claim on it (docked on a lost aPad: its claim holds a while,
+        and the new owner does not serve it yet), else the first aPad's loop."""
+        planners = self.planners.values()
+        chosen = (next((p for p in planners if p.serves(mussel_id)), None)
+                  or next((p for p in planners if p.claimed(mussel_id)), None) or next(iter(planners)))
+        return chosen.battery(mussel_id)
 
     def summary(self) -> dict[str, object]:
         channel = {} if self.emulator is None else dict(self.emulator.core.medium.counts)  # else: in `vil modem`

@@ -313,9 +313,9 @@ class ApadActions:
             self.command(self.api.command_mussel, mussel_id, MusselCommand.SURFACE, self.apad_id)
             self._log("call_up", mussel=mussel_id, distance_m=round(distance, 2))
         else:  # over the water, acknowledged, retried; a sleeper pinged awake first
-            outcome = acoustic.uplink.call_up(mussel_id, self.knows.wake_in_s(mussel_id) > 0, self.apad_id, self._wait,
-                                              wanted=partial(self.knows.heard_alive, mussel_id))
-            if outcome is CallUp.ABANDONED:  # believed empty while the aPad's slot came round
+            outcome = acoustic.uplink.call_up(mussel_id, partial(self.knows.asleep, mussel_id), self.apad_id,
+                                              self._wait, wanted=partial(self.knows.heard_alive, mussel_id))
+            if outcome is CallUp.ABANDONED:  # believed empty before a call-up went: not called
                 self.knows.release(mussel_id)
                 return False
             self._log("call_up", mussel=mussel_id, distance_m=round(distance, 2), acoustic=True,

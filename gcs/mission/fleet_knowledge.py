@@ -209,6 +209,10 @@ class FleetKnowledge:
         """Mission seconds until it next hears a call-up (0: awake, or always on)."""
         return self.duty(mussel_id).wake_in_s(mussel_id, self.clock.time(), self.settings.mission.theta)
 
+    def asleep(self, mussel_id: int) -> bool:
+        """Asleep now as far as its duty says (a call-up would wait for its wake: ping it first)."""
+        return self.wake_in_s(mussel_id) > 0
+
     def call_up_wait_s(self, mussel_id: int) -> float:
         """How long a call-up may take to float it: the loop's bound, or its longest wake gap and twice
         its rise (a sleep order given during the mission may sleep longer than the scenario's profiles)."""
@@ -267,6 +271,10 @@ class FleetKnowledge:
     def serves(self, mussel_id: int) -> bool:
         """Whether this aPad may call the aMussel up (always, with no other aPad)."""
         return self.shares is None or self.shares.serves(self.apad_id, mussel_id, self.clock.now_us)
+
+    def claimed(self, mussel_id: int) -> bool:
+        """Whether this aPad holds the claim on it (fetching it, or holding it on a slot); never, alone."""
+        return self.shares is not None and self.shares.holds(self.apad_id, mussel_id)
 
     def claim(self, mussel_id: int) -> bool:
         """Claim the aMussel for this aPad before calling it up (never two aPads; always, alone)."""

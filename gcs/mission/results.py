@@ -137,7 +137,8 @@ def happened_lines(results: list[RunResult]) -> list[str]:
 
 
 def acoustic_words(a: dict[str, Any]) -> str:
-    """An acoustic run in one clause: frame, reports heard of sent, knowledge age, estimate error, call-ups."""
+    """An acoustic run in one clause: frame, reports heard of sent, knowledge age, estimate error, call-ups
+    (and those abandoned before they went: believed empty by the aPad's slot)."""
     counts, fleet, k = a.get("counts", {}), a.get("fleet", {}), a.get("knowledge", {})
     sent, heard = fleet.get("reports_sent", 0), counts.get("reports_heard", 0)
     calls = counts.get("call_ups_acked", 0) + counts.get("call_ups_unacked", 0)
@@ -145,7 +146,8 @@ def acoustic_words(a: dict[str, Any]) -> str:
             f"{k.get('age_median_s', 0):.1f} s old (median; max {k.get('age_max_s', 0):.0f} s), battery estimate "
             f"off by {100 * k.get('battery_error_mean', 0):.2f} % (max {100 * k.get('battery_error_max', 0):.2f} %), "
             f"call-ups acknowledged {counts.get('call_ups_acked', 0)} of {calls} "
-            f"({counts.get('call_up_retries', 0)} retries)")
+            f"({counts.get('call_up_retries', 0)} retries)"
+            + (f", {abandoned} abandoned unsent" if (abandoned := counts.get("call_ups_abandoned", 0)) else ""))
 
 
 def apads_table(results: list[RunResult]) -> Table | None:

@@ -154,7 +154,7 @@ class MissionSession:
         self.shares = shares = restored.shares if restored is not None and restored.shares else FleetShares()
         self.watch = watch = SwarmWatch(
             world.link.registry, shares, world.frame, {a.system_id: a.battery_end_v for a in world.scenario.apads},
-            world.events, world.clock, seed=world.scenario.seed)
+            world.events, world.clock, seed=world.scenario.seed, fleet_size=world.scenario.fleet.count)
         if restored is not None:
             watch.retired |= restored.retired
         watch.check(world.clock.now_us)

@@ -113,11 +113,13 @@ class SwarmWatch:
 
     def __init__(
         self, registry: VehicleRegistry, shares: FleetShares, frame: LocalFrame, apads: dict[int, float],
-        events: EventLog, clock: Clock, seed: int = 0,
+        events: EventLog, clock: Clock, seed: int = 0, fleet_size: int = 0,
     ) -> None:
-        """`apads`: every aPad of the scenario, by system id, with its battery end threshold (V)."""
+        """`apads`: every aPad of the scenario, by system id, with its battery end threshold (V);
+        `fleet_size`: the aMussels the mission expects to hear (an even share of them is the room each
+        aPad has for those that join as they are heard; 0: as many as are known)."""
         self.registry, self.shares, self.frame, self.apads = registry, shares, frame, apads
-        self.events, self.clock, self.seed = events, clock, seed
+        self.events, self.clock, self.seed, self.fleet_size = events, clock, seed, fleet_size
         self.on_reshare: list[Callable[[FleetShares], None]] = []
         self.retired: set[int] = set()  # aPads whose loop has ended (battery): never shared again
 
@@ -159,8 +161,8 @@ class SwarmWatch:
 
     def join_newcomers(self) -> None:
         """aMussels first heard after the sharing (acoustically, in their TDMA slots; a real one as it
-        comes in range) each join the share of the nearest centre with room, an even share of all
-        known; the shares already made stay as they are."""
+        comes in range) each join the share of the nearest centre with room (an even share of the
+        fleet expected, or of all known if more); the shares already made stay as they are."""
         table, shares = self.registry.mussels, self.shares
         new = np.array(sorted(set(table) - shares.owner.keys()), np.int64)
         if not len(new) or shares.partition is None:
@@ -170,7 +172,8 @@ class SwarmWatch:
         if not apads:
             return
         counts = {a: len(shares.partition.shares.get(a, [])) for a in apads}
-        room = math.ceil((sum(len(ids) for ids in shares.partition.shares.values()) + len(new)) / len(apads))
+        known = sum(len(ids) for ids in shares.partition.shares.values()) + len(new)
+        room = math.ceil(max(known, self.fleet_size) / len(apads))  # an even share of the whole fleet
         rows = table.rows(new)
         x, y = self.frame.to_local(table.lat_e7[rows] / 1e7, table.lon_e7[rows] / 1e7)
         joiners: dict[int, int] = {}

@@ -76,8 +76,9 @@ FIGURES: tuple[tuple[str, Draw, str, str], ...] = (
      "and the aMussels alive at its end (line); below, the aMussels each aPad charged that day (line) and the "
      "energy it passed into them (dotted). Every day is in the table of the same name."),
     ("partition.png", maps.partition_png, "The fleet shared among the aPads",
-     "Which aPad served which aMussels (k-means, balanced): the first sharing, then the last re-shares "
-     "after an aPad was lost or came back. X marks each share's centre."),
+     "Which aPad served which aMussels (k-means, balanced; in an acoustic fleet each aMussel joins the nearest "
+     "share with room as it is first heard): the first sharing, then the last re-shares after an aPad was lost "
+     "or came back. X marks each share's centre."),
 )
 
 

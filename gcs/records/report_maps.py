@@ -80,20 +80,28 @@ def track_png(data: RunData, path: Path) -> Path:
 
 
 def reshares(events: tuple[Event, ...]) -> list[Event]:
-    """The swarm's re-share events (which aPad serves which aMussels), oldest first; an older run's
-    event (counts, not ids) or a damaged one is left out."""
-    out = []
+    """The swarm's sharings (which aPad serves which aMussels), oldest first: each re-share, with the
+    aMussels that joined it as they were first heard (an acoustic fleet: `joined` events) folded in and
+    its time that of the last to join; an older run's event (counts, not ids) or a damaged one is left out."""
+    out: list[Event] = []
     for event in events:
         shares = event.fields.get("shares")
-        if event.kind == "reshare" and isinstance(shares, dict) and all(
-                isinstance(ids, list) and all(type(m) is int for m in ids) for ids in shares.values()):
+        if not (isinstance(shares, dict) and all(
+                isinstance(ids, list) and all(type(m) is int for m in ids) for ids in shares.values())):
+            continue
+        if event.kind == "reshare":
             out.append(event)
+        elif event.kind == "joined" and out:
+            last: dict[str, list[int]] = out[-1].fields["shares"]
+            grown = {a: sorted(set(last.get(a, [])) | set(shares.get(a, []))) for a in sorted({*last, *shares})}
+            out[-1] = Event(event.t_s, "reshare", {**out[-1].fields, "shares": grown, "heard": True})
     return out
 
 
 def partition_png(data: RunData, path: Path) -> Path | None:
-    """Several aPads: the k-means shares of the fleet, one panel per sharing (the first, then the
-    last two re-shares after an aPad was lost or came back). None for a one-aPad run."""
+    """Several aPads: the shares of the fleet, one panel per sharing (the first, with those that
+    joined it as they were heard, then the last two re-shares after an aPad was lost or came back).
+    None for a one-aPad run."""
     events = reshares(data.events)
     if not events:
         return None
@@ -118,7 +126,9 @@ def partition_png(data: RunData, path: Path) -> Path | None:
         gone = ", ".join(str(a) for a in lost) if isinstance(lost, list) else ""
         origin_axes(ax, data)
         ax.xaxis.label.set_fontsize(7)
-        ax.set_title(f"t = {event.t_s / 60:.1f} min" + (f", aPad {gone} lost" if gone else ""))
+        heard = " (as first heard)" if event.fields.get("heard") else ""
+        ax.set_title(f"t = {event.t_s / 60:.1f} min{heard}" + (f", aPad {gone} lost" if gone else ""))
         ax.legend(fontsize=7, loc="best")
-    fig.suptitle(f"The fleet shared among the aPads — {data.title}\n(k-means, balanced; X: share centre)")
+    fig.suptitle(f"The fleet shared among the aPads — {data.title}\n"
+                 "(k-means, balanced, or each as first heard to the nearest share with room; X: share centre)")
     return save(fig, path)

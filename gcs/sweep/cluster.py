@@ -12,7 +12,7 @@ import tempfile
 import threading
 import traceback
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -63,7 +63,23 @@ def dask_client(scheduler: str | None, workers: int | None = None, processes: bo
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=":0",
                                silence_logs=logging.ERROR)
     with cluster, Client(cluster) as client:
-        yield client
+        try:
+            yield client
+        except KeyboardInterrupt:
+            _quiet_heartbeats(client)
+            raise
+
+
+def _quiet_heartbeats(client: Client) -> None:
+    """Before a Ctrl-C closes the local cluster: a worker whose heartbeat is in flight as the scheduler
+    closes logs it as an error with a traceback (distributed.worker, "Failed to communicate with
+    scheduler during heartbeat"), which is no error of the sweep's; only a Ctrl-C's closing mutes it."""
+    with suppress(Exception):  # a worker already gone: nothing of its to mute
+        client.run(_mute_worker_log, on_error="return")
+
+
+def _mute_worker_log() -> None:
+    logging.getLogger("distributed.worker").setLevel(logging.CRITICAL)
 
 
 @contextmanager

@@ -11,8 +11,9 @@ from itertools import pairwise
 import numpy as np
 import pytest
 
+from acoustic.channel import Transmission
 from acoustic.nanomodem.driver import ModemDriver, Result
-from acoustic.nanomodem.emulator import ModemEmulator, RemoteUnit
+from acoustic.nanomodem.emulator import LOCAL, ModemEmulator, RemoteUnit
 from acoustic.nanomodem.lockstep import attach
 from acoustic.nanomodem.ports import pipe
 from acoustic.orders import CALL_UP_TRIES
@@ -83,13 +84,82 @@ def test_a_call_up_no_longer_wanted_when_its_slot_comes_is_abandoned_unsent() ->
     uplink.register(clock.scheduler)
     slot_s = tdma.next_slot_start_s(Owner.APAD, 1, 0.0)
     assert slot_s > 1.0
-    outcome = uplink.call_up(7, True, 1, wanted=lambda: clock.time() < slot_s - 0.5)  # a sleeper: ping first
+    outcome = uplink.call_up(7, lambda: True, 1, wanted=lambda: clock.time() < slot_s - 0.5)  # a sleeper
     assert outcome is CallUp.ABANDONED and clock.time() == pytest.approx(slot_s, abs=1e-6)
     assert uplink.counts == {"call_ups_abandoned": 1}  # no ping, no call-up sent
     assert not any(core.medium.counts.values())  # nothing on the water
     assert [(e.kind, e.fields) for e in events.events] == [("call_up_abandoned", {"mussel": 7})]
-    assert uplink.call_up(7, False, 1) is CallUp.ACKED  # wanted by default: sent and acknowledged
+    assert uplink.call_up(7, lambda: False, 1) is CallUp.ACKED  # wanted by default: sent and acknowledged
+
+
+class OneUnit:
+    """The GCS's unit and one remote aMussel `at_m` away on the emulator, with every packet the GCS's
+    unit puts on the water recorded (start, airtime)."""
+
+    def __init__(self, at_m: float) -> None:
+        self.params, self.clock = AcousticParams(), VirtualClock()
+        self.core = ModemEmulator(self.params, (RemoteUnit(7, (at_m, 0.0, 3.0)),), np.random.default_rng(1))
+        gcs_end, modem_end = pipe()
+        attach(self.core, modem_end, self.clock)
+        self.tdma = tdma_frame([7], [1], 50.0, self.params)
+        self.events = EventLog()
+        self.uplink = AcousticUplink(ModemDriver(gcs_end, self.clock), VehicleRegistry(), self.clock, self.events,
+                                     self.tdma)
+        self.uplink.register(self.clock.scheduler)
+        self.sent: list[tuple[float, float]] = []
+        transmit = self.core.medium.transmit
+
+        def recorded(sender: int, start_s: float, payload_bytes: int, data: object = None,
+                     listeners: list[int] | None = None) -> Transmission:
+            tx = transmit(sender, start_s, payload_bytes, data, listeners)
+            if sender == LOCAL:
+                self.sent.append((tx.start_s, tx.airtime_s))
+            return tx
+
+        self.core.medium.transmit = recorded  # type: ignore[method-assign]
+
+    def in_apad_slots(self) -> bool:
+        """Every packet of the GCS's unit began and ended within one of the aPad's slots."""
+        slot_s = self.tdma.slot_s
+        return all(start + airtime <= self.tdma.next_slot_start_s(Owner.APAD, 1, start - slot_s) + slot_s
+                   and start >= self.tdma.next_slot_start_s(Owner.APAD, 1, start - slot_s) - 1e-6
+                   for start, airtime in self.sent)
+
+
+def test_a_woken_sleeper_is_called_up_in_the_same_slot_as_its_ping() -> None:
+    unit = OneUnit(20.0)
+    assert unit.uplink.call_up(7, lambda: True, 1) is CallUp.ACKED
+    assert unit.uplink.counts == {"wake_pings": 1, "call_up_sent": 1, "call_ups_acked": 1, "call_up_retries": 0}
+    assert len(unit.sent) == 2 and unit.in_apad_slots()  # the ping and the call-up, one slot
+    (ping_s, _), (call_s, _) = unit.sent
+    assert unit.tdma.next_slot_start_s(Owner.APAD, 1, call_s - unit.tdma.slot_s) == pytest.approx(ping_s)
+
+
+def test_a_sleeper_that_answers_no_ping_gets_no_call_up_outside_the_apads_slot() -> None:
+    # 5 km off: no ping is answered (#TO after 4 s, past the slot). Each try ends with its ping; the last
+    # sends the call-up alone at its slot's start (heard asleep, it would be taken at the next wake).
+    unit = OneUnit(5000.0)
+    assert unit.uplink.call_up(7, lambda: True, 1) is CallUp.UNACKED
+    counts = unit.uplink.counts
+    assert counts["wake_pings"] == CALL_UP_TRIES - 1 and counts["wake_ping:timeout"] == CALL_UP_TRIES - 1
+    assert counts["call_up_sent"] == 1 and counts["call_ups_unacked"] == 1
+    assert len(unit.sent) == CALL_UP_TRIES and unit.in_apad_slots()
+
+
+def test_a_call_up_that_went_is_not_abandoned_when_no_longer_wanted() -> None:
+    # Out of range: the first call-up goes and is not acknowledged; it may still have been heard, so
+    # the tries go on though the aMussel is no longer wanted, and the loop's surfacing wait decides.
+    unit = OneUnit(5000.0)
+    tries: list[float] = []
+
+    def wanted() -> bool:
+        tries.append(unit.clock.time())
+        return len(tries) <= 2  # asked before the first try and at its slot: wanted; never again
+
+    assert unit.uplink.call_up(7, lambda: False, 1, wanted=wanted) is CallUp.UNACKED
+    assert len(tries) == 2 and unit.uplink.counts["call_up_sent"] == CALL_UP_TRIES
+    assert "call_ups_abandoned" not in unit.uplink.counts
 
 
 def call_up(uplink: AcousticUplink, mussel: int, apad: int, own: Clock) -> CallUp:
-    return uplink.call_up(mussel, False, apad, own.sleep)
+    return uplink.call_up(mussel, lambda: False, apad, own.sleep)
