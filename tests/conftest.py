@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import compileall
 import os
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -12,13 +13,16 @@ import pytest
 os.environ.pop("NO_COLOR", None)
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("vil", "missiontime", "acoustic", "mavlink_dialect", "mussel_sim", "apad_sitl", "gcs")
+# The project's top-level packages, as pyproject.toml lists them (the Makefile compiles the same).
+PACKAGES = sorted({p.split(".")[0] for p in
+                   tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"]})
 
 
 def pytest_configure(config: pytest.Config) -> None:
     """Bytecode for the project's packages, written once before the workers start. Hundreds of tests start
     `vil`, SITL and modem processes; where PYTHONDONTWRITEBYTECODE is set (as `make` expects, see its
-    compileall of mavlink_dialect) each of them compiled every module it imports again, ~0.4 s a start.
+    compileall) each of them compiled every module it imports again, ~0.4 s a start, and a source
+    changed since `make` is compiled once here instead of in every process.
     compileall writes .pyc regardless, only for sources newer than theirs (git ignores __pycache__/)."""
     if hasattr(config, "workerinput"):  # an xdist worker: the controller has compiled them
         return
