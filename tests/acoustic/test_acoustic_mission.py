@@ -14,6 +14,7 @@ import re
 import shutil
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -57,6 +58,19 @@ def run_copied_at_a_checkpoint(scenario: Scenario, whole: Path, crashed: Path, a
     monkeypatch.setattr(checkpoint, "save", real_save)
     assert taken
     return taken[0]
+
+
+def resumed_and_whole(scenario: Scenario, tmp_path: Path, at_s: float,
+                      monkeypatch: pytest.MonkeyPatch) -> tuple[dict[str, Any], dict[str, Any]]:
+    """result.json of `scenario` crashed past `at_s` and resumed (`vil run --resume`'s way: replayed to
+    the checkpoint), and of the same run never interrupted; their wall time and folder left out."""
+    whole, crashed = tmp_path / "whole", tmp_path / "crashed"
+    run_copied_at_a_checkpoint(scenario, whole, crashed, at_s, monkeypatch)
+    run_mission(scenario, crashed, resume=True)
+    a, b = (json.loads((d / "result.json").read_text()) for d in (crashed, whole))
+    for r in (a, b):
+        del r["wall_s"], r["out_dir"]
+    return a, b
 
 
 def run_restored(scenario: Scenario, crashed: Path) -> RunResult:
@@ -171,12 +185,7 @@ def test_a_crashed_acoustic_mission_resumes_to_the_uninterrupted_result(tmp_path
     # The folder as a crash at the first checkpoint past 5 minutes leaves it; the resume replays the
     # mission to that checkpoint (the channel's draws included) and goes on.
     scenario = replace(POOL.with_overrides(duration_s=600.0), acoustic=replace(POOL.acoustic, noise_psd_db=104.0))
-    whole, crashed = tmp_path / "whole", tmp_path / "crashed"
-    run_copied_at_a_checkpoint(scenario, whole, crashed, 300.0, monkeypatch)
-    run_mission(scenario, crashed, resume=True)
-    a, b = (json.loads((d / "result.json").read_text()) for d in (crashed, whole))
-    for r in (a, b):
-        del r["wall_s"], r["out_dir"]
+    a, b = resumed_and_whole(scenario, tmp_path, 300.0, monkeypatch)
     assert a["acoustic"]["counts"]["reports_heard"] > 0 and a["acoustic"]["channel"]["packet_error"] > 0
     assert a == b
 
@@ -257,11 +266,6 @@ def test_a_crashed_two_apad_acoustic_mission_resumes_to_the_uninterrupted_result
     # loops, the shared unit and the channel's draws to the checkpoint and goes on to the same result.
     scenario = two_apad_acoustic(10.0)
     scenario = replace(scenario, acoustic=replace(scenario.acoustic, noise_psd_db=104.0))
-    whole, crashed = tmp_path / "whole", tmp_path / "crashed"
-    run_copied_at_a_checkpoint(scenario, whole, crashed, 300.0, monkeypatch)
-    run_mission(scenario, crashed, resume=True)
-    a, b = (json.loads((d / "result.json").read_text()) for d in (crashed, whole))
-    for r in (a, b):
-        del r["wall_s"], r["out_dir"]
+    a, b = resumed_and_whole(scenario, tmp_path, 300.0, monkeypatch)
     assert a["acoustic"]["counts"]["call_up_retries"] > 0 and a["acoustic"]["channel"]["packet_error"] > 0
     assert {e["sysid"] for e in a["apads"]} == {1, 2} and a == b
