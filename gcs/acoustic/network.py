@@ -7,7 +7,8 @@
 - the GCS's driver on an in-process byte pipe to it: the same driver code that speaks to a real unit
   through pyserial, reading the same bytes;
 - the aMussels' side (`mussel_sim.modems`): status reports in their TDMA slots, call-ups heard;
-- the GCS's side (`gcs.acoustic.uplink`): reports folded into what the GCS knows, call-ups sent;
+- the GCS's side: reports folded into what the GCS knows (`gcs.acoustic.uplink`), call-ups sent
+  (`gcs.acoustic.call_ups`), over one driver;
 - a `KnowledgeLedger` sampled every `SAMPLE_S`: the planner's belief against the simulator's truth.
 """
 
@@ -25,6 +26,7 @@ from acoustic.nanomodem.ports import BytePort, pipe
 from acoustic.nanomodem.sea import Sea
 from acoustic.params import AcousticParams
 from acoustic.tdma import TdmaFrame, tdma_frame
+from gcs.acoustic.call_ups import CallUps
 from gcs.acoustic.knowledge import KnowledgeLedger, age_s
 from gcs.acoustic.uplink import AcousticUplink
 from gcs.link.registry import VehicleRegistry
@@ -50,9 +52,9 @@ class Planner(Protocol):
 
 
 class AcousticNetwork:
-    def __init__(self, emulator: Attached | None, modems: MusselModems, uplink: AcousticUplink, ledger: KnowledgeLedger,
-                 registry: VehicleRegistry, fleet: FleetRunner) -> None:
-        self.emulator, self.modems, self.uplink, self.ledger = emulator, modems, uplink, ledger
+    def __init__(self, emulator: Attached | None, modems: MusselModems, uplink: AcousticUplink, call_ups: CallUps,
+                 ledger: KnowledgeLedger, registry: VehicleRegistry, fleet: FleetRunner) -> None:
+        self.emulator, self.modems, self.uplink, self.call_ups, self.ledger = emulator, modems, uplink, call_ups, ledger
         self.registry, self.fleet = registry, fleet
         # Each aPad's loop's view of the fleet (its own drains, sleep orders included), as it plans;
         # none yet: no loop plans, so there is no belief to sample.
@@ -92,9 +94,11 @@ class AcousticNetwork:
         tdma = tdma_frame(ids, apad_ids, area_range_m, params)
         modems = MusselModems(fleet, sea, tdma, GCS_ADDRESS, (hx, hy))
         modems.register(clock.scheduler, clock.now_us)
-        uplink = AcousticUplink(ModemDriver(port, clock, params.sound_speed_mps), registry, clock, events, tdma)
+        driver = ModemDriver(port, clock, params.sound_speed_mps)
+        uplink = AcousticUplink(driver, registry, clock, tdma)
         uplink.register(clock.scheduler)
-        network = cls(emulator, modems, uplink, KnowledgeLedger(fleet.state.ids), registry, fleet)
+        network = cls(emulator, modems, uplink, CallUps(driver, clock, events, tdma), KnowledgeLedger(fleet.state.ids),
+                      registry, fleet)
         network._task = clock.scheduler.every(SAMPLE_S, network.sample, "acoustic-knowledge", clock.now_us)
         return network
 
@@ -136,6 +140,8 @@ class AcousticNetwork:
     def summary(self) -> dict[str, object]:
         channel = {} if self.emulator is None else dict(self.emulator.core.medium.counts)  # else: in `vil modem`
         sea = dict(getattr(self.modems.sea, "dropped", {}))  # a sea over UDP, or none: what it did not carry
-        return {**self.uplink.summary(), "fleet": dict(sorted(self.modems.counts.items())),
+        counts = {**self.uplink.counts, **self.call_ups.counts}  # apart: reports heard; tries and outcomes
+        return {**self.uplink.summary(), "counts": dict(sorted(counts.items())),
+                "fleet": dict(sorted(self.modems.counts.items())),
                 "channel": channel, "knowledge": self.ledger.summary().as_dict(),
                 **({"sea_dropped": dict(sorted(sea.items()))} if sea else {})}

@@ -13,7 +13,7 @@ from collections.abc import Callable
 from functools import partial
 
 from apad_sitl.vocabulary import Latch, Progress
-from gcs.acoustic.uplink import CallUp
+from gcs.acoustic.call_ups import CallUp
 from gcs.api import CommandError, GeofenceError, Location
 from gcs.mission.control import EndReason, LoopControl, LoopLog, LoopStatus, MissionEnded, Phase
 from gcs.mission.fleet_knowledge import FleetKnowledge
@@ -313,7 +313,7 @@ class ApadActions:
             self.command(self.api.command_mussel, mussel_id, MusselCommand.SURFACE, self.apad_id)
             self._log("call_up", mussel=mussel_id, distance_m=round(distance, 2))
         else:  # over the water, acknowledged, retried; a sleeper pinged awake first
-            outcome = acoustic.uplink.call_up(mussel_id, partial(self.knows.asleep, mussel_id), self.apad_id,
+            outcome = acoustic.call_ups.call_up(mussel_id, partial(self.knows.asleep, mussel_id), self.apad_id,
                                               self._wait, wanted=partial(self.knows.heard_alive, mussel_id))
             if outcome is CallUp.ABANDONED:  # believed empty before a call-up went: not called
                 self.knows.release(mussel_id)

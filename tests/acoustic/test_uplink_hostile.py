@@ -17,7 +17,6 @@ from acoustic.status_packet import LAYOUT, VERSION, StatusReport, pack
 from acoustic.tdma import tdma_frame
 from gcs.acoustic.uplink import AcousticUplink
 from gcs.link.registry import VehicleRegistry
-from gcs.records.events import EventLog
 from missiontime.clocks import VirtualClock
 
 GOOD = StatusReport(7, 0, 0, 0.5, 0.0, 43.94, 15.44, 3.0, 8.0, 20.0, 1013.0, 1.0)
@@ -29,8 +28,7 @@ def test_hostile_reports_are_counted_by_reason_and_a_good_one_is_known() -> None
     gcs_end, modem_end = pipe()
     emulator = attach(core, modem_end, clock)
     registry = VehicleRegistry()
-    uplink = AcousticUplink(ModemDriver(gcs_end, clock), registry, clock, EventLog(), tdma_frame([7], [1], 50.0,
-                                                                                              AcousticParams()))
+    uplink = AcousticUplink(ModemDriver(gcs_end, clock), registry, clock, tdma_frame([7], [1], 50.0, AcousticParams()))
     uplink.register(clock.scheduler)
     good = pack(GOOD)
     hostile = [

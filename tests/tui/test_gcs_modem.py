@@ -66,10 +66,11 @@ def test_the_gcs_hears_and_calls_up_through_a_serial_unit(
 
     asyncio.run(drive())
     assert runner.world is not None and runner.world.acoustic is not None
-    uplink, modems = runner.world.acoustic.uplink, runner.world.acoustic.modems
+    acoustic = runner.world.acoustic
+    uplink, call_ups, modems = acoustic.uplink, acoustic.call_ups, acoustic.modems
     assert modems.counts["reports_sent"] > 0
     assert uplink.counts["reports_heard"] >= modems.counts["reports_sent"] - 2  # a pool: all heard but the last few
-    assert uplink.counts["call_ups_acked"] >= 1 and modems.counts["heard:unicast_ack"] >= 1
+    assert call_ups.counts["call_ups_acked"] >= 1 and modems.counts["heard:unicast_ack"] >= 1
     assert not uplink.dropped and not uplink.driver.dropped
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=30)

@@ -1,7 +1,8 @@
-"""Several aPads' loops share the GCS's one nanomodem: an exchange (ping, acknowledged unicast) holds the
-unit until its answer, and another aPad's call-up waits for it and then for that aPad's own next slot.
-Real bytes through the emulator, its pipe and the driver; the loops as `missiontime.processes` scripts
-on one virtual clock, as a swarm mission runs them."""
+"""Call-ups over the GCS's nanomodem in the aPads' TDMA slots: what goes on the water stays in the aPad's
+slot (a sleeper's ping and call-up in one), a call-up no longer wanted is abandoned only before one went,
+and several aPads' loops take turns on the one unit (a try holds it until its answers; another aPad's
+waits for it and then for its own next slot). Real bytes through the emulator, its pipe and the driver;
+the loops as `missiontime.processes` scripts on one virtual clock, as a swarm mission runs them."""
 
 from __future__ import annotations
 
@@ -19,8 +20,7 @@ from acoustic.nanomodem.ports import pipe
 from acoustic.orders import CALL_UP_TRIES
 from acoustic.params import AcousticParams
 from acoustic.tdma import Owner, tdma_frame
-from gcs.acoustic.uplink import AcousticUplink, CallUp
-from gcs.link.registry import VehicleRegistry
+from gcs.acoustic.call_ups import CallUp, CallUps
 from gcs.records.events import EventLog
 from missiontime import Clock
 from missiontime.clocks import VirtualClock
@@ -37,28 +37,27 @@ def test_two_apads_calling_up_at_once_take_turns_on_the_unit() -> None:
     attach(ModemEmulator(params, remotes, np.random.default_rng(1)), modem_end, clock)
     tdma = tdma_frame([7, 8], [1, 2], 50.0, params)  # the aPads' slots are the last two, back to back
     events = EventLog()
-    uplink = AcousticUplink(ModemDriver(gcs_end, clock), VehicleRegistry(), clock, events, tdma)
-    uplink.register(clock.scheduler)
+    call_ups = CallUps(ModemDriver(gcs_end, clock), clock, events, tdma)
     exchanges: list[tuple[int, float, float]] = []  # (aPad, start, end) of each exchange on the unit
-    real_unicast_ack = uplink.driver.unicast_ack
+    real_unicast_ack = call_ups.driver.unicast_ack
 
     def timed_unicast_ack(address: int, data: bytes) -> Result:
-        holder = uplink.holder
+        holder = call_ups.holder
         assert holder is not None  # nobody speaks on the unit without holding it
         start = clock.time()
         result = real_unicast_ack(address, data)
         exchanges.append((holder, start, clock.time()))
         return result
 
-    uplink.driver.unicast_ack = timed_unicast_ack  # type: ignore[method-assign]
+    call_ups.driver.unicast_ack = timed_unicast_ack  # type: ignore[method-assign]
     processes = Processes(clock)
-    handles = {apad: processes.spawn(f"apad{apad}", partial(call_up, uplink, mussel, apad))
+    handles = {apad: processes.spawn(f"apad{apad}", partial(call_up, call_ups, mussel, apad))
                for apad, mussel in ((1, 7), (2, 8))}
     processes.run()
 
     assert handles[1].result is CallUp.UNACKED and handles[2].result is CallUp.ACKED
-    assert uplink.counts["call_ups_unacked"] == 1 and uplink.counts["call_ups_acked"] == 1
-    assert uplink.counts["modem_busy_waits"] == CALL_UP_TRIES  # each of aPad 1's tries outlasts a slot
+    assert call_ups.counts["call_ups_unacked"] == 1 and call_ups.counts["call_ups_acked"] == 1
+    assert call_ups.counts["modem_busy_waits"] == CALL_UP_TRIES  # each of aPad 1's tries outlasts a slot
     assert [e.fields for e in events.events if e.kind == "call_up_unacked"] == [
         {"mussel": 7, "tries": CALL_UP_TRIES, "apad": 1}]
     assert all(end - start > tdma.slot_s for apad, start, end in exchanges if apad == 1)
@@ -67,7 +66,7 @@ def test_two_apads_calling_up_at_once_take_turns_on_the_unit() -> None:
     for apad, start, _ in exchanges:  # each at the start of one of its aPad's slots
         assert start == pytest.approx(tdma.next_slot_start_s(Owner.APAD, apad, start - 1e-3), abs=1e-6)
     assert [apad for apad, _, _ in exchanges] == [1] * CALL_UP_TRIES + [2]
-    assert not uplink.driver.dropped and not uplink.dropped  # no reply taken by the wrong exchange
+    assert not call_ups.driver.dropped  # no reply taken by the wrong try
 
 
 def test_a_call_up_no_longer_wanted_when_its_slot_comes_is_abandoned_unsent() -> None:
@@ -80,16 +79,15 @@ def test_a_call_up_no_longer_wanted_when_its_slot_comes_is_abandoned_unsent() ->
     attach(core, modem_end, clock)
     tdma = tdma_frame([7], [1], 50.0, params)
     events = EventLog()
-    uplink = AcousticUplink(ModemDriver(gcs_end, clock), VehicleRegistry(), clock, events, tdma)
-    uplink.register(clock.scheduler)
+    call_ups = CallUps(ModemDriver(gcs_end, clock), clock, events, tdma)
     slot_s = tdma.next_slot_start_s(Owner.APAD, 1, 0.0)
     assert slot_s > 1.0
-    outcome = uplink.call_up(7, lambda: True, 1, wanted=lambda: clock.time() < slot_s - 0.5)  # a sleeper
+    outcome = call_ups.call_up(7, lambda: True, 1, wanted=lambda: clock.time() < slot_s - 0.5)  # a sleeper
     assert outcome is CallUp.ABANDONED and clock.time() == pytest.approx(slot_s, abs=1e-6)
-    assert uplink.counts == {"call_ups_abandoned": 1}  # no ping, no call-up sent
+    assert call_ups.counts == {"call_ups_abandoned": 1}  # no ping, no call-up sent
     assert not any(core.medium.counts.values())  # nothing on the water
     assert [(e.kind, e.fields) for e in events.events] == [("call_up_abandoned", {"mussel": 7})]
-    assert uplink.call_up(7, lambda: False, 1) is CallUp.ACKED  # wanted by default: sent and acknowledged
+    assert call_ups.call_up(7, lambda: False, 1) is CallUp.ACKED  # wanted by default: sent and acknowledged
 
 
 class OneUnit:
@@ -103,9 +101,7 @@ class OneUnit:
         attach(self.core, modem_end, self.clock)
         self.tdma = tdma_frame([7], [1], 50.0, self.params)
         self.events = EventLog()
-        self.uplink = AcousticUplink(ModemDriver(gcs_end, self.clock), VehicleRegistry(), self.clock, self.events,
-                                     self.tdma)
-        self.uplink.register(self.clock.scheduler)
+        self.call_ups = CallUps(ModemDriver(gcs_end, self.clock), self.clock, self.events, self.tdma)
         self.sent: list[tuple[float, float]] = []
         transmit = self.core.medium.transmit
 
@@ -128,8 +124,8 @@ class OneUnit:
 
 def test_a_woken_sleeper_is_called_up_in_the_same_slot_as_its_ping() -> None:
     unit = OneUnit(20.0)
-    assert unit.uplink.call_up(7, lambda: True, 1) is CallUp.ACKED
-    assert unit.uplink.counts == {"wake_pings": 1, "call_up_sent": 1, "call_ups_acked": 1, "call_up_retries": 0}
+    assert unit.call_ups.call_up(7, lambda: True, 1) is CallUp.ACKED
+    assert unit.call_ups.counts == {"wake_pings": 1, "call_up_sent": 1, "call_ups_acked": 1, "call_up_retries": 0}
     assert len(unit.sent) == 2 and unit.in_apad_slots()  # the ping and the call-up, one slot
     (ping_s, _), (call_s, _) = unit.sent
     assert unit.tdma.next_slot_start_s(Owner.APAD, 1, call_s - unit.tdma.slot_s) == pytest.approx(ping_s)
@@ -139,8 +135,8 @@ def test_a_sleeper_that_answers_no_ping_gets_no_call_up_outside_the_apads_slot()
     # 5 km off: no ping is answered (#TO after 4 s, past the slot). Each try ends with its ping; the last
     # sends the call-up alone at its slot's start (heard asleep, it would be taken at the next wake).
     unit = OneUnit(5000.0)
-    assert unit.uplink.call_up(7, lambda: True, 1) is CallUp.UNACKED
-    counts = unit.uplink.counts
+    assert unit.call_ups.call_up(7, lambda: True, 1) is CallUp.UNACKED
+    counts = unit.call_ups.counts
     assert counts["wake_pings"] == CALL_UP_TRIES - 1 and counts["wake_ping:timeout"] == CALL_UP_TRIES - 1
     assert counts["call_up_sent"] == 1 and counts["call_ups_unacked"] == 1
     assert len(unit.sent) == CALL_UP_TRIES and unit.in_apad_slots()
@@ -156,10 +152,10 @@ def test_a_call_up_that_went_is_not_abandoned_when_no_longer_wanted() -> None:
         tries.append(unit.clock.time())
         return len(tries) <= 2  # asked before the first try and at its slot: wanted; never again
 
-    assert unit.uplink.call_up(7, lambda: False, 1, wanted=wanted) is CallUp.UNACKED
-    assert len(tries) == 2 and unit.uplink.counts["call_up_sent"] == CALL_UP_TRIES
-    assert "call_ups_abandoned" not in unit.uplink.counts
+    assert unit.call_ups.call_up(7, lambda: False, 1, wanted=wanted) is CallUp.UNACKED
+    assert len(tries) == 2 and unit.call_ups.counts["call_up_sent"] == CALL_UP_TRIES
+    assert "call_ups_abandoned" not in unit.call_ups.counts
 
 
-def call_up(uplink: AcousticUplink, mussel: int, apad: int, own: Clock) -> CallUp:
-    return uplink.call_up(mussel, lambda: False, apad, own.sleep)
+def call_up(call_ups: CallUps, mussel: int, apad: int, own: Clock) -> CallUp:
+    return call_ups.call_up(mussel, lambda: False, apad, own.sleep)
