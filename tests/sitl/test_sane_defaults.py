@@ -23,7 +23,8 @@ from mussel_sim.geo import distance_m
 
 pytestmark = pytest.mark.sitl
 ROOT = Path(__file__).resolve().parents[2]
-SHIPPED = "bay-capacity, bay120, bay120-sleep, bay24, bay24-acoustic, pool12, pool12-acoustic, pool12x2, stress240"
+SHIPPED = ("bay-capacity, bay120, bay120-acoustic, bay120-sleep, bay24, bay24-acoustic, pool12, pool12-acoustic, "
+           "pool12x2, stress240")
 
 
 def refusal(capsys: pytest.CaptureFixture[str], *argv: str) -> str:
