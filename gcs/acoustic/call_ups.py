@@ -16,6 +16,7 @@ from enum import Enum
 
 from acoustic.airtime import airtime_s
 from acoustic.nanomodem.driver import ModemDriver, Result
+from acoustic.nanomodem.replies import Range
 from acoustic.orders import CALL_UP, CALL_UP_TRIES
 from acoustic.tdma import Owner, TdmaFrame
 from gcs.records.events import EventLog
@@ -59,22 +60,23 @@ class CallUps:
         bounds; another aPad's loop waits for it to be free and then for its own next slot (each slot
         so missed counted: `modem_busy_waits`)."""
         sleep = wait or self.clock.sleep
-        sent = False  # a call-up has gone on the water
+        sent = 0  # call-ups gone on the water
         for attempt in range(1, CALL_UP_TRIES + 1):
-            if not self._take_unit(apad_id, sleep, None if sent else wanted):
+            slot_start = self._take_unit(apad_id, sleep, None if sent else wanted)
+            if slot_start is None:
                 return self._abandoned(mussel_id, apad_id)
             try:
-                ping = asleep() and (sent or attempt < CALL_UP_TRIES)
-                result = self._try(mussel_id, apad_id, ping)
+                ping = asleep() and (sent > 0 or attempt < CALL_UP_TRIES)
+                result = self._try(mussel_id, slot_start + self.tdma.slot_s, ping)
             finally:
                 self.holder, self.driver.sleep = None, self.clock.sleep
             if result is None:  # a sleeper not woken in this slot: no call-up went
                 continue
-            sent = True
+            sent += 1
             self.counts["call_up_sent"] += 1
             if result.ok:
                 self.counts["call_ups_acked"] += 1
-                self.counts["call_up_retries"] += attempt - 1
+                self.counts["call_up_retries"] += sent - 1  # call-ups sent again (a ping alone is none)
                 return CallUp.ACKED
             self.counts[f"call_up:{result.outcome.value}"] += 1
         self.counts["call_ups_unacked"] += 1
@@ -82,26 +84,27 @@ class CallUps:
                          **self._apad_field(apad_id))
         return CallUp.UNACKED
 
-    def _try(self, mussel_id: int, apad_id: int, ping: bool) -> Result | None:
-        """One try on the unit, in the aPad's slot: the wake-up ping first if `ping`, then the call-up;
-        None if it did not go (the ping unanswered, or too little of the slot left after it)."""
+    def _try(self, mussel_id: int, slot_end_s: float, ping: bool) -> Result | None:
+        """One try on the unit, in the aPad's slot ending at `slot_end_s`: the wake-up ping first if
+        `ping`, then the call-up; None if it did not go (the ping unanswered, or too little of the slot
+        left after it)."""
         if ping:
             woken = self.driver.ping(mussel_id)
             self.counts["wake_pings"] += 1
             if not woken.ok:
                 self.counts[f"wake_ping:{woken.outcome.value}"] += 1
                 return None
-            if not self._room_for_call_up(apad_id):
+            assert isinstance(woken.reply, Range)  # what `ModemDriver.ping` answers with
+            if not self._room_for_call_up(woken.reply.range_m(self.driver.sound_speed_mps), slot_end_s):
                 self.counts["call_up:no_room_after_ping"] += 1
                 return None
         return self.driver.unicast_ack(mussel_id, CALL_UP)
 
-    def _room_for_call_up(self, apad_id: int) -> bool:
-        """Whether a call-up and its acknowledgement, across the whole area, still end in the aPad's
-        slot that began at or before now."""
-        now = self.clock.time()
-        slot_end = self.tdma.next_slot_start_s(Owner.APAD, apad_id, now - self.tdma.slot_s) + self.tdma.slot_s
-        return now + CALL_UP_AIRTIME_S + ACK_AIRTIME_S + 2 * self.tdma.delay_s <= slot_end
+    def _room_for_call_up(self, range_m: float, slot_end_s: float) -> bool:
+        """Whether a call-up sent now to an aMussel `range_m` away, and its acknowledgement heard across
+        the whole area, still end by `slot_end_s`."""
+        there_s = range_m / self.driver.sound_speed_mps
+        return self.clock.time() + CALL_UP_AIRTIME_S + there_s + ACK_AIRTIME_S + self.tdma.delay_s <= slot_end_s
 
     def _abandoned(self, mussel_id: int, apad_id: int) -> CallUp:
         self.counts["call_ups_abandoned"] += 1
@@ -111,24 +114,28 @@ class CallUps:
     def _apad_field(self, apad_id: int) -> dict[str, int]:
         return {"apad": apad_id} if len(self.tdma.apad_ids) > 1 else {}
 
-    def _take_unit(self, apad_id: int, sleep: Callable[[float], None], wanted: Callable[[], bool] | None) -> bool:
-        """The unit held for `apad_id` at the start of one of its slots (the caller frees it); False,
-        and not held, if it is no longer `wanted`, now or at that slot."""
+    def _take_unit(self, apad_id: int, sleep: Callable[[float], None],
+                   wanted: Callable[[], bool] | None) -> float | None:
+        """The unit held for `apad_id` at the start of one of its slots (the caller frees it): that
+        slot's start; None, and not held, if it is no longer `wanted`, now or at that slot."""
         if wanted is not None and not wanted():
-            return False
+            return None
         while True:
             while self.holder is not None:
                 sleep(MODEM_BUSY_POLL_S)
-            self._wait_for_slot(apad_id, sleep)
+            start_s = self._wait_for_slot(apad_id, sleep)
             if self.holder is None:
                 break
             self.counts["modem_busy_waits"] += 1  # another aPad's try began meanwhile: the next slot
         if wanted is not None and not wanted():
-            return False
+            return None
         self.holder, self.driver.sleep = apad_id, sleep
-        return True
+        return start_s
 
-    def _wait_for_slot(self, apad_id: int, sleep: Callable[[float], None]) -> None:
-        start_us = math.ceil(self.tdma.next_slot_start_s(Owner.APAD, apad_id, self.clock.time()) * US_PER_S)
+    def _wait_for_slot(self, apad_id: int, sleep: Callable[[float], None]) -> float:
+        """Until the start of the aPad's next slot (now, if one starts now); that start (s)."""
+        start_s = self.tdma.next_slot_start_s(Owner.APAD, apad_id, self.clock.time())
+        start_us = math.ceil(start_s * US_PER_S)
         while (left_us := start_us - self.clock.now_us) > 0:  # in steps, so a quit is heard within one
             sleep(min(left_us, SLOT_WAIT_STEP_US) / US_PER_S)
+        return start_s

@@ -82,7 +82,8 @@ def track_png(data: RunData, path: Path) -> Path:
 def reshares(events: tuple[Event, ...]) -> list[Event]:
     """The swarm's sharings (which aPad serves which aMussels), oldest first: each re-share, with the
     aMussels that joined it as they were first heard (an acoustic fleet: `joined` events) folded in and
-    its time that of the last to join; an older run's event (counts, not ids) or a damaged one is left out."""
+    the last to join's time as `heard_until_s`; an older run's event (counts, not ids) or a damaged one is
+    left out."""
     out: list[Event] = []
     for event in events:
         shares = event.fields.get("shares")
@@ -94,7 +95,7 @@ def reshares(events: tuple[Event, ...]) -> list[Event]:
         elif event.kind == "joined" and out:
             last: dict[str, list[int]] = out[-1].fields["shares"]
             grown = {a: sorted(set(last.get(a, [])) | set(shares.get(a, []))) for a in sorted({*last, *shares})}
-            out[-1] = Event(event.t_s, "reshare", {**out[-1].fields, "shares": grown, "heard": True})
+            out[-1] = Event(out[-1].t_s, "reshare", {**out[-1].fields, "shares": grown, "heard_until_s": event.t_s})
     return out
 
 
@@ -126,8 +127,9 @@ def partition_png(data: RunData, path: Path) -> Path | None:
         gone = ", ".join(str(a) for a in lost) if isinstance(lost, list) else ""
         origin_axes(ax, data)
         ax.xaxis.label.set_fontsize(7)
-        heard = " (as first heard)" if event.fields.get("heard") else ""
-        ax.set_title(f"t = {event.t_s / 60:.1f} min{heard}" + (f", aPad {gone} lost" if gone else ""))
+        until = event.fields.get("heard_until_s")
+        heard = f", joined as heard to {until / 60:.1f} min" if isinstance(until, float) else ""
+        ax.set_title(f"t = {event.t_s / 60:.1f} min" + (f", aPad {gone} lost" if gone else "") + heard)
         ax.legend(fontsize=7, loc="best")
     fig.suptitle(f"The fleet shared among the aPads — {data.title}\n"
                  "(k-means, balanced, or each as first heard to the nearest share with room; X: share centre)")

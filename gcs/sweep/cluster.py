@@ -24,6 +24,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from gcs.sweep.cells import Cell, run_cell
 
 CONNECT_TIMEOUT_S = 20.0
+QUIET_BOUND_S = 2.0  # how long a Ctrl-C's closing waits for the workers to mute their heartbeat log
 
 
 class ClusterError(RuntimeError):
@@ -74,8 +75,13 @@ def _quiet_heartbeats(client: Client) -> None:
     """Before a Ctrl-C closes the local cluster: a worker whose heartbeat is in flight as the scheduler
     closes logs it as an error with a traceback (distributed.worker, "Failed to communicate with
     scheduler during heartbeat"), which is no error of the sweep's; only a Ctrl-C's closing mutes it."""
-    with suppress(Exception):  # a worker already gone: nothing of its to mute
-        client.run(_mute_worker_log, on_error="return")
+    def mute() -> None:
+        with suppress(Exception):  # a worker already gone: nothing of its to mute
+            client.run(_mute_worker_log, on_error="return")
+
+    muting = threading.Thread(target=mute, name="vil-sweep-mute", daemon=True)
+    muting.start()
+    muting.join(QUIET_BOUND_S)  # a worker that does not answer: close the cluster all the same
 
 
 def _mute_worker_log() -> None:

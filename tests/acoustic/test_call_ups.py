@@ -142,6 +142,19 @@ def test_a_sleeper_that_answers_no_ping_gets_no_call_up_outside_the_apads_slot()
     assert len(unit.sent) == CALL_UP_TRIES and unit.in_apad_slots()
 
 
+@pytest.mark.parametrize("at_m", [500.0, 1000.0])
+def test_a_ping_answered_too_late_in_the_slot_leaves_the_call_up_to_a_later_slot(at_m: float) -> None:
+    # 500 m: the answer comes with too little of the slot left for the call-up and its acknowledgement;
+    # 1000 m: after the slot has ended. Neither sends the call-up then: the last try sends it alone at its
+    # slot's start (the modem acknowledges it; asleep, the aMussel would take it at its next wake).
+    unit = OneUnit(at_m)
+    assert unit.call_ups.call_up(7, lambda: True, 1) is CallUp.ACKED
+    counts = unit.call_ups.counts
+    assert counts["wake_pings"] == counts["call_up:no_room_after_ping"] == CALL_UP_TRIES - 1
+    assert counts["call_up_sent"] == 1 and counts["call_up_retries"] == 0  # a ping alone is no retry
+    assert len(unit.sent) == CALL_UP_TRIES and unit.in_apad_slots()
+
+
 def test_a_call_up_that_went_is_not_abandoned_when_no_longer_wanted() -> None:
     # Out of range: the first call-up goes and is not acknowledged; it may still have been heard, so
     # the tries go on though the aMussel is no longer wanted, and the loop's surfacing wait decides.
