@@ -22,7 +22,7 @@ from gcs.mission.crew import Crew
 from gcs.mission.fleet_knowledge import FleetKnowledge
 from gcs.mission.sleep_orders import GOING_HOME, reschedule
 from gcs.mission.strategies import route_length_m
-from mussel_sim.geo import distance_m
+from mussel_sim.geo import pair_distance_m
 
 IDLE_LOOKAHEAD_S = 600.0  # idle: the hotel load this long is counted besides the way home
 NOT_CHARGING_S = 120.0  # at home and not charging this long: the charger is not there or not working
@@ -36,7 +36,7 @@ def trip_need_wh(knows: FleetKnowledge, route: list[int]) -> float:
     stops = [knows.api.mussels[m].location for m in route]
     out_m = route_length_m((here.lat, here.lon), [(s.lat, s.lon) for s in stops])
     last = stops[-1] if stops else here
-    home_m = float(distance_m(last.lat, last.lon, home[0], home[1]))
+    home_m = pair_distance_m(last.lat, last.lon, home[0], home[1])  # remembered: an idle wait prices it at every poll
     metres = 2.0 * out_m + home_m
     if not route:  # idle (priced at every poll of the wait): the way home and the hotel load alone
         return budget.trip_wh(metres, metres / knows.settings.apad_speed_mps + IDLE_LOOKAHEAD_S, 0.0)
