@@ -45,6 +45,7 @@ from mavlink_dialect.transport import Transport
 from missiontime import US_PER_S, Scheduler, Task
 from mussel_sim.battery import to_millivolts
 from mussel_sim.fleet import apply_latches, step
+from mussel_sim.fleet_orders import PendingOrders
 from mussel_sim.fleet_sleep import publish_rows
 from mussel_sim.fleet_state import FleetInputs, FleetParams, FleetState, StepEvents
 from mussel_sim.geo import LocalFrame
@@ -58,13 +59,7 @@ FLEET_SYSTEM_ID = 251
 FLEET_COMPONENT_ID = 25
 DEG_E7 = 1e7
 STATUSTEXT_MAX = 50
-# DOCK_SLOT_STATUS latch values that hold an aMussel (the aPad's words, read here as wire values).
-HOLDING_LATCHES = (mavlink.DOCK_LATCH_STATE_CLOSING, mavlink.DOCK_LATCH_STATE_LATCHED)
 SURFACE_DEPTH_M = 0.01  # this shallow an aMussel is at the surface, in WiFi's reach (floating and docked: 0 m)
-# Woken by the acoustic ping, an aMussel listens this long (mission time) for the call-up that follows:
-# the GCS sends it right after the ping's answer, within the aPad's slot (under a second later). A few
-# seconds' margin; not drawn from the battery (the duty cycle's mean drain stands for its wakes).
-PING_LISTEN_US = 5 * US_PER_S
 LAST_WORDS = 10  # publishes of each message a depleted aMussel still makes; 0.4 ** 10: 1e-4 all lost at 40 %
 
 
@@ -148,16 +143,7 @@ class FleetRunner:
         self._apads_m: dict[int, tuple[float, float]] = {}
         self.real_mussel_ids: set[int] = set()
         self.dropped: Counter[str] = Counter()  # received messages refused, by reason
-        # Where we have docked each aMussel, and the reverse: (aPad, slot) -> aMussel id.
-        self._docked_at: dict[int, tuple[int, int]] = {}
-        self._slot_holds: dict[tuple[int, int], int] = {}
-        self._surface: list[int] = []
-        self._sink: list[int] = []
-        self._dock: dict[int, tuple[int, int]] = {}
-        self._release: list[int] = []
-        self._sleep: list[tuple[int, float, float]] = []
-        self._wake: list[int] = []
-        self._listening_until_us: dict[int, int] = {}  # pinged awake: listening for a call-up until then
+        self.orders = PendingOrders(self._ids)  # heard since the last step, for the next
         self._published_us: dict[int, int] = {}  # message id -> mission time of its last publish
         self._depleted_publishes: dict[int, NDArray[np.int64]] = {}  # message id -> (n,) publishes since depleted
 
@@ -196,7 +182,7 @@ class FleetRunner:
         if dt_us <= 0:  # a repeated instant must not step the model twice
             return
         if self.end_us is not None and now_us > self.end_us:
-            if self._dock or self._release:  # a dock or undock the aPad finished after the end
+            if self.orders.latches_changed:  # a dock or undock the aPad finished after the end
                 self.state = apply_latches(self.state, self._take_inputs(), self.params)  # commands: no use now
             return
         self.state, events = step(self.state, self._take_inputs(), self.params, self.rng, dt_us / US_PER_S)
@@ -259,21 +245,13 @@ class FleetRunner:
 
     def heard_acoustically(self, mussel_id: int, command: MusselCommand | None) -> None:
         """An aMussel's modem heard the GCS: a `command` for it (a call-up: SURFACE), or, with None,
-        the wake-up ping. Taken at the next step like a command over MAVLink; an id not ours is counted.
-        A pinged aMussel stays awake `PING_LISTEN_US` (from the fleet's last step: 5 to 6 s) for the
-        call-up that follows: heard in that time, it is taken at once (the ping woke it) instead of
-        held for its next scheduled wake."""
+        the wake-up ping (`PendingOrders.heard_acoustically`, timed by the fleet's last step: a pinged
+        one listens 5 to 6 s). Taken at the next step like a command over MAVLink; an id not ours is
+        counted."""
         if mussel_id not in self._ids:
             self.dropped["invalid:acoustic:mussel_id"] += 1
             return
-        now_us = self.state.time_us
-        if command is None:
-            self._wake.append(mussel_id)
-            self._listening_until_us[mussel_id] = now_us + PING_LISTEN_US
-            return
-        if command == MusselCommand.SURFACE and self._listening_until_us.pop(mussel_id, -1) >= now_us:
-            self._wake.append(mussel_id)  # in the step with the call-up: held as asleep, then let go at once
-        (self._surface if command == MusselCommand.SURFACE else self._sink).append(mussel_id)
+        self.orders.heard_acoustically(mussel_id, command, self.state.time_us)
 
     def _send_batch(self, spec: hot.HotSpec, columns: dict[str, Any]) -> None:
         """One message per aMussel, packed as a batch: byte for byte what one-by-one encoding makes."""
@@ -311,12 +289,13 @@ class FleetRunner:
         if isinstance(msg, mavlink.MAVLink_global_position_int_message):
             self.apad_positions[src] = (msg.lat / DEG_E7, msg.lon / DEG_E7)
         elif isinstance(msg, mavlink.MAVLink_dock_slot_status_message):
-            self._slot_status(src, msg.slot, msg.mussel_id, msg.latch)
+            self.orders.slot_status(src, msg.slot, msg.mussel_id, msg.latch)
         elif isinstance(msg, mavlink.MAVLink_amussel_command_message):
-            (self._surface if msg.command == MusselCommand.SURFACE else self._sink).append(msg.mussel_id)
+            self.orders.command(msg.mussel_id, MusselCommand.SURFACE if msg.command == MusselCommand.SURFACE
+                                else MusselCommand.SINK)
         elif isinstance(msg, mavlink.MAVLink_amussel_sleep_order_message):
             # float32 as on the wire, also for an order handed over in-process (not parsed back)
-            self._sleep.append((msg.mussel_id, float(np.float32(msg.interval)), float(np.float32(msg.awake))))
+            self.orders.sleep_order(msg.mussel_id, float(np.float32(msg.interval)), float(np.float32(msg.awake)))
         elif isinstance(msg, mavlink.MAVLink_amussel_status_message) and msg.simulated == 0:
             mussel_id = msg.mussel_id
             if mussel_id in self._ids:  # refused: neither may stand for the other
@@ -332,25 +311,6 @@ class FleetRunner:
 
     # --- internals --------------------------------------------------------------------------------------
 
-    def _slot_status(self, apad: int, slot: int, mussel_id: int, latch: int) -> None:
-        key = (apad, slot)
-        held = mussel_id if latch in HOLDING_LATCHES and mussel_id != 0 else 0
-        prev = self._slot_holds.get(key)
-        if prev is not None and prev != held:
-            del self._slot_holds[key]
-            del self._docked_at[prev]
-            if prev in self._dock:  # docked and let go before any step saw it: nothing happened
-                del self._dock[prev]
-            else:
-                self._release.append(prev)
-        if held and held in self._ids and self._docked_at.get(held) != key:
-            old = self._docked_at.get(held)
-            if old is not None:  # moved to another slot: the old slot no longer claims it
-                self._slot_holds.pop(old, None)
-            self._docked_at[held] = key
-            self._slot_holds[key] = held
-            self._dock[held] = key
-
     def _apads_local(self) -> dict[int, tuple[float, float]]:
         """The aPads' last positions in the fleet's metres (converted again only when they moved)."""
         key = tuple(sorted(self.apad_positions.items()))
@@ -365,18 +325,7 @@ class FleetRunner:
         return dict(self._apads_m)
 
     def _take_inputs(self) -> FleetInputs:
-        apads = self._apads_local()
-        inputs = FleetInputs.make(
-            apads=apads,
-            surface=self._surface,
-            sink=self._sink,
-            dock=[(m, a, s) for m, (a, s) in self._dock.items()],
-            release=self._release,
-            sleep=self._sleep,
-            wake=self._wake,
-        )
-        self._surface, self._sink, self._dock, self._release, self._sleep, self._wake = [], [], {}, [], [], []
-        return inputs
+        return self.orders.take(self._apads_local())
 
     def _report(self, events: StepEvents) -> None:
         for mussel_id in events.surface_refused_out_of_range_ids:

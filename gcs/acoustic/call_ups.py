@@ -47,7 +47,7 @@ class CallUps:
         stays within it, so it crosses no aMussel's report on the water.
 
         - A sleeper (`asleep`, asked at each try) is pinged first; woken, it listens a few seconds
-          (`mussel_sim.comms.PING_LISTEN_US`) and the call-up follows at once if the slot has room for
+          (`mussel_sim.fleet_orders.PING_LISTEN_US`) and the call-up follows at once if the slot has room for
           it. Unanswered (or no room left), the try ends there. The last try, if no call-up has gone
           yet, sends it without a ping: heard asleep, it is taken at the sleeper's next wake.
         - `wanted` is asked before each try until a call-up has gone (from then on it may rise): False

@@ -263,7 +263,7 @@ class FuzzWorld:
         fleet = w.fleet
         if set(fleet.apad_positions) - expected:
             out.append(f"the fleet believes in aPads {sorted(fleet.apad_positions)}")
-        for mussel_id, (apad, slot) in fleet._docked_at.items():
+        for mussel_id, (apad, slot) in fleet.orders.docked_at.items():
             if apad not in expected or not 1 <= slot <= 4:
                 out.append(f"the fleet docked aMussel {mussel_id} on aPad {apad} slot {slot}")
         if not (np.all(np.isfinite(fleet.state.x_m)) and np.all(np.isfinite(fleet.state.battery_frac))):
