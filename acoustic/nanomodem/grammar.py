@@ -97,6 +97,20 @@ class _Cursor(Generic[T]):
             self.pos = 0
         return None
 
+    def data_wanted(self) -> int:
+        """Bytes the data token under way still takes (0 if the cursor is not in data)."""
+        tokens = self.template.tokens
+        if self.token == len(tokens):
+            return 0
+        tok = tokens[self.token]
+        return self.fields[tok.length_field] - len(self.data) if isinstance(tok, Data) else 0
+
+    def take_data(self, chunk: bytes) -> None:
+        """Data bytes that do not finish the token (`data_wanted` less at least one): what `step` would
+        do with each, at once."""
+        self.data += chunk
+        self.consumed += len(chunk)
+
     @property
     def complete(self) -> bool:
         return self.token == len(self.template.tokens)
@@ -137,13 +151,21 @@ class Matcher(Generic[T]):
         out: list[T | Rejected] = []
         i, n = 0, len(data)
         while i < n:
-            if not self._live:
+            live = self._live
+            if not live:
                 found = self._starts.search(data, i)
                 j = found.start() if found else n
                 if j > i:
                     out.append(Rejected(STRAY, data[i:j]))
                     i = j
                     continue
+            elif len(live) == 1 and (wanted := live[0].data_wanted()) > 1:
+                # Inside a payload any byte fits: all but its last at once (the last finishes it, byte-wise).
+                chunk = data[i:i + wanted - 1]
+                live[0].take_data(chunk)
+                self._raw += chunk
+                i += len(chunk)
+                continue
             out += self.push(data[i])
             i += 1
         return out

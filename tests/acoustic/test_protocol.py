@@ -143,3 +143,22 @@ def test_any_replies_round_trip_through_the_reply_parser(replies: list[object]) 
     parser = ReplyParser()
     wire = b"".join(r.encode() for r in replies)  # type: ignore[attr-defined]
     assert [x for i in range(len(wire)) for x in parser.feed(wire[i:i + 1])] == replies and parser.dropped == {}
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.one_of(_REPLY.map(lambda r: r.encode()), st.binary(max_size=12)), min_size=1, max_size=8),
+       st.data())
+def test_replies_among_garbage_parse_the_same_whole_cut_anywhere_or_byte_by_byte(parts: list[bytes],
+                                                                                 data: st.DataObject) -> None:
+    """A payload is taken in one slice where a byte-wise walk would accept each of its bytes anyway: the
+    replies and the drops by reason are those of the walk, however the bytes arrive."""
+    wire = b"".join(parts)
+    cuts = sorted(data.draw(st.lists(st.integers(0, len(wire)), max_size=8)))
+
+    def parsed(pieces: list[bytes]) -> tuple[list[object], dict[str, int]]:
+        parser = ReplyParser()
+        return [r for piece in pieces for r in parser.feed(piece)], parser.dropped
+
+    bytewise = parsed([wire[i:i + 1] for i in range(len(wire))])
+    assert parsed([wire]) == bytewise
+    assert parsed([wire[a:b] for a, b in zip([0, *cuts], [*cuts, len(wire)], strict=True)]) == bytewise
