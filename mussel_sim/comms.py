@@ -196,7 +196,9 @@ class FleetRunner:
     def publish_status_task(self, now_us: int) -> None:
         s, rows = self.state, self._speaking(hot.AMUSSEL_STATUS, now_us)
         ids, x, y, depth, u, state = s.ids, s.x_m, s.y_m, s.depth_m, s.battery_frac, s.state
-        if rows is not None:  # some are asleep: the others only
+        if rows is not None:  # some are asleep (or under water, acoustic): the others only
+            if not rows.size:
+                return  # nobody speaks: no positions to convert
             ids, x, y, depth, u, state = ids[rows], x[rows], y[rows], depth[rows], u[rows], state[rows]
         lat, lon = self.frame.to_geodetic(x, y)
         self._send_batch(hot.AMUSSEL_STATUS, {
@@ -212,6 +214,8 @@ class FleetRunner:
         s, rows = self.state, self._speaking(hot.AMUSSEL_SENSORS, now_us)
         ids, x, y, depth = s.ids, s.x_m, s.y_m, s.depth_m
         if rows is not None:
+            if not rows.size:
+                return
             ids, x, y, depth = ids[rows], x[rows], y[rows], depth[rows]
         r = self.sensors.sample(x, y, depth, now_us / US_PER_S)
         self._send_batch(hot.AMUSSEL_SENSORS, {
