@@ -1,12 +1,15 @@
-"""The nanomodem emulator's pure core: the local unit on the serial line, remote units on the water.
+"""The nanomodem emulator's pure core: units on host serial lines, remote units on the water.
 
-`ModemEmulator` takes the host's bytes with their arrival times (`from_host`) and is advanced to an
-instant (`advance`), returning the bytes the unit writes by then; `next_due_s` says when it next has
-something to do (the edge sleeps until then). Between units go `Frame`s over a `Medium`, so delay,
-loss, half duplex and collisions are the channel model's. The remote units answer as the real ones
-do: a ping or an acknowledged unicast with a reply, `$V` with their voltage, `$E` with the data
-back; a unit answers as soon as the request has arrived (`TURNAROUND_S`). A remote unit without power
-(`set_power`: its aMussel depleted) hears nothing and answers nothing. Pure: no clock, no I/O.
+`ModemEmulator` takes a host's bytes with their arrival times (`from_host`) and is advanced to an
+instant (`advance`), returning the bytes the local unit writes by then (`take_output` for another
+hosted unit's); `next_due_s` says when it next has something to do (the edge sleeps until then).
+The local unit is the one a `vil modem` pty or the GCS's driver speaks to; more hosted units
+(`hosted`: the aPads' own modems, each reached over its aPad's MAVLink) share its water. Between
+units go `Frame`s over a `Medium`, so delay, loss, half duplex and collisions are the channel
+model's. The remote units answer as the real ones do: a ping or an acknowledged unicast with a
+reply, `$V` with their voltage, `$E` with the data back; a unit answers as soon as the request has
+arrived (`TURNAROUND_S`). A remote unit without power (`set_power`: its aMussel depleted) hears
+nothing and answers nothing. Pure: no clock, no I/O.
 
 Where the unit's guide is silent (NOTES.md), the emulator's reading: `$V` and `$M` unanswered give
 `#TO` after the same 4 s as a ping; `$T` sends a command packet the remote counts; an echo comes
@@ -49,7 +52,7 @@ TURNAROUND_S = 0.0
 # would queue more is answered `E` and counted (`busy`): a host that writes faster than the water
 # carries cannot grow the emulator without bound.
 MAX_QUEUED_S = 4.5
-LOCAL = 0  # the local unit's node index in the medium; remote unit i is node i + 1
+LOCAL = 0  # the local unit's node index in the medium; remote unit i is node i + 1, hosted unit j n + 1 + j
 
 
 class FrameKind(Enum):
@@ -110,47 +113,81 @@ def supply_ticks(volts: float) -> int:
     return int(min(max(round(volts / VOLTS_PER_TICK), 0), 65535))
 
 
+@dataclass
+class HostedUnit:
+    """A unit on a host's serial line: its node on the water, address, the commands it is parsing,
+    the answers it waits for, the quality of the last packet it decoded, the bytes it has written."""
+
+    node: int
+    address: int
+    supply_v: float
+    parser: CommandParser
+    waits: list[_Wait] = field(default_factory=list)
+    quality: int | None = None
+    out: bytearray = field(default_factory=bytearray)
+
+
 class ModemEmulator:
     def __init__(
         self, params: AcousticParams, remotes: tuple[RemoteUnit, ...], rng: np.random.Generator, *,
         address: int = 0, position_m: tuple[float, float, float] = (0.0, 0.0, 0.0), supply_v: float = 12.0,
-        gap_s: float = GAP_S, ping_timeout_s: float = PING_TIMEOUT_S,
+        gap_s: float = GAP_S, ping_timeout_s: float = PING_TIMEOUT_S, hosted: tuple[RemoteUnit, ...] = (),
     ) -> None:
-        addresses = [r.address for r in remotes]
+        """`hosted`: more units on host serial lines (index 1, 2, ... of `from_host` and `take_output`),
+        after the remote units on the water; they move with `move_remotes` like the remote units."""
+        addresses = [r.address for r in (*remotes, *hosted)]
         if len(set(addresses)) != len(addresses) or any(not 0 <= a <= MAX_ADDRESS for a in addresses):
-            raise ValueError(f"remote addresses must differ and be 0..{MAX_ADDRESS}, got {addresses}")
+            raise ValueError(f"remote and hosted addresses must differ and be 0..{MAX_ADDRESS}, got {addresses}")
         self.params, self.remotes = params, remotes
-        self._nodes = {r.address: i + 1 for i, r in enumerate(remotes)}  # address -> node index in the medium
-        self.address, self.supply_v, self.ping_timeout_s = address, supply_v, ping_timeout_s
-        positions = np.array([position_m, *(r.position_m for r in remotes)], dtype=np.float64)
+        # address -> node index in the medium (the remote and the hosted units; the local unit is LOCAL)
+        self._nodes = {r.address: i + 1 for i, r in enumerate((*remotes, *hosted))}
+        self.ping_timeout_s = ping_timeout_s
+        positions = np.array([position_m, *(r.position_m for r in (*remotes, *hosted))], dtype=np.float64)
         self.medium = Medium(params, positions, rng)
-        self.parser = CommandParser(gap_s)
+        self.units = [HostedUnit(LOCAL, address, supply_v, CommandParser(gap_s))]
+        self.units += [HostedUnit(self._nodes[h.address], h.address, h.supply_v, CommandParser(gap_s)) for h in hosted]
+        self._hosted_at = {u.node: u for u in self.units}  # node -> the hosted unit there
         self.heard = HeardLog()
         # What a remote unit heard addressed to it (or to all) is also handed here: (end s, address, frame).
         self.on_remote_heard: Callable[[float, int, Frame], None] | None = None
         self.counts: dict[str, int] = {}
         self.unpowered: set[int] = set()  # addresses of remote units without power
-        self._waits: list[_Wait] = []
-        self._quality: int | None = None
-        self._out = bytearray()
+
+    @property
+    def address(self) -> int:
+        """The local unit's address (`$A` changes it)."""
+        return self.units[0].address
 
     # ---- the serial side
-    def from_host(self, data: bytes, t_s: float) -> None:
-        """Bytes the host wrote, arrived at `t_s` (call `advance(t_s)` first, so time runs in order)."""
-        for item in self.parser.feed(data, t_s):
-            self._command(item, t_s)
+    def from_host(self, data: bytes, t_s: float, unit: int = 0) -> None:
+        """Bytes hosted unit `unit`'s host wrote (0: the local unit's), arrived at `t_s` (call
+        `advance(t_s)` first, so time runs in order)."""
+        u = self.units[unit]
+        for item in u.parser.feed(data, t_s):
+            self._command(u, item, t_s)
 
     def advance(self, t_s: float) -> bytes:
-        """Run to `t_s`; the bytes the unit has written to the host since the last call."""
+        """Run to `t_s`; the bytes the local unit has written to its host since the last call (the
+        other hosted units' wait in `take_output`)."""
+        self.run_to(t_s)
+        return self.take_output(0)
+
+    def run_to(self, t_s: float) -> None:
+        """Run to `t_s`; what the hosted units write waits in `take_output`."""
         while (due := self.next_due_s()) is not None and due <= t_s:
             self._step(due)
         self._step(t_s)
-        out, self._out = bytes(self._out), bytearray()
+
+    def take_output(self, unit: int) -> bytes:
+        """The bytes hosted unit `unit` has written to its host and nobody has taken yet."""
+        u = self.units[unit]
+        out, u.out = bytes(u.out), bytearray()
         return out
 
     def next_due_s(self) -> float | None:
-        times = [t for t in (self.parser.deadline_s(), self.medium.next_decision_s()) if t is not None]
-        times += [w.deadline_s for w in self._waits]
+        times = [t for t in (*(u.parser.deadline_s() for u in self.units), self.medium.next_decision_s())
+                 if t is not None]
+        times += [w.deadline_s for u in self.units for w in u.waits]
         return min(times, default=None)
 
     def remote_send(self, address: int, t_s: float, data: bytes, dest: int | None = None) -> Transmission:
@@ -184,8 +221,9 @@ class ModemEmulator:
     def _count(self, reason: str) -> None:
         self.counts[reason] = self.counts.get(reason, 0) + 1
 
-    def _reply(self, reply: Reply) -> None:
-        self._out += reply.encode()
+    @staticmethod
+    def _reply(unit: HostedUnit, reply: Reply) -> None:
+        unit.out += reply.encode()
 
     def _node_of(self, address: int) -> int:
         node = self._nodes.get(address)
@@ -201,95 +239,99 @@ class ModemEmulator:
         """The nodes that act on `frame` on time: all for a broadcast, else its addressee (if any unit has it)."""
         if frame.dest is None:
             return None
-        if frame.dest == self.address:
-            return [LOCAL]
+        nodes = [u.node for u in self.units if u.address == frame.dest]
+        if nodes:
+            return nodes
         node = self._nodes.get(frame.dest)
         return [] if node is None else [node]
 
-    def _command(self, item: Command | Rejected, t_s: float) -> None:
+    def _command(self, unit: HostedUnit, item: Command | Rejected, t_s: float) -> None:
         if isinstance(item, Rejected):
             self.counts[item.reason] = self.counts.get(item.reason, 0) + item.weight
             if item.reason != STRAY:
-                self._reply(Error())
+                self._reply(unit, Error())
             return
         self._count("command")
         kind, a = item.kind, item.address
         if kind is Kind.SET_ADDRESS:
             assert a is not None
-            self.address = a
-            self._reply(AddressSet(a))
+            unit.address = a
+            self._reply(unit, AddressSet(a))
         elif kind is Kind.STATUS:
-            self._reply(Status(self.address, supply_ticks(self.supply_v)))
+            self._reply(unit, Status(unit.address, supply_ticks(unit.supply_v)))
         elif kind is Kind.QUALITY:
-            self._reply(Quality(self._quality))
-        elif self.medium.busy_until_s(LOCAL) > t_s + MAX_QUEUED_S:
+            self._reply(unit, Quality(unit.quality))
+        elif self.medium.busy_until_s(unit.node) > t_s + MAX_QUEUED_S:
             self._count("busy")
-            self._reply(Error())
+            self._reply(unit, Error())
         else:
             assert kind is Kind.BROADCAST or a is not None
-            self._reply(Ack(kind, a, len(item.data) if kind.has_data else None))
+            self._reply(unit, Ack(kind, a, len(item.data) if kind.has_data else None))
             frame_kind = {Kind.PING: FrameKind.PING, Kind.VOLTAGE: FrameKind.VOLTAGE_REQUEST,
                           Kind.BROADCAST: FrameKind.BROADCAST, Kind.UNICAST: FrameKind.UNICAST,
                           Kind.UNICAST_ACK: FrameKind.UNICAST_ACK, Kind.TEST: FrameKind.TEST,
                           Kind.ECHO: FrameKind.ECHO}[kind]
-            tx = self._send(LOCAL, t_s, Frame(frame_kind, self.address, a, item.data))
+            tx = self._send(unit.node, t_s, Frame(frame_kind, unit.address, a, item.data))
             if frame_kind in ANSWERS and a is not None:
                 # The unit's 4 s run from its own transmission: a request queued behind packets already
                 # on the water must not time out before it is sent.
-                self._waits.append(_Wait(ANSWERS[frame_kind], a, tx.start_s, tx.airtime_s,
-                                         tx.start_s + self.ping_timeout_s))
+                unit.waits.append(_Wait(ANSWERS[frame_kind], a, tx.start_s, tx.airtime_s,
+                                        tx.start_s + self.ping_timeout_s))
 
     # ---- the water side
     def _step(self, t_s: float) -> None:
-        for item in self.parser.expire(t_s):
-            self._command(item, t_s)
+        for unit in self.units:
+            for item in unit.parser.expire(t_s):
+                self._command(unit, item, t_s)
         for reception in self.medium.settle(t_s):
             self._reception(reception)
-        for wait in [w for w in self._waits if w.deadline_s <= t_s]:
-            self._waits.remove(wait)
-            self._count("timeout")
-            self._reply(Timeout())
+        for unit in self.units:
+            for wait in [w for w in unit.waits if w.deadline_s <= t_s]:
+                unit.waits.remove(wait)
+                self._count("timeout")
+                self._reply(unit, Timeout())
 
     def _reception(self, r: Reception) -> None:
         frame = r.transmission.data
         assert isinstance(frame, Frame)
+        unit = self._hosted_at.get(r.receiver)
         if r.outcome is not Outcome.DELIVERED:
-            self._count(f"{'local' if r.receiver == LOCAL else 'remote'}_{r.outcome.value}")
-            if r.receiver == LOCAL:
-                self._quality = None
+            self._count(f"{'remote' if unit is None else 'local'}_{r.outcome.value}")
+            if unit is not None:
+                unit.quality = None
             return
-        if r.receiver == LOCAL:
-            self._quality = min(round(expected_byte_errors(r.snr_db, len(frame.data), self.params)), 8)
-            self._local_heard(frame, r)
+        if unit is not None:
+            unit.quality = min(round(expected_byte_errors(r.snr_db, len(frame.data), self.params)), 8)
+            self._local_heard(unit, frame, r)
         else:
             self._remote_heard(self.remotes[r.receiver - 1], r.receiver, frame, r)
 
-    def _local_heard(self, frame: Frame, r: Reception) -> None:
+    def _local_heard(self, unit: HostedUnit, frame: Frame, r: Reception) -> None:
         if frame.kind is FrameKind.BROADCAST:
             self._count("heard")
-            self._reply(Received(frame.data, frame.source))
+            self._reply(unit, Received(frame.data, frame.source))
             return
-        if frame.dest != self.address:
+        if frame.dest != unit.address:
             self._count("not_for_us")
             return
         if frame.kind in (FrameKind.UNICAST, FrameKind.UNICAST_ACK, FrameKind.ECHO):
             self._count("heard")
-            self._reply(Received(frame.data))
-        if frame.kind in ANSWERS:  # a remote unit's request of this one: answered, nothing printed
-            self._answer(LOCAL, self.address, frame, r)
+            self._reply(unit, Received(frame.data))
+        if frame.kind in ANSWERS:  # another unit's request of this one: answered, nothing printed
+            self._answer(unit.node, unit.address, frame, r)
             return
-        wait = next((w for w in self._waits if w.kind is frame.kind and w.address == frame.source), None)
+        wait = next((w for w in unit.waits if w.kind is frame.kind and w.address == frame.source), None)
         if wait is None:
             if frame.kind in ANSWERS.values():
                 self._count("late_answer")
             return
-        self._waits.remove(wait)
+        unit.waits.remove(wait)
         if frame.kind is FrameKind.VOLTAGE_REPLY:
-            self._reply(Received(frame.data, frame.source))
+            self._reply(unit, Received(frame.data, frame.source))
             return
         answer_s = airtime_s(len(frame.data))
         one_way_s = (r.end_s - wait.sent_s - wait.first_leg_s - answer_s - TURNAROUND_S) / 2.0
-        self._reply(Range(frame.source, int(min(max(round(one_way_s / RANGE_TICK_S), 0), MAX_TICKS))))
+        self._reply(unit, Range(frame.source, int(min(max(round(one_way_s / RANGE_TICK_S), 0), MAX_TICKS))))
 
     def _remote_heard(self, unit: RemoteUnit, node: int, frame: Frame, r: Reception) -> None:
         if frame.dest is not None and frame.dest != unit.address:
@@ -307,7 +349,8 @@ class ModemEmulator:
         """A unit's automatic answer to a request it heard (after `TURNAROUND_S`)."""
         t = r.end_s + TURNAROUND_S
         if frame.kind in ANSWERS:
-            volts = self.supply_v if node == LOCAL else self.remotes[node - 1].supply_v
+            hosted = self._hosted_at.get(node)
+            volts = hosted.supply_v if hosted is not None else self.remotes[node - 1].supply_v
             data = f"V{supply_ticks(volts):05d}".encode() if frame.kind is FrameKind.VOLTAGE_REQUEST else b""
             self._send(node, t, Frame(ANSWERS[frame.kind], address, frame.source, data))
         elif frame.kind is FrameKind.ECHO:

@@ -22,35 +22,42 @@ IDLE_S = 3600.0  # the task's period while the emulator has nothing due (it is r
 
 
 class Attached:
-    """The emulator's side of the pipe, on a clock."""
+    """The emulator's side of the pipes, on a clock: `port` the local unit's, `hosted[i]` hosted unit
+    i + 1's (`ModemEmulator`'s `hosted`: an aPad's own modem)."""
 
-    def __init__(self, core: ModemEmulator, port: PipeEnd, clock: Clock) -> None:
+    def __init__(self, core: ModemEmulator, port: PipeEnd, clock: Clock, hosted: tuple[PipeEnd, ...] = ()) -> None:
+        if len(hosted) != len(core.units) - 1:
+            raise ValueError(f"{len(core.units) - 1} hosted units, {len(hosted)} ports")
         self.core, self.port, self.clock = core, port, clock
+        self.ports = (port, *hosted)
         self.task: Task = clock.scheduler.every(IDLE_S, self._due, "nanomodem emulator", start_us=clock.now_us)
         clock.scheduler.add_poller(self)
 
     def ring_on(self, bell: Doorbell) -> bool:
-        self.port.bell = bell
+        for port in self.ports:
+            port.bell = bell
         return True
 
     def fileno(self) -> int | None:
         return None
 
     def poll(self) -> bool:
-        data = self.port.read()
-        if not data:
+        arrived = [(unit, data) for unit, port in enumerate(self.ports) if (data := port.read())]
+        if not arrived:
             return False
         now = us_to_s(self.clock.now_us)
-        out = self.core.advance(now)
-        self.core.from_host(data, now)
-        self._send(out + self.core.advance(now))
+        self.core.run_to(now)  # what was due before these bytes (written below, before what they cause)
+        for unit, data in arrived:
+            self.core.from_host(data, now, unit)
+        self.core.run_to(now)
+        self._send()
         return True
 
     def remote_send(self, address: int, data: bytes, dest: int | None = None) -> None:
         """Remote unit `address` sends now (a broadcast, or a unicast to `dest`): the emulator's
         `remote_send`, with its next instant rescheduled."""
         self.core.remote_send(address, us_to_s(self.clock.now_us), data, dest)
-        self._send(b"")
+        self._send()
 
     # ---- the `Sea` of the remote units (acoustic.nanomodem.sea), in-process
     def send(self, address: int, data: bytes, dest: int | None) -> None:
@@ -66,11 +73,15 @@ class Attached:
         self.core.on_remote_heard = lambda _t_s, address, frame: heard(address, frame.kind, frame.data)
 
     def _due(self, now_us: int) -> None:
-        self._send(self.core.advance(us_to_s(now_us)))
+        self.core.run_to(us_to_s(now_us))
+        self._send()
 
-    def _send(self, out: bytes) -> None:
-        if out:
-            self.port.write(out)
+    def _send(self) -> None:
+        """Each unit's output to its host, and the emulator's next instant rescheduled."""
+        for unit, port in enumerate(self.ports):
+            out = self.core.take_output(unit)
+            if out:
+                port.write(out)
         due = self.core.next_due_s()
         sched = self.clock.scheduler
         if due is None:
@@ -82,5 +93,5 @@ class Attached:
             sched.reschedule(self.task, next_us=max(due_us, self.clock.now_us), active=True)
 
 
-def attach(core: ModemEmulator, port: PipeEnd, clock: Clock) -> Attached:
-    return Attached(core, port, clock)
+def attach(core: ModemEmulator, port: PipeEnd, clock: Clock, hosted: tuple[PipeEnd, ...] = ()) -> Attached:
+    return Attached(core, port, clock, hosted)
