@@ -12,6 +12,7 @@ MAVSDK's plugins on one `System`:
     docking.py           the aMussel fix table, Dock and Undock
     param_server.py      the PARAM protocol (and MAVLink FTP, NAKed)
     mission_protocol.py  an empty mission list
+    modem_serial.py      the aPad's own nanomodem over APAD_MODEM_SERIAL (when it has one)
 
 A part never sees this class: it is built with the `PartHost` this class is (`host.py`: receive,
 send, log, count, the time), the `ApadState`, the command table if it answers commands, and the
@@ -29,10 +30,11 @@ messages between tasks. Lat/lon <-> metres goes through `LocalFrame` around home
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from acoustic.nanomodem.ports import BytePort
 from apad_sitl import messages as msgs
 from apad_sitl.commands import CommandTable
 from apad_sitl.dege7 import DegE7
@@ -44,6 +46,7 @@ from apad_sitl.host import MessageHandler, invalid_reason, unsupported_reason
 from apad_sitl.hull_step import step_hull
 from apad_sitl.logs import VehicleLog
 from apad_sitl.mission_protocol import MissionProtocol
+from apad_sitl.modem_serial import ModemSerial
 from apad_sitl.modes import Modes, mode_name
 from apad_sitl.navigation import Navigation
 from apad_sitl.param_server import ParamServer
@@ -94,11 +97,14 @@ class SitlVehicle:
         signing_key: bytes | None = None,
         geofence_deg: Sequence[tuple[float, float]] | None = None,
         log_append: bool = False,
+        modem: tuple[BytePort, Callable[[], None] | None] | None = None,
     ) -> None:
         """`rates_hz` overrides DEFAULT_RATES_HZ per message id; `log_epoch_us` offsets .tlog stamps and
         is the Unix time of t = 0 for signing timestamps. With `signing_key` every frame we send is
         signed and so must be everything received, the swarm's AMUSSEL_STATUS too. `geofence_deg`
         is the water area as a (lat, lon) ring: Go To targets outside it and undocking outside it are refused.
+        `modem`: the aPad's own nanomodem, its serial port and what puts it where the aPad is before
+        each write (`modem_serial.py`); None: the aPad has none.
         """
         self.transport = transport
         self.system_id = system_id
@@ -137,6 +143,7 @@ class SitlVehicle:
         self.docking = Docking(self, apad, self.commands, self.mussels, self.geofence, self.energy.heard)
         self.param_server = ParamServer(self, apad)
         self.mission_protocol = MissionProtocol(self)
+        self.modem = ModemSerial(self, *modem) if modem is not None else None
         self._wire()
 
         if log_dir is not None:
@@ -178,6 +185,8 @@ class SitlVehicle:
         name = f"apad{self.system_id}"
         self._physics_task = scheduler.every(1.0 / self.physics_hz, self._physics, f"{name}.physics", start_us)
         self.streams.attach(scheduler, start_us, name)
+        if self.modem is not None:
+            self.modem.attach(scheduler, start_us, name)
         self.modes.attach(scheduler, start_us, name)
         scheduler.add_poller(self)
 
@@ -189,6 +198,8 @@ class SitlVehicle:
         if self._physics_task is not None:
             self._physics_task.active = False
         self.streams.stop()
+        if self.modem is not None:
+            self.modem.close()
         if self._scheduler is not None:
             self._scheduler.remove_poller(self)
         self.event("close", distance_travelled_m=round(self.state.distance_travelled_m, 3),

@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from acoustic.nanomodem.emulator import ModemEmulator
-from acoustic.nanomodem.ports import PipeEnd
+from acoustic.nanomodem.ports import PipeEnd, PortClosed
 from acoustic.nanomodem.sea import Heard
 from missiontime.clocks import Clock, Doorbell, Task, seconds_to_us, us_to_s
 
@@ -30,6 +30,7 @@ class Attached:
             raise ValueError(f"{len(core.units) - 1} hosted units, {len(hosted)} ports")
         self.core, self.port, self.clock = core, port, clock
         self.ports = (port, *hosted)
+        self.gone: set[PipeEnd] = set()  # ports whose other end has closed
         self.task: Task = clock.scheduler.every(IDLE_S, self._due, "nanomodem emulator", start_us=clock.now_us)
         clock.scheduler.add_poller(self)
 
@@ -42,7 +43,7 @@ class Attached:
         return None
 
     def poll(self) -> bool:
-        arrived = [(unit, data) for unit, port in enumerate(self.ports) if (data := port.read())]
+        arrived = [(unit, data) for unit, port in enumerate(self.ports) if (data := self._read(port))]
         if not arrived:
             return False
         now = us_to_s(self.clock.now_us)
@@ -76,12 +77,29 @@ class Attached:
         self.core.run_to(us_to_s(now_us))
         self._send()
 
+    def _read(self, port: PipeEnd) -> bytes:
+        if port in self.gone:
+            return b""
+        try:
+            return port.read()
+        except PortClosed:
+            self._gone(port)
+            return b""
+
+    def _gone(self, port: PipeEnd) -> None:
+        """A host that has gone (an aPad's modem cable pulled): its unit hears on, its bytes go nowhere."""
+        self.gone.add(port)
+        self.core.counts["host_gone"] = self.core.counts.get("host_gone", 0) + 1
+
     def _send(self) -> None:
         """Each unit's output to its host, and the emulator's next instant rescheduled."""
         for unit, port in enumerate(self.ports):
             out = self.core.take_output(unit)
-            if out:
-                port.write(out)
+            if out and port not in self.gone:
+                try:
+                    port.write(out)
+                except PortClosed:
+                    self._gone(port)
         due = self.core.next_due_s()
         sched = self.clock.scheduler
         if due is None:

@@ -1,10 +1,15 @@
-"""The GCS's call-ups over its nanomodem (`acoustic.nanomodem.driver`), in the aPads' TDMA slots.
+"""The GCS's call-ups over the aPads' nanomodems (`acoustic.nanomodem.driver`), in their TDMA slots.
 
 `CallUps.call_up` sends the call-up as an acknowledged unicast in the aPad's slot (to a sleeper right
 after its wake-up ping, in the same slot), retried to `CALL_UP_TRIES`; each outcome is counted, and one
 never acknowledged is an event (`call_up_unacked`): the aMussel may still have heard it, so the loop's
-surfacing wait decides. With several aPads their loops (`missiontime.processes`) take turns on the one
-unit. The reports the unit hears come in through `gcs.acoustic.uplink`.
+surfacing wait decides.
+
+An aPad with a modem of its own (`apad_units`: a driver over `gcs.acoustic.apad_modem_port`, its bytes
+carried by the aPad's MAVLink) calls up from where it is: the permission comes from the aPad in range,
+as the paper has it. An aPad without one (a SITL process, a console on a real unit at sea) has the
+GCS's unit speak for it in its slot; with several such aPads their loops (`missiontime.processes`)
+take turns on that one unit. The reports the GCS's unit hears come in through `gcs.acoustic.uplink`.
 """
 
 from __future__ import annotations
@@ -35,10 +40,13 @@ class CallUp(Enum):
 
 
 class CallUps:
-    def __init__(self, driver: ModemDriver, clock: Clock, events: EventLog, tdma: TdmaFrame) -> None:
+    def __init__(self, driver: ModemDriver, clock: Clock, events: EventLog, tdma: TdmaFrame,
+                 apad_units: dict[int, ModemDriver] | None = None) -> None:
+        """`driver`: the GCS's unit; `apad_units`: the drivers of the aPads' own units, by aPad."""
         self.driver, self.clock, self.events, self.tdma = driver, clock, events, tdma
+        self.apad_units = dict(apad_units or {})
         self.counts: Counter[str] = Counter()  # tries, pings and outcomes
-        self.holder: int | None = None  # the aPad whose try is on the unit now
+        self.holder: int | None = None  # the aPad whose try is on the GCS's unit now
 
     def call_up(self, mussel_id: int, asleep: Callable[[], bool], apad_id: int,
                 wait: Callable[[float], None] | None = None, wanted: Callable[[], bool] | None = None) -> CallUp:
@@ -56,20 +64,27 @@ class CallUps:
         - `wait`: how to pass time (default the clock's sleep): a mission loop's own, which ends the
           call-up by raising when the operator quits.
 
-        With several aPads their loops share the one unit: a try holds it until its answers or their
-        bounds; another aPad's loop waits for it to be free and then for its own next slot (each slot
-        so missed counted: `modem_busy_waits`)."""
+        An aPad with its own unit calls up through it. APads without share the GCS's unit: a try holds
+        it until its answers or their bounds; another aPad's loop waits for it to be free and then for
+        its own next slot (each slot so missed counted: `modem_busy_waits`)."""
         sleep = wait or self.clock.sleep
+        own = self.apad_units.get(apad_id)
+        driver = own or self.driver
+        self.counts["call_ups_from_apad_unit" if own else "call_ups_from_gcs_unit"] += 1
         sent = 0  # call-ups gone on the water
         for attempt in range(1, CALL_UP_TRIES + 1):
-            slot_start = self._take_unit(apad_id, sleep, None if sent else wanted)
+            slot_start = (self._own_slot(apad_id, sleep, None if sent else wanted) if own
+                          else self._take_unit(apad_id, sleep, None if sent else wanted))
             if slot_start is None:
                 return self._abandoned(mussel_id, apad_id)
+            driver.sleep = sleep
             try:
                 ping = asleep() and (sent > 0 or attempt < CALL_UP_TRIES)
-                result = self._try(mussel_id, slot_start + self.tdma.slot_s, ping)
+                result = self._try(driver, mussel_id, slot_start + self.tdma.slot_s, ping)
             finally:
-                self.holder, self.driver.sleep = None, self.clock.sleep
+                driver.sleep = self.clock.sleep
+                if not own:
+                    self.holder = None
             if result is None:  # a sleeper not woken in this slot: no call-up went
                 continue
             sent += 1
@@ -84,21 +99,21 @@ class CallUps:
                          **self._apad_field(apad_id))
         return CallUp.UNACKED
 
-    def _try(self, mussel_id: int, slot_end_s: float, ping: bool) -> Result | None:
-        """One try on the unit, in the aPad's slot ending at `slot_end_s`: the wake-up ping first if
-        `ping`, then the call-up; None if it did not go (the ping unanswered, or too little of the slot
-        left after it)."""
+    def _try(self, driver: ModemDriver, mussel_id: int, slot_end_s: float, ping: bool) -> Result | None:
+        """One try on `driver`'s unit, in the aPad's slot ending at `slot_end_s`: the wake-up ping first
+        if `ping`, then the call-up; None if it did not go (the ping unanswered, or too little of the
+        slot left after it)."""
         if ping:
-            woken = self.driver.ping(mussel_id)
+            woken = driver.ping(mussel_id)
             self.counts["wake_pings"] += 1
             if not woken.ok:
                 self.counts[f"wake_ping:{woken.outcome.value}"] += 1
                 return None
             assert isinstance(woken.reply, Range)  # what `ModemDriver.ping` answers with
-            if not self._room_for_call_up(woken.reply.range_m(self.driver.sound_speed_mps), slot_end_s):
+            if not self._room_for_call_up(woken.reply.range_m(driver.sound_speed_mps), slot_end_s):
                 self.counts["call_up:no_room_after_ping"] += 1
                 return None
-        return self.driver.unicast_ack(mussel_id, CALL_UP)
+        return driver.unicast_ack(mussel_id, CALL_UP)
 
     def _room_for_call_up(self, range_m: float, slot_end_s: float) -> bool:
         """Whether a call-up sent now to an aMussel `range_m` away, and its acknowledgement heard across
@@ -129,8 +144,17 @@ class CallUps:
             self.counts["modem_busy_waits"] += 1  # another aPad's try began meanwhile: the next slot
         if wanted is not None and not wanted():
             return None
-        self.holder, self.driver.sleep = apad_id, sleep
+        self.holder = apad_id
         return start_s
+
+    def _own_slot(self, apad_id: int, sleep: Callable[[float], None],
+                  wanted: Callable[[], bool] | None) -> float | None:
+        """The start of `apad_id`'s next slot, for its own unit; None if it is no longer `wanted`, now
+        or at that slot."""
+        if wanted is not None and not wanted():
+            return None
+        start_s = self._wait_for_slot(apad_id, sleep)
+        return None if wanted is not None and not wanted() else start_s
 
     def _wait_for_slot(self, apad_id: int, sleep: Callable[[float], None]) -> float:
         """Until the start of the aPad's next slot (now, if one starts now); that start (s)."""

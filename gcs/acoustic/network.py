@@ -3,9 +3,12 @@
 `AcousticNetwork.build` puts, on the mission clock:
 
 - the nanomodem emulator (`acoustic.nanomodem.emulator`): the GCS's unit at the first aPad's home,
-  one remote unit per aMussel (address = id), over a `Medium` seeded from the scenario's seed;
-- the GCS's driver on an in-process byte pipe to it: the same driver code that speaks to a real unit
-  through pyserial, reading the same bytes;
+  one remote unit per aMussel (address = id), each aPad's own unit where that aPad is (addresses
+  from 255 down), over a `Medium` seeded from the scenario's seed;
+- the GCS's driver on an in-process byte pipe to its unit: the same driver code that speaks to a
+  real unit through pyserial, reading the same bytes; and a driver for each aPad's unit, whose bytes
+  go over the aPad's MAVLink (`apad_modem_port`) to its modem port, an in-process pipe to the water
+  (`apad_modem_end`, which the world gives the SITL aPad);
 - the aMussels' side (`mussel_sim.modems`): status reports in their TDMA slots, call-ups heard;
 - the GCS's side: reports folded into what the GCS knows (`gcs.acoustic.uplink`), call-ups sent
   (`gcs.acoustic.call_ups`), over one driver;
@@ -22,14 +25,16 @@ from acoustic.nanomodem.commands import MAX_ADDRESS
 from acoustic.nanomodem.driver import ModemDriver
 from acoustic.nanomodem.emulator import ModemEmulator, RemoteUnit
 from acoustic.nanomodem.lockstep import Attached, attach
-from acoustic.nanomodem.ports import BytePort, pipe
+from acoustic.nanomodem.ports import BytePort, PipeEnd, pipe
 from acoustic.nanomodem.sea import Sea
 from acoustic.params import AcousticParams
 from acoustic.tdma import TdmaFrame, tdma_frame
+from gcs.acoustic.apad_modem_port import ApadModemPort
 from gcs.acoustic.call_ups import CallUps
 from gcs.acoustic.knowledge import KnowledgeLedger, age_s
 from gcs.acoustic.uplink import AcousticUplink
 from gcs.link.registry import VehicleRegistry
+from gcs.link.router import Link
 from gcs.records.events import EventLog
 from missiontime import Clock, Task
 from mussel_sim.comms import FleetRunner
@@ -37,6 +42,7 @@ from mussel_sim.modems import MusselModems
 
 GCS_ADDRESS = 0  # the GCS's unit; the aMussels' addresses are their ids (1..255)
 GCS_DEPTH_M = 0.5  # the surface computer's unit hangs just below the surface
+APAD_MODEM_DEPTH_M = 0.5  # an aPad's unit, under its hull
 SAMPLE_S = 10.0  # belief against truth, sampled this often (mission seconds)
 CHANNEL_SEED = 21  # the channel's draws, apart from the fleet's and the placement's for the same seed
 
@@ -51,11 +57,24 @@ class Planner(Protocol):
     def claimed(self, mussel_id: int) -> bool: ...
 
 
+def apad_unit_addresses(apad_ids: list[int], mussel_ids: list[int]) -> dict[int, int]:
+    """Each aPad's unit's address: 255, 254, ... in the order of `apad_ids`; one an aMussel has is refused."""
+    addresses = {sysid: MAX_ADDRESS - k for k, sysid in enumerate(apad_ids)}
+    taken = sorted(set(addresses.values()) & set(mussel_ids))
+    if taken:
+        raise ValueError(f"acoustic scenarios keep the nanomodem addresses {min(addresses.values())}..{MAX_ADDRESS} "
+                         f"for the aPads' own units: aMussel ids {taken} take them")
+    return addresses
+
+
 class AcousticNetwork:
     def __init__(self, emulator: Attached | None, modems: MusselModems, uplink: AcousticUplink, call_ups: CallUps,
                  ledger: KnowledgeLedger, registry: VehicleRegistry, fleet: FleetRunner) -> None:
         self.emulator, self.modems, self.uplink, self.call_ups, self.ledger = emulator, modems, uplink, call_ups, ledger
         self.registry, self.fleet = registry, fleet
+        self.apad_modem_ends: dict[int, PipeEnd] = {}  # the aPads' side of their units' pipes, by aPad
+        self.apad_unit_address: dict[int, int] = {}
+        self._water_origin_m = (0.0, 0.0)  # the GCS's unit, in the fleet's frame
         # Each aPad's loop's view of the fleet (its own drains, sleep orders included), as it plans;
         # none yet: no loop plans, so there is no belief to sample.
         self.planners: dict[int, Planner] = {}
@@ -66,27 +85,37 @@ class AcousticNetwork:
         return self.modems.tdma
 
     @classmethod
-    def build(cls, clock: Clock, fleet: FleetRunner, registry: VehicleRegistry, events: EventLog,
-              params: AcousticParams, home_deg: tuple[float, float], apad_ids: list[int], seed: int,
-              area_range_m: float, unit: tuple[BytePort, Sea] | None = None) -> AcousticNetwork:
-        """The network on `clock`, from mission time now: the GCS's unit at the first aPad's home
-        (`home_deg`, latitude and longitude), a slot for each aMussel and aPad (`apad_ids`), the channel's
-        draws from `seed`; belief against truth is sampled once a loop `plans`. `unit`: the
-        GCS's modem on a serial port and the sea its remote units are on (`vil gcs --modem --sea`);
-        None: both emulated in-process (lockstep)."""
+    def build(cls, clock: Clock, fleet: FleetRunner, link: Link, events: EventLog, params: AcousticParams,
+              apad_homes_deg: dict[int, tuple[float, float]], seed: int, area_range_m: float,
+              unit: tuple[BytePort, Sea] | None = None) -> AcousticNetwork:
+        """The network on `clock`, from mission time now: the GCS's unit at the first aPad's home (of
+        `apad_homes_deg`: each aPad's home, latitude and longitude), a slot for each aMussel and aPad,
+        the channel's draws from `seed`; belief against truth is sampled once a loop `plans`. `unit`:
+        the GCS's modem on a serial port and the sea its remote units are on (`vil gcs --modem --sea`:
+        the aPads have no units of their own there, the GCS's speaks for them); None: the water
+        emulated in-process (lockstep), the aPads' own units on it."""
         ids = [int(m) for m in fleet.state.ids]  # sorted: the medium's nodes follow the fleet's rows
         if ids and (ids[0] <= GCS_ADDRESS or ids[-1] > MAX_ADDRESS):
             raise ValueError(f"acoustic scenarios need aMussel ids 1..{MAX_ADDRESS} (the nanomodem's addresses)")
-        hx, hy = (float(v[0]) for v in fleet.frame.to_local(np.array([home_deg[0]]), np.array([home_deg[1]])))
+        apad_ids = list(apad_homes_deg)
+        homes = {sysid: cls._local(fleet, deg) for sysid, deg in apad_homes_deg.items()}
+        hx, hy = homes[apad_ids[0]]
         emulator: Attached | None = None
+        apad_ends: dict[int, PipeEnd] = {}
+        addresses: dict[int, int] = {}
         if unit is None:  # lockstep: the emulator in-process, its local unit the GCS's, on a byte pipe
+            addresses = apad_unit_addresses(apad_ids, ids)
             s = fleet.state
             remotes = tuple(RemoteUnit(m, (float(s.x_m[k]) - hx, float(s.y_m[k]) - hy, float(s.depth_m[k])))
                             for k, m in enumerate(ids))
+            hosted = tuple(RemoteUnit(addresses[a], (homes[a][0] - hx, homes[a][1] - hy, APAD_MODEM_DEPTH_M))
+                           for a in apad_ids)
             core = ModemEmulator(params, remotes, np.random.default_rng([seed, CHANNEL_SEED]),
-                                 address=GCS_ADDRESS, position_m=(0.0, 0.0, GCS_DEPTH_M))
+                                 address=GCS_ADDRESS, position_m=(0.0, 0.0, GCS_DEPTH_M), hosted=hosted)
             gcs_end, modem_end = pipe()
-            emulator = attach(core, modem_end, clock)
+            pipes = {a: pipe() for a in apad_ids}  # (the aPad's modem port, the water's end)
+            emulator = attach(core, modem_end, clock, hosted=tuple(pipes[a][1] for a in apad_ids))
+            apad_ends = {a: pipes[a][0] for a in apad_ids}
             port: BytePort = gcs_end
             sea: Sea = emulator
         else:
@@ -95,12 +124,27 @@ class AcousticNetwork:
         modems = MusselModems(fleet, sea, tdma, GCS_ADDRESS, (hx, hy))
         modems.register(clock.scheduler, clock.now_us)
         driver = ModemDriver(port, clock, params.sound_speed_mps)
-        uplink = AcousticUplink(driver, registry, clock, tdma)
+        uplink = AcousticUplink(driver, link.registry, clock, tdma)
         uplink.register(clock.scheduler)
-        network = cls(emulator, modems, uplink, CallUps(driver, clock, events, tdma), KnowledgeLedger(fleet.state.ids),
-                      registry, fleet)
+        apad_units = {a: ModemDriver(ApadModemPort(link, a, clock), clock, params.sound_speed_mps) for a in apad_ends}
+        network = cls(emulator, modems, uplink, CallUps(driver, clock, events, tdma, apad_units),
+                      KnowledgeLedger(fleet.state.ids), link.registry, fleet)
+        network.apad_modem_ends, network.apad_unit_address, network._water_origin_m = apad_ends, addresses, (hx, hy)
         network._task = clock.scheduler.every(SAMPLE_S, network.sample, "acoustic-knowledge", clock.now_us)
         return network
+
+    @staticmethod
+    def _local(fleet: FleetRunner, deg: tuple[float, float]) -> tuple[float, float]:
+        x, y = fleet.frame.to_local(np.array([deg[0]]), np.array([deg[1]]))
+        return float(x[0]), float(y[0])
+
+    def place_apad_unit(self, apad_id: int, position_deg: tuple[float, float]) -> None:
+        """aPad `apad_id`'s own unit where the aPad is now (its modem port calls this before each write)."""
+        if self.emulator is None or apad_id not in self.apad_unit_address:
+            return
+        x, y = self._local(self.fleet, position_deg)
+        hx, hy = self._water_origin_m
+        self.emulator.move([self.apad_unit_address[apad_id]], np.array([[x - hx, y - hy, APAD_MODEM_DEPTH_M]]))
 
     def close(self) -> None:
         """Let go of the serial port and the sea's socket (an in-process pipe has nothing to free)."""

@@ -248,11 +248,10 @@ def build_world(
                   options=options)
     world.mute_logs(muted_logs)
     if scenario.acoustic.enabled:
-        home = scenario.apads[0]
         world.acoustic = AcousticNetwork.build(
-            clock, fleet, link.registry, events, scenario.acoustic, (home.home_lat_deg, home.home_lon_deg),
-            [a.system_id for a in scenario.apads], scenario.seed, area_range_m(scenario),
-            serial_unit(options, clock))
+            clock, fleet, link, events, scenario.acoustic,
+            {a.system_id: (a.home_lat_deg, a.home_lon_deg) for a in scenario.apads}, scenario.seed,
+            area_range_m(scenario), serial_unit(options, clock))
     world.real = RealFleet(link.registry.mussels, link.registry.mussel_heard_us,
                            discharge_profile(scenario.fleet.discharge), charge_profile(scenario.fleet.charge),
                            scenario.mission.theta)
@@ -327,7 +326,7 @@ def _embed_one(
     else:
         gcs_end, apad_end = memory_pair(f"apad{a.system_id}")
     vehicle = SitlVehicle(
-        apad_end, apad_params(s, a), a.home_lat_deg, a.home_lon_deg, system_id=a.system_id,
+        apad_end, apad_params(s, a), a.home_lat_deg, a.home_lon_deg, system_id=a.system_id, modem=_apad_modem(world, a),
         current_mps=(s.environment.current_east_mps, s.environment.current_north_mps),
         log_dir=world.folder.path if world.folder else None, log_epoch_us=epoch_us, signing_key=options.signing_key,
         geofence_deg=world.geofence_deg or None, log_append=append_logs,
@@ -337,6 +336,16 @@ def _embed_one(
     vehicle.attach(clock.scheduler, clock.now_us)
     world.link.add_transport(gcs_end)
     world.vehicles[a.system_id] = vehicle
+
+
+def _apad_modem(world: World, a: ApadConfig) -> tuple[BytePort, Callable[[], None]] | None:
+    """The aPad's own nanomodem on the acoustic network's water (its port, and what puts it where the
+    aPad is before each write); None without the channel, or where the GCS's unit speaks for it."""
+    network = world.acoustic
+    end = network.apad_modem_ends.get(a.system_id) if network is not None else None
+    if network is None or end is None:
+        return None
+    return end, lambda: network.place_apad_unit(a.system_id, world.vehicles[a.system_id].position_deg)
 
 
 def lockstep_world(

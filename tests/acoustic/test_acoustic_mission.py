@@ -20,6 +20,8 @@ import numpy as np
 import pytest
 from testkit import restored_session, scenario_variant
 
+from acoustic.channel import Medium, Transmission
+from acoustic.nanomodem.emulator import LOCAL, Frame, FrameKind
 from gcs.mission.acoustic_frame import scenario_frame
 from gcs.mission.headless import run_mission
 from gcs.mission.results import RunResult
@@ -240,9 +242,23 @@ def two_apad_acoustic(minutes: float) -> Scenario:
     return replace(POOL_X2.with_overrides(duration_s=60.0 * minutes), acoustic=replace(POOL_X2.acoustic, enabled=True))
 
 
-def test_two_apads_share_the_fleet_as_it_is_heard_and_call_up_over_the_water(tmp_path: Path) -> None:
+def test_two_apads_share_the_fleet_as_it_is_heard_and_call_up_over_the_water(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     # At the start the GCS has heard no aMussel: the fleet is shared among the aPads as each is first
-    # heard in its TDMA slot (the nearest aPad with room), and both aPads call up through the one unit.
+    # heard in its TDMA slot (the nearest aPad with room), and each aPad calls up through its own unit,
+    # from where it is: every ping and call-up on the water leaves from an aPad's unit, as far from
+    # its aMussel as the call-up's event says the aPad was (the GCS's unit, at one end of the pool,
+    # is tens of metres from the aMussels at the other).
+    sent: list[tuple[int, FrameKind, np.ndarray, np.ndarray]] = []
+    transmit = Medium.transmit
+
+    def recorded(self: Medium, sender: int, start_s: float, payload_bytes: int, data: object = None,
+                 listeners: list[int] | None = None) -> Transmission:
+        if isinstance(data, Frame) and data.kind in (FrameKind.PING, FrameKind.UNICAST_ACK) and listeners:
+            sent.append((sender, data.kind, self.positions_m[sender].copy(), self.positions_m[listeners[0]].copy()))
+        return transmit(self, sender, start_s, payload_bytes, data, listeners)
+
+    monkeypatch.setattr(Medium, "transmit", recorded)
     result = run_mission(two_apad_acoustic(20.0), tmp_path / "run")
     events = read_events(Path(result.out_dir) / "events.jsonl")
     shares = {row["sysid"]: row["mussels"] for row in result.apads}
@@ -253,7 +269,12 @@ def test_two_apads_share_the_fleet_as_it_is_heard_and_call_up_over_the_water(tmp
     assert {c["apad"] for c in called} == {1, 2}
     assert all(c["acoustic"] and c["acked"] and c["mussel"] in shares[c["apad"]] for c in called)
     counts = result.acoustic["counts"]
-    assert counts["call_up_sent"] == counts["call_ups_acked"] == len(called)
+    assert counts["call_up_sent"] == counts["call_ups_acked"] == counts["call_ups_from_apad_unit"] == len(called)
+    call_ups = [(node, at, to) for node, kind, at, to in sent if kind is FrameKind.UNICAST_ACK]
+    assert len(call_ups) == len(called) and all(node != LOCAL for node, _, _ in call_ups)
+    gaps = [abs(float(np.hypot(*(at - to)[:2])) - c["distance_m"])
+            for (_, at, to), c in zip(call_ups, called, strict=True)]
+    assert max(gaps) < 1.0, gaps  # through the GCS's unit: up to 13 m
     assert len(result.acoustic["slots"]) == 14  # 12 aMussels and the 2 aPads
     k = result.acoustic["knowledge"]
     assert {p["mussel_id"] for p in k["per_mussel"]} == set(range(1, 13)) and k["battery_error_max"] < 0.01

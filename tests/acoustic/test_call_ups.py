@@ -84,7 +84,7 @@ def test_a_call_up_no_longer_wanted_when_its_slot_comes_is_abandoned_unsent() ->
     assert slot_s > 1.0
     outcome = call_ups.call_up(7, lambda: True, 1, wanted=lambda: clock.time() < slot_s - 0.5)  # a sleeper
     assert outcome is CallUp.ABANDONED and clock.time() == pytest.approx(slot_s, abs=1e-6)
-    assert call_ups.counts == {"call_ups_abandoned": 1}  # no ping, no call-up sent
+    assert call_ups.counts == {"call_ups_abandoned": 1, "call_ups_from_gcs_unit": 1}  # no ping, no call-up sent
     assert not any(core.medium.counts.values())  # nothing on the water
     assert [(e.kind, e.fields) for e in events.events] == [("call_up_abandoned", {"mussel": 7})]
     assert call_ups.call_up(7, lambda: False, 1) is CallUp.ACKED  # wanted by default: sent and acknowledged
@@ -125,7 +125,8 @@ class OneUnit:
 def test_a_woken_sleeper_is_called_up_in_the_same_slot_as_its_ping() -> None:
     unit = OneUnit(20.0)
     assert unit.call_ups.call_up(7, lambda: True, 1) is CallUp.ACKED
-    assert unit.call_ups.counts == {"wake_pings": 1, "call_up_sent": 1, "call_ups_acked": 1, "call_up_retries": 0}
+    assert unit.call_ups.counts == {"wake_pings": 1, "call_up_sent": 1, "call_ups_acked": 1, "call_up_retries": 0,
+                                    "call_ups_from_gcs_unit": 1}
     assert len(unit.sent) == 2 and unit.in_apad_slots()  # the ping and the call-up, one slot
     (ping_s, _), (call_s, _) = unit.sent
     assert unit.tdma.next_slot_start_s(Owner.APAD, 1, call_s - unit.tdma.slot_s) == pytest.approx(ping_s)
