@@ -50,7 +50,9 @@ def _read_here() -> tuple[type[Any], ...]:
     from mavlink_dialect import memory_pair
 
     with SitlVehicle(memory_pair()[0], ApadParams(), 0.0, 0.0) as vehicle:
-        ids = set(vehicle._handlers) | set(_READERS) | {mavlink.MAVLINK_MSG_ID_AMUSSEL_COMMAND}
+        # AMUSSEL_COMMAND: the fleet's; APAD_MODEM_SERIAL: an aPad with a modem of its own, and the GCS's port to it
+        ids = set(vehicle._handlers) | set(_READERS) | {mavlink.MAVLINK_MSG_ID_AMUSSEL_COMMAND,
+                                                         mavlink.MAVLINK_MSG_ID_APAD_MODEM_SERIAL}
     return tuple(mavlink.mavlink_map[i] for i in sorted(ids))
 
 

@@ -68,6 +68,34 @@ def test_hostile_fields_reach_both_receive_paths_and_nothing_impossible_is_belie
         fuzz.close()
 
 
+def test_hostile_modem_passthrough_reaches_the_apads_modem_and_the_gcss_port_without_harm() -> None:
+    """pool12-acoustic: the aPad has a modem of its own (APAD_MODEM_SERIAL) and the GCS a port to it.
+    Hostile passthrough frames, and every other message, into both paths: nothing raises, what does
+    not fit is counted, the bytes that do reach the aPad's modem (its parser counts what is not a
+    command), and a call-up through the aPad's modem still works afterwards."""
+    modem_only = [cls for cls in MESSAGE_CLASSES if cls.msgname == "APAD_MODEM_SERIAL"]
+    fuzz = FuzzWorld(7, scenario="missions/pool12-acoustic.toml", classes=modem_only, hostile_share=0.7)
+    w = fuzz.world
+    try:
+        network = w.acoustic
+        assert network is not None and network.emulator is not None
+        for i in range(max(EXAMPLES // 4, 500)):
+            frame = fuzz.frames.frame()
+            fuzz.feed("gcs", frame)
+            fuzz.feed("sitl", frame)
+            if i % ADVANCE_EVERY == ADVANCE_EVERY - 1:
+                fuzz.advance(0.3)
+        assert fuzz.handler_errors() == {} and fuzz.impossible() == []
+        sitl = fuzz.drops()["sitl"]
+        assert sitl["invalid:APAD_MODEM_SERIAL:count"] > 0 and sitl["invalid:APAD_MODEM_SERIAL:flags"] > 0
+        assert network.emulator.core.counts["stray_byte"] > 0  # what got through reached the modem's parser
+        fuzz.advance(3.0)  # what the modem answered the spray has gone back and been dropped
+        driver = network.call_ups.apad_units[1]
+        assert driver.status().ok and driver.ping(1).ok  # the passthrough still works
+    finally:
+        fuzz.close()
+
+
 def test_no_stranger_disturbs_a_mission_every_mussel_is_accounted_for() -> None:
     """The mission loop runs while strangers spray both sides: it runs to its end, and each aMussel
     is on the seabed or in a slot. (Orders a stranger GCS may give the aPad are left out: any GCS may
