@@ -3,21 +3,27 @@
 The paper's aPads carry nanomodems; the GCS calls an aMussel up through the modem of the aPad that
 serves it, so the call-up leaves from the aPad. The GCS's driver speaks to this modem as to a unit of
 its own, through our dialect's APAD_MODEM_SERIAL: MAVLink's serial passthrough (SERIAL_CONTROL) with
-the target SERIAL_CONTROL lacks, as several aPads share one link.
+the target SERIAL_CONTROL lacks (several aPads share one link), made whole over a lossy link:
 
-- Bytes the GCS writes go to the modem at once, as they came (a command's bytes arrive together, as
-  the unit needs). Before they go, `before_write` puts the modem where the aPad is now.
-- A request with RESPOND asks for the modem's output: it is held until the modem has written
-  something, or until its timeout (at most `MAX_HOLD_MS`), and answered with what there is, in
-  messages of up to 64 bytes (none at the timeout: one empty reply). A new request replaces a held one.
+- Writes are numbered (`seq`): each goes to the modem once, as it came (a command's bytes together,
+  as the unit needs); a repeat (the link duplicated it, or the GCS sent it again) is not written again.
+  Before a write goes, `before_write` puts the modem where the aPad is now.
+- The modem's output is one stream. A request (RESPOND) says how much of it the GCS holds (`offset`):
+  what came before is confirmed and forgotten; the rest is sent again until it is confirmed, at most
+  `CHUNKS_PER_ANSWER` messages an answer. A request is held until there is output, or its timeout (at
+  most `MAX_HOLD_MS`). Each message of output says where in the stream it begins and which write the
+  modem had last been given when it was written: the GCS tells a late answer to an earlier command.
+- Bounded: at most `MAX_OUTPUT` bytes of output wait unconfirmed (the oldest go first, counted).
+- One GCS owns the modem: the first to speak to it, until it has been silent `OWNER_SILENT_S`;
+  another's messages meanwhile are counted and left alone.
 - Nothing received may end the vehicle: a count beyond the data, a REPLY sent to the aPad, a modem
-  port that has gone are dropped and counted by reason in the vehicle's `dropped`.
+  port that has gone are dropped and counted (the vehicle's `dropped`, or `counts` here).
 """
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 from acoustic.nanomodem.ports import BytePort, PortClosed
@@ -27,17 +33,19 @@ from missiontime import US_PER_S, Scheduler, Task
 from missiontime.clocks import Doorbell
 
 CHUNK = 64  # APAD_MODEM_SERIAL.data
+CHUNKS_PER_ANSWER = 4
+MAX_OUTPUT = 4096  # bytes of the modem's output waiting to be confirmed
 MAX_HOLD_MS = 10_000  # a request held longer than this is answered (a GCS asking for more is clamped)
+OWNER_SILENT_S = 10.0  # the owning GCS silent this long: another may take the modem
 IDLE_S = 3600.0  # the deadline task's period while nothing is held (rescheduled when a request is)
+SEQ_MOD = 1 << 16
 REPLY = mavlink.SERIAL_CONTROL_FLAG_REPLY
 RESPOND = mavlink.SERIAL_CONTROL_FLAG_RESPOND
 
 
-@dataclass
-class _Held:
-    system: int
-    component: int
-    deadline_us: int
+def newer(seq: int, than: int) -> bool:
+    """Whether write number `seq` comes after `than` (16-bit numbers, wrapping)."""
+    return 0 < (seq - than) % SEQ_MOD < SEQ_MOD // 2
 
 
 class ModemSerial:
@@ -45,11 +53,17 @@ class ModemSerial:
 
     def __init__(self, host: PartHost, port: BytePort, before_write: Callable[[], None] | None = None) -> None:
         self._host, self.port, self._before_write = host, port, before_write
-        self._output = bytearray()  # what the modem wrote and no request has taken yet
-        self._held: _Held | None = None
+        self.counts: Counter[str] = Counter()  # what was left alone, and why
+        self.gone: str | None = None  # why the modem's port has gone (nothing more is written or read)
+        self._owner: tuple[int, int] | None = None  # (system, component) of the GCS the modem answers
+        self._owner_heard_us = 0
+        self._written = 0  # the last write number given to the modem
+        self._base = 0  # where in the output stream `_output` begins
+        self._output = bytearray()  # output not yet confirmed
+        self._epochs: list[tuple[int, int]] = [(0, 0)]  # (stream position, the write the output from it follows)
+        self._held_until_us: int | None = None  # a request held until then (mission time)
         self._scheduler: Scheduler | None = None
         self._deadline: Task | None = None
-        self.gone: str | None = None  # why the modem's port has gone (nothing more is written or read)
         host.on(mavlink.MAVLINK_MSG_ID_APAD_MODEM_SERIAL, self._on_serial)
 
     def attach(self, scheduler: Scheduler, start_us: int, name: str) -> None:
@@ -76,11 +90,9 @@ class ModemSerial:
         return None
 
     def poll(self) -> bool:
-        data = self._read()
-        if not data:
+        if not self._take_output():
             return False
-        self._output += data
-        if self._held is not None:
+        if self._held_until_us is not None:
             self._answer()
         return True
 
@@ -95,56 +107,111 @@ class ModemSerial:
         if not 0 <= msg.count <= CHUNK:
             host.count_invalid("APAD_MODEM_SERIAL", "count")
             return
+        sender = (msg.get_srcSystem(), msg.get_srcComponent())
+        silent_us = host.now_us - self._owner_heard_us
+        if self._owner not in (None, sender) and silent_us < OWNER_SILENT_S * US_PER_S:
+            self.counts["not_the_owner"] += 1
+            return
+        self._owner, self._owner_heard_us = sender, host.now_us
+        self._confirm(msg.offset)
         if msg.count:
-            if self._before_write is not None:
-                self._before_write()
-            self._write(bytes(msg.data[:msg.count]))
+            if newer(msg.seq, self._written):
+                self._write(msg.seq, bytes(msg.data[:msg.count]))
+            else:
+                self.counts["repeated_write"] += 1
         if msg.flags & RESPOND:
-            hold_us = min(msg.timeout, MAX_HOLD_MS) * (US_PER_S // 1000)
-            self._held = _Held(msg.get_srcSystem(), msg.get_srcComponent(), host.now_us + hold_us)
-            self._output += self._read()
-            if self._output or hold_us == 0:
+            self._held_until_us = host.now_us + min(msg.timeout, MAX_HOLD_MS) * (US_PER_S // 1000)
+            self._take_output()
+            if self._output or msg.timeout == 0:
                 self._answer()
             elif self._scheduler is not None and self._deadline is not None:
-                self._scheduler.reschedule(self._deadline, next_us=self._held.deadline_us, active=True)
+                self._scheduler.reschedule(self._deadline, next_us=self._held_until_us, active=True)
 
     def _on_deadline(self, now_us: int) -> None:
         host = self._host
         host.now_us = max(host.now_us, now_us)
-        if self._held is not None and now_us >= self._held.deadline_us:
+        if self._held_until_us is not None and now_us >= self._held_until_us:
             self._answer()
 
+    def _confirm(self, offset: int) -> None:
+        """The GCS holds the output up to `offset`: forget it. An offset past the output's end confirms
+        it all (the GCS took bytes the modem never wrote: a spoof; its next answer says where the stream
+        stands, and the GCS goes back there); one before what waits changes nothing."""
+        end = self._base + len(self._output)
+        if offset > end:
+            self.counts["offset_past_output"] += 1
+        if self._base < offset:
+            self._forget(min(offset, end) - self._base)
+
+    def _forget(self, n: int) -> None:
+        del self._output[:n]
+        self._base += n
+        while len(self._epochs) > 1 and self._epochs[1][0] <= self._base:
+            self._epochs.pop(0)
+
     def _answer(self) -> None:
-        """Answer the held request with the modem's output (one empty reply if there is none)."""
-        held, self._held = self._held, None
+        """Answer the held request: the unconfirmed output, from where it begins (none: one empty message)."""
+        self._held_until_us = None
         if self._scheduler is not None and self._deadline is not None:
             self._scheduler.reschedule(self._deadline, active=False)
-        if held is None:
+        owner = self._owner
+        if owner is None:
             return
-        out, self._output = bytes(self._output), bytearray()
-        for i in range(0, max(len(out), 1), CHUNK):
-            chunk = out[i:i + CHUNK]
+        position, end = self._base, self._base + len(self._output)
+        for _ in range(CHUNKS_PER_ANSWER):
+            seq, epoch_end = self._epoch_at(position)
+            stop = min(end, position + CHUNK, epoch_end)
+            chunk = bytes(self._output[position - self._base:stop - self._base])
             self._host.send(mavlink.MAVLink_apad_modem_serial_message(
-                held.system, held.component, REPLY, 0, len(chunk), chunk.ljust(CHUNK, b"\0")))
+                owner[0], owner[1], REPLY, 0, seq, position, len(chunk), chunk.ljust(CHUNK, b"\0")))
+            position = stop
+            if position >= end:
+                break
+
+    def _epoch_at(self, position: int) -> tuple[int, int]:
+        """The write the output at `position` follows, and where the next write's output begins."""
+        seq, end = self._epochs[0][1], 1 << 62
+        for start, s in self._epochs:
+            if start > position:
+                end = start
+                break
+            seq = s
+        return seq, end
 
     # ---- the port
-    def _write(self, data: bytes) -> None:
+    def _write(self, seq: int, data: bytes) -> None:
+        self._take_output()  # what the modem wrote before this command belongs to the one before
+        self._written = seq
+        here = self._base + len(self._output)
+        if self._epochs[-1][0] == here:  # no output since the last write: this one's replaces it (bounded)
+            self._epochs[-1] = (here, seq)
+        else:
+            self._epochs.append((here, seq))
         if self.gone is not None:
             self._host.count_unsupported("APAD_MODEM_SERIAL:modem_gone")
             return
+        if self._before_write is not None:
+            self._before_write()
         try:
             self.port.write(data)
         except PortClosed as exc:
             self._gone(str(exc))
 
-    def _read(self) -> bytes:
+    def _take_output(self) -> bool:
+        """The modem's new output into the stream (the oldest beyond `MAX_OUTPUT` forgotten, counted)."""
         if self.gone is not None:
-            return b""
+            return False
         try:
-            return self.port.read()
+            data = self.port.read()
         except PortClosed as exc:
             self._gone(str(exc))
-            return b""
+            return False
+        self._output += data
+        if len(self._output) > MAX_OUTPUT:
+            over = len(self._output) - MAX_OUTPUT
+            self.counts["output_overflow"] += over
+            self._forget(over)
+        return bool(data)
 
     def _gone(self, why: str) -> None:
         self.gone = why

@@ -88,7 +88,7 @@ class RemoteUnit:
 
 
 @dataclass
-class _Wait:
+class Wait:
     """An answer the local unit waits for: a reply of `kind` from `address` by `deadline_s`."""
 
     kind: FrameKind
@@ -122,7 +122,7 @@ class HostedUnit:
     address: int
     supply_v: float
     parser: CommandParser
-    waits: list[_Wait] = field(default_factory=list)
+    waits: list[Wait] = field(default_factory=list)
     quality: int | None = None
     out: bytearray = field(default_factory=bytearray)
 
@@ -139,13 +139,16 @@ class ModemEmulator:
         if len(set(addresses)) != len(addresses) or any(not 0 <= a <= MAX_ADDRESS for a in addresses):
             raise ValueError(f"remote and hosted addresses must differ and be 0..{MAX_ADDRESS}, got {addresses}")
         self.params, self.remotes = params, remotes
-        # address -> node index in the medium (the remote and the hosted units; the local unit is LOCAL)
-        self._nodes = {r.address: i + 1 for i, r in enumerate((*remotes, *hosted))}
+        # address -> node index in the medium of the remote units, and of the hosted units' starting
+        # addresses (what `move_remotes` moves; `$A` gives a hosted unit a new address, not a new place)
+        self._nodes = {r.address: i + 1 for i, r in enumerate(remotes)}
+        self._movable = {**self._nodes, **{h.address: len(remotes) + 1 + j for j, h in enumerate(hosted)}}
         self.ping_timeout_s = ping_timeout_s
         positions = np.array([position_m, *(r.position_m for r in (*remotes, *hosted))], dtype=np.float64)
         self.medium = Medium(params, positions, rng)
         self.units = [HostedUnit(LOCAL, address, supply_v, CommandParser(gap_s))]
-        self.units += [HostedUnit(self._nodes[h.address], h.address, h.supply_v, CommandParser(gap_s)) for h in hosted]
+        self.units += [HostedUnit(self._movable[h.address], h.address, h.supply_v, CommandParser(gap_s))
+                       for h in hosted]
         self._hosted_at = {u.node: u for u in self.units}  # node -> the hosted unit there
         self.heard = HeardLog()
         # What a remote unit heard addressed to it (or to all) is also handed here: (end s, address, frame).
@@ -200,9 +203,9 @@ class ModemEmulator:
         """Remote units to new positions (metres, the local unit's frame); an unknown address is counted."""
         nodes = self.medium.positions_m.copy()
         for address, position in zip(addresses, np.asarray(positions_m, dtype=np.float64).reshape(-1, 3), strict=True):
-            node = self._nodes.get(address)
+            node = self._movable.get(address)
             if node is None:
-                self._count("move_unknown_unit")
+                self.count("move_unknown_unit")
                 continue
             nodes[node] = position
         self.medium.move(nodes)
@@ -212,13 +215,14 @@ class ModemEmulator:
         address is counted."""
         for address, on in powered.items():
             if address not in self._nodes:
-                self._count("power_unknown_unit")
+                self.count("power_unknown_unit")
             elif on:
                 self.unpowered.discard(address)
             else:
                 self.unpowered.add(address)
 
-    def _count(self, reason: str) -> None:
+    def count(self, reason: str) -> None:
+        """One more of `reason` in `counts` (the edges count what happened to their ports here too)."""
         self.counts[reason] = self.counts.get(reason, 0) + 1
 
     @staticmethod
@@ -239,11 +243,9 @@ class ModemEmulator:
         """The nodes that act on `frame` on time: all for a broadcast, else its addressee (if any unit has it)."""
         if frame.dest is None:
             return None
-        nodes = [u.node for u in self.units if u.address == frame.dest]
-        if nodes:
-            return nodes
+        nodes = [u.node for u in self.units if u.address == frame.dest]  # a hosted unit may share a remote's
         node = self._nodes.get(frame.dest)
-        return [] if node is None else [node]
+        return nodes if node is None else [*nodes, node]
 
     def _command(self, unit: HostedUnit, item: Command | Rejected, t_s: float) -> None:
         if isinstance(item, Rejected):
@@ -251,7 +253,7 @@ class ModemEmulator:
             if item.reason != STRAY:
                 self._reply(unit, Error())
             return
-        self._count("command")
+        self.count("command")
         kind, a = item.kind, item.address
         if kind is Kind.SET_ADDRESS:
             assert a is not None
@@ -262,7 +264,7 @@ class ModemEmulator:
         elif kind is Kind.QUALITY:
             self._reply(unit, Quality(unit.quality))
         elif self.medium.busy_until_s(unit.node) > t_s + MAX_QUEUED_S:
-            self._count("busy")
+            self.count("busy")
             self._reply(unit, Error())
         else:
             assert kind is Kind.BROADCAST or a is not None
@@ -275,7 +277,7 @@ class ModemEmulator:
             if frame_kind in ANSWERS and a is not None:
                 # The unit's 4 s run from its own transmission: a request queued behind packets already
                 # on the water must not time out before it is sent.
-                unit.waits.append(_Wait(ANSWERS[frame_kind], a, tx.start_s, tx.airtime_s,
+                unit.waits.append(Wait(ANSWERS[frame_kind], a, tx.start_s, tx.airtime_s,
                                         tx.start_s + self.ping_timeout_s))
 
     # ---- the water side
@@ -288,7 +290,7 @@ class ModemEmulator:
         for unit in self.units:
             for wait in [w for w in unit.waits if w.deadline_s <= t_s]:
                 unit.waits.remove(wait)
-                self._count("timeout")
+                self.count("timeout")
                 self._reply(unit, Timeout())
 
     def _reception(self, r: Reception) -> None:
@@ -296,7 +298,7 @@ class ModemEmulator:
         assert isinstance(frame, Frame)
         unit = self._hosted_at.get(r.receiver)
         if r.outcome is not Outcome.DELIVERED:
-            self._count(f"{'remote' if unit is None else 'local'}_{r.outcome.value}")
+            self.count(f"{'remote' if unit is None else 'local'}_{r.outcome.value}")
             if unit is not None:
                 unit.quality = None
             return
@@ -308,14 +310,14 @@ class ModemEmulator:
 
     def _local_heard(self, unit: HostedUnit, frame: Frame, r: Reception) -> None:
         if frame.kind is FrameKind.BROADCAST:
-            self._count("heard")
+            self.count("heard")
             self._reply(unit, Received(frame.data, frame.source))
             return
         if frame.dest != unit.address:
-            self._count("not_for_us")
+            self.count("not_for_us")
             return
         if frame.kind in (FrameKind.UNICAST, FrameKind.UNICAST_ACK, FrameKind.ECHO):
-            self._count("heard")
+            self.count("heard")
             self._reply(unit, Received(frame.data))
         if frame.kind in ANSWERS:  # another unit's request of this one: answered, nothing printed
             self._answer(unit.node, unit.address, frame, r)
@@ -323,7 +325,7 @@ class ModemEmulator:
         wait = next((w for w in unit.waits if w.kind is frame.kind and w.address == frame.source), None)
         if wait is None:
             if frame.kind in ANSWERS.values():
-                self._count("late_answer")
+                self.count("late_answer")
             return
         unit.waits.remove(wait)
         if frame.kind is FrameKind.VOLTAGE_REPLY:
@@ -337,7 +339,7 @@ class ModemEmulator:
         if frame.dest is not None and frame.dest != unit.address:
             return
         if unit.address in self.unpowered:
-            self._count("remote_unpowered")
+            self.count("remote_unpowered")
             return
         self.heard.entries.append((r.end_s, unit.address, frame))
         self.heard.total += 1

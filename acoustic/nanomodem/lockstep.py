@@ -89,7 +89,7 @@ class Attached:
     def _gone(self, port: PipeEnd) -> None:
         """A host that has gone (an aPad's modem cable pulled): its unit hears on, its bytes go nowhere."""
         self.gone.add(port)
-        self.core.counts["host_gone"] = self.core.counts.get("host_gone", 0) + 1
+        self.core.count("host_gone")
 
     def _send(self) -> None:
         """Each unit's output to its host, and the emulator's next instant rescheduled."""

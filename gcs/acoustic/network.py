@@ -74,6 +74,7 @@ class AcousticNetwork:
         self.registry, self.fleet = registry, fleet
         self.apad_modem_ends: dict[int, PipeEnd] = {}  # the aPads' side of their units' pipes, by aPad
         self.apad_unit_address: dict[int, int] = {}
+        self.apad_ports: dict[int, ApadModemPort] = {}  # the GCS's ports to them, by aPad
         self._water_origin_m = (0.0, 0.0)  # the GCS's unit, in the fleet's frame
         # Each aPad's loop's view of the fleet (its own drains, sleep orders included), as it plans;
         # none yet: no loop plans, so there is no belief to sample.
@@ -87,13 +88,15 @@ class AcousticNetwork:
     @classmethod
     def build(cls, clock: Clock, fleet: FleetRunner, link: Link, events: EventLog, params: AcousticParams,
               apad_homes_deg: dict[int, tuple[float, float]], seed: int, area_range_m: float,
-              unit: tuple[BytePort, Sea] | None = None) -> AcousticNetwork:
+              unit: tuple[BytePort, Sea] | None = None, apad_modems: bool = True) -> AcousticNetwork:
         """The network on `clock`, from mission time now: the GCS's unit at the first aPad's home (of
         `apad_homes_deg`: each aPad's home, latitude and longitude), a slot for each aMussel and aPad,
         the channel's draws from `seed`; belief against truth is sampled once a loop `plans`. `unit`:
         the GCS's modem on a serial port and the sea its remote units are on (`vil gcs --modem --sea`:
         the aPads have no units of their own there, the GCS's speaks for them); None: the water
-        emulated in-process (lockstep), the aPads' own units on it."""
+        emulated in-process (lockstep), the aPads' own units on it if `apad_modems` (the world's own SITL
+        aPads, which it gives their modem ports; aPads it only connects to have none: the GCS's unit
+        speaks for them)."""
         ids = [int(m) for m in fleet.state.ids]  # sorted: the medium's nodes follow the fleet's rows
         if ids and (ids[0] <= GCS_ADDRESS or ids[-1] > MAX_ADDRESS):
             raise ValueError(f"acoustic scenarios need aMussel ids 1..{MAX_ADDRESS} (the nanomodem's addresses)")
@@ -104,18 +107,18 @@ class AcousticNetwork:
         apad_ends: dict[int, PipeEnd] = {}
         addresses: dict[int, int] = {}
         if unit is None:  # lockstep: the emulator in-process, its local unit the GCS's, on a byte pipe
-            addresses = apad_unit_addresses(apad_ids, ids)
+            addresses = apad_unit_addresses(apad_ids, ids) if apad_modems else {}
             s = fleet.state
             remotes = tuple(RemoteUnit(m, (float(s.x_m[k]) - hx, float(s.y_m[k]) - hy, float(s.depth_m[k])))
                             for k, m in enumerate(ids))
             hosted = tuple(RemoteUnit(addresses[a], (homes[a][0] - hx, homes[a][1] - hy, APAD_MODEM_DEPTH_M))
-                           for a in apad_ids)
+                           for a in addresses)
             core = ModemEmulator(params, remotes, np.random.default_rng([seed, CHANNEL_SEED]),
                                  address=GCS_ADDRESS, position_m=(0.0, 0.0, GCS_DEPTH_M), hosted=hosted)
             gcs_end, modem_end = pipe()
-            pipes = {a: pipe() for a in apad_ids}  # (the aPad's modem port, the water's end)
-            emulator = attach(core, modem_end, clock, hosted=tuple(pipes[a][1] for a in apad_ids))
-            apad_ends = {a: pipes[a][0] for a in apad_ids}
+            pipes = {a: pipe() for a in addresses}  # (the aPad's modem port, the water's end)
+            emulator = attach(core, modem_end, clock, hosted=tuple(pipes[a][1] for a in addresses))
+            apad_ends = {a: pipes[a][0] for a in addresses}
             port: BytePort = gcs_end
             sea: Sea = emulator
         else:
@@ -126,9 +129,11 @@ class AcousticNetwork:
         driver = ModemDriver(port, clock, params.sound_speed_mps)
         uplink = AcousticUplink(driver, link.registry, clock, tdma)
         uplink.register(clock.scheduler)
-        apad_units = {a: ModemDriver(ApadModemPort(link, a, clock), clock, params.sound_speed_mps) for a in apad_ends}
+        ports = {a: ApadModemPort(link, a, clock) for a in apad_ends}
+        apad_units = {a: ModemDriver(port, clock, params.sound_speed_mps) for a, port in ports.items()}
         network = cls(emulator, modems, uplink, CallUps(driver, clock, events, tdma, apad_units),
                       KnowledgeLedger(fleet.state.ids), link.registry, fleet)
+        network.apad_ports = ports
         network.apad_modem_ends, network.apad_unit_address, network._water_origin_m = apad_ends, addresses, (hx, hy)
         network._task = clock.scheduler.every(SAMPLE_S, network.sample, "acoustic-knowledge", clock.now_us)
         return network
@@ -185,7 +190,12 @@ class AcousticNetwork:
         channel = {} if self.emulator is None else dict(self.emulator.core.medium.counts)  # else: in `vil modem`
         sea = dict(getattr(self.modems.sea, "dropped", {}))  # a sea over UDP, or none: what it did not carry
         counts = {**self.uplink.counts, **self.call_ups.counts}  # apart: reports heard; tries and outcomes
+        # What crossed each aPad's MAVLink to its modem, and what its port dropped (a link that loses
+        # and repeats shows here as requests asked again and output taken once)
+        units = {str(a): {"messages_sent": port.sent, "dropped": dict(sorted(port.dropped.items()))}
+                 for a, port in self.apad_ports.items()}
         return {**self.uplink.summary(), "counts": dict(sorted(counts.items())),
+                **({"apad_units": units} if units else {}),
                 "fleet": dict(sorted(self.modems.counts.items())),
                 "channel": channel, "knowledge": self.ledger.summary().as_dict(),
                 **({"sea_dropped": dict(sorted(sea.items()))} if sea else {})}

@@ -251,7 +251,7 @@ def build_world(
         world.acoustic = AcousticNetwork.build(
             clock, fleet, link, events, scenario.acoustic,
             {a.system_id: (a.home_lat_deg, a.home_lon_deg) for a in scenario.apads}, scenario.seed,
-            area_range_m(scenario), serial_unit(options, clock))
+            area_range_m(scenario), serial_unit(options, clock), apad_modems=options.connect is None)
     world.real = RealFleet(link.registry.mussels, link.registry.mussel_heard_us,
                            discharge_profile(scenario.fleet.discharge), charge_profile(scenario.fleet.charge),
                            scenario.mission.theta)

@@ -22,10 +22,12 @@ from testkit import restored_session, scenario_variant
 
 from acoustic.channel import Medium, Transmission
 from acoustic.nanomodem.emulator import LOCAL, Frame, FrameKind
+from gcs.link.faultproxy import LinkFaults
 from gcs.mission.acoustic_frame import scenario_frame
 from gcs.mission.headless import run_mission
 from gcs.mission.results import RunResult
 from gcs.mission.scenario import Scenario, load_scenario
+from gcs.mission.world import LinkOptions
 from gcs.records import checkpoint
 from gcs.records.replay import read_events, read_tlog
 from gcs.records.report import write_report
@@ -290,3 +292,18 @@ def test_a_crashed_two_apad_acoustic_mission_resumes_to_the_uninterrupted_result
     a, b = resumed_and_whole(scenario, tmp_path, 300.0, monkeypatch)
     assert a["acoustic"]["counts"]["call_up_retries"] > 0 and a["acoustic"]["channel"]["packet_error"] > 0
     assert {e["sysid"] for e in a["apads"]} == {1, 2} and a == b
+
+
+def test_call_ups_through_the_apads_modem_survive_a_lossy_wifi_link(tmp_path: Path) -> None:
+    # The call-ups cross the aPad's MAVLink now (APAD_MODEM_SERIAL). On docs/faults.md's field WiFi
+    # (20 % loss each way, 200 ms, 5 % duplicates) writes go to the modem once and its output comes back
+    # whole, so every call-up is acknowledged: before the passthrough numbered its writes and sent its
+    # output again until confirmed, 7 of 8 at 20 % loss, and duplicates put call-ups twice on the water.
+    scenario = POOL.with_overrides(duration_s=1200.0)
+    faults = LinkFaults(loss_frac=0.20, latency_s=0.200, duplicate_frac=0.05, seed=1)
+    result = run_mission(scenario, tmp_path / "run", options=LinkOptions(faults=faults))
+    counts = result.acoustic["counts"]
+    assert counts["call_ups_acked"] == counts["call_ups_from_apad_unit"] > 0 and "call_ups_unacked" not in counts
+    unit = result.acoustic["apad_units"]["1"]
+    assert unit["dropped"]["request_unanswered"] > 0  # lost on the way, asked again
+    assert result.misplaced == []

@@ -18,6 +18,7 @@ from dataclasses import replace
 import pytest
 from hostile_packets import GCS_ORDERS, MESSAGE_CLASSES, STRANGERS, FuzzWorld, HostileFrames, senders
 
+from apad_sitl.modem_serial import OWNER_SILENT_S
 from gcs.mission.accounting import account
 from gcs.mission.scenario import Scenario
 from gcs.mission.world import MISSION_TELEMETRY_HZ
@@ -89,9 +90,11 @@ def test_hostile_modem_passthrough_reaches_the_apads_modem_and_the_gcss_port_wit
         sitl = fuzz.drops()["sitl"]
         assert sitl["invalid:APAD_MODEM_SERIAL:count"] > 0 and sitl["invalid:APAD_MODEM_SERIAL:flags"] > 0
         assert network.emulator.core.counts["stray_byte"] > 0  # what got through reached the modem's parser
-        fuzz.advance(3.0)  # what the modem answered the spray has gone back and been dropped
+        # A stranger that spoke to the modem first owns it until it has been silent OWNER_SILENT_S (MAVLink
+        # signing is what keeps strangers out); then the GCS takes it, and the passthrough works again.
+        fuzz.advance(OWNER_SILENT_S + 1.0)
         driver = network.call_ups.apad_units[1]
-        assert driver.status().ok and driver.ping(1).ok  # the passthrough still works
+        assert driver.status().ok and driver.ping(1).ok
     finally:
         fuzz.close()
 
