@@ -5,15 +5,18 @@ serves it, so the call-up leaves from the aPad. The GCS's driver speaks to this 
 its own, through our dialect's APAD_MODEM_SERIAL: MAVLink's serial passthrough (SERIAL_CONTROL) with
 the target SERIAL_CONTROL lacks (several aPads share one link), made whole over a lossy link:
 
-- Writes are numbered (`seq`): each goes to the modem once, as it came (a command's bytes together,
-  as the unit needs); a repeat (the link duplicated it, or the GCS sent it again) is not written again.
-  Before a write goes, `before_write` puts the modem where the aPad is now.
+- Writes are numbered (`seq`) and go to the modem once each and in order: a repeat (the link
+  duplicated it, or the GCS sent it again) or one that skips a lost one is left for the GCS to send
+  again. Before a write goes, `before_write` puts the modem where the aPad is now.
 - The modem's output is one stream. A request (RESPOND) says how much of it the GCS holds (`offset`):
   what came before is confirmed and forgotten; the rest is sent again until it is confirmed, at most
-  `CHUNKS_PER_ANSWER` messages an answer. A request is held until there is output, or its timeout (at
-  most `MAX_HOLD_MS`). Each message of output says where in the stream it begins and which write the
-  modem had last been given when it was written: the GCS tells a late answer to an earlier command.
-- Bounded: at most `MAX_OUTPUT` bytes of output wait unconfirmed (the oldest go first, counted).
+  `CHUNKS_PER_ANSWER` messages an answer, each saying where its data begins, where the unconfirmed
+  output begins (`base`: what lies before it the GCS will not get), and after which write the modem
+  wrote it (`after`: the GCS tells a late answer to an earlier command by it). A request is held
+  until there is output, or its timeout (at most `MAX_HOLD_MS`); every answer says which write the
+  modem had last (`seq`).
+- Bounded: at most `MAX_OUTPUT` bytes of output wait unconfirmed (the oldest lines go first, whole,
+  counted).
 - One GCS owns the modem: the first to speak to it, until it has been silent `OWNER_SILENT_S`;
   another's messages meanwhile are counted and left alone.
 - Nothing received may end the vehicle: a count beyond the data, a REPLY sent to the aPad, a modem
@@ -46,6 +49,11 @@ RESPOND = mavlink.SERIAL_CONTROL_FLAG_RESPOND
 def newer(seq: int, than: int) -> bool:
     """Whether write number `seq` comes after `than` (16-bit numbers, wrapping)."""
     return 0 < (seq - than) % SEQ_MOD < SEQ_MOD // 2
+
+
+def next_seq(seq: int) -> int:
+    """The write number after `seq`: 1 .. 65535, then 1 again (0 is "no write yet")."""
+    return seq % (SEQ_MOD - 1) + 1
 
 
 class ModemSerial:
@@ -115,8 +123,10 @@ class ModemSerial:
         self._owner, self._owner_heard_us = sender, host.now_us
         self._confirm(msg.offset)
         if msg.count:
-            if newer(msg.seq, self._written):
+            if msg.seq == next_seq(self._written):
                 self._write(msg.seq, bytes(msg.data[:msg.count]))
+            elif newer(msg.seq, self._written):
+                self.counts["write_out_of_order"] += 1  # one before it was lost: the GCS sends both again
             else:
                 self.counts["repeated_write"] += 1
         if msg.flags & RESPOND:
@@ -157,33 +167,35 @@ class ModemSerial:
         owner = self._owner
         if owner is None:
             return
-        position, end = self._base, self._base + len(self._output)
+        base, end = self._base, self._base + len(self._output)
+        position = base
         for _ in range(CHUNKS_PER_ANSWER):
-            seq, epoch_end = self._epoch_at(position)
+            after, epoch_end = self._epoch_at(position)
             stop = min(end, position + CHUNK, epoch_end)
-            chunk = bytes(self._output[position - self._base:stop - self._base])
+            chunk = bytes(self._output[position - base:stop - base])
             self._host.send(mavlink.MAVLink_apad_modem_serial_message(
-                owner[0], owner[1], REPLY, 0, seq, position, len(chunk), chunk.ljust(CHUNK, b"\0")))
+                owner[0], owner[1], REPLY, 0, self._written, position, base, after, len(chunk),
+                chunk.ljust(CHUNK, b"\0")))
             position = stop
             if position >= end:
                 break
 
     def _epoch_at(self, position: int) -> tuple[int, int]:
-        """The write the output at `position` follows, and where the next write's output begins."""
-        seq, end = self._epochs[0][1], 1 << 62
-        for start, s in self._epochs:
+        """After which write the output at `position` was written, and where the next write's output begins."""
+        after, end = self._epochs[0][1], 1 << 62
+        for start, seq in self._epochs:
             if start > position:
                 end = start
                 break
-            seq = s
-        return seq, end
+            after = seq
+        return after, end
 
     # ---- the port
     def _write(self, seq: int, data: bytes) -> None:
-        self._take_output()  # what the modem wrote before this command belongs to the one before
+        self._take_output()  # what the modem wrote before this command follows the write before
         self._written = seq
         here = self._base + len(self._output)
-        if self._epochs[-1][0] == here:  # no output since the last write: this one's replaces it (bounded)
+        if self._epochs[-1][0] == here:  # nothing written since the last write: this one's replaces it (bounded)
             self._epochs[-1] = (here, seq)
         else:
             self._epochs.append((here, seq))
@@ -208,7 +220,10 @@ class ModemSerial:
             return False
         self._output += data
         if len(self._output) > MAX_OUTPUT:
-            over = len(self._output) - MAX_OUTPUT
+            # The oldest lines go whole (to the end of the line the bound cuts), so what is left, and
+            # the GCS's parser, begin at a reply's start.
+            cut = self._output.find(b"\r\n", len(self._output) - MAX_OUTPUT)
+            over = len(self._output) if cut < 0 else cut + 2
             self.counts["output_overflow"] += over
             self._forget(over)
         return bool(data)

@@ -6897,31 +6897,33 @@ class MAVLink_apad_modem_serial_message(MAVLink_message):
     SERIAL_CONTROL's passthrough with the target SERIAL_CONTROL lacks
     (several aPads share one link), made whole over a lossy link. The
     GCS writes count bytes of data to the modem of aPad target_system,
-    numbered by seq (a repeat is not written again); with flags
-    RESPOND it asks for the modem's output from offset on, which
-    confirms what came before. The aPad answers (flags REPLY) as soon
-    as there is output, or after timeout ms with none, with the
-    unconfirmed output from offset on, again until it is confirmed.
+    numbered by seq: the aPad writes each number once and in order.
+    With flags RESPOND the GCS asks for the modem's output from offset
+    on, which confirms what came before. The aPad answers (flags
+    REPLY) as soon as there is output, or after timeout ms with none,
+    with its unconfirmed output from base on, again until it is
+    confirmed. Each reply says after which write its output was
+    written, so the GCS tells a late answer to an earlier command.
     """
 
     id = MAVLINK_MSG_ID_APAD_MODEM_SERIAL
     msgname = "APAD_MODEM_SERIAL"
-    fieldnames = ["target_system", "target_component", "flags", "timeout", "seq", "offset", "count", "data"]
-    ordered_fieldnames = ["offset", "timeout", "seq", "target_system", "target_component", "flags", "count", "data"]
-    fieldtypes = ["uint8_t", "uint8_t", "uint8_t", "uint16_t", "uint16_t", "uint32_t", "uint8_t", "uint8_t"]
+    fieldnames = ["target_system", "target_component", "flags", "timeout", "seq", "offset", "base", "after", "count", "data"]
+    ordered_fieldnames = ["offset", "base", "timeout", "seq", "after", "target_system", "target_component", "flags", "count", "data"]
+    fieldtypes = ["uint8_t", "uint8_t", "uint8_t", "uint16_t", "uint16_t", "uint32_t", "uint32_t", "uint16_t", "uint8_t", "uint8_t"]
     fielddisplays_by_name: Dict[str, str] = {"flags": "bitmask"}
     fieldenums_by_name: Dict[str, str] = {"flags": "SERIAL_CONTROL_FLAG"}
-    fieldunits_by_name: Dict[str, str] = {"timeout": "ms", "offset": "bytes", "count": "bytes"}
-    native_format = bytearray(b"<IHHBBBBB")
-    orders = [3, 4, 5, 1, 2, 0, 6, 7]
-    lengths = [1, 1, 1, 1, 1, 1, 1, 64]
-    array_lengths = [0, 0, 0, 0, 0, 0, 0, 64]
-    crc_extra = 119
-    unpacker = struct.Struct("<IHHBBBB64B")
+    fieldunits_by_name: Dict[str, str] = {"timeout": "ms", "offset": "bytes", "base": "bytes", "count": "bytes"}
+    native_format = bytearray(b"<IIHHHBBBBB")
+    orders = [5, 6, 7, 2, 3, 0, 1, 4, 8, 9]
+    lengths = [1, 1, 1, 1, 1, 1, 1, 1, 1, 64]
+    array_lengths = [0, 0, 0, 0, 0, 0, 0, 0, 0, 64]
+    crc_extra = 139
+    unpacker = struct.Struct("<IIHHHBBBB64B")
     instance_field = None
     instance_offset = -1
 
-    def __init__(self, target_system: int, target_component: int, flags: int, timeout: int, seq: int, offset: int, count: int, data: Sequence[int]):
+    def __init__(self, target_system: int, target_component: int, flags: int, timeout: int, seq: int, offset: int, base: int, after: int, count: int, data: Sequence[int]):
         MAVLink_message.__init__(self, MAVLink_apad_modem_serial_message.id, MAVLink_apad_modem_serial_message.msgname)
         self._fieldnames = MAVLink_apad_modem_serial_message.fieldnames
         self._instance_field = MAVLink_apad_modem_serial_message.instance_field
@@ -6932,11 +6934,13 @@ class MAVLink_apad_modem_serial_message(MAVLink_message):
         self.timeout = timeout
         self.seq = seq
         self.offset = offset
+        self.base = base
+        self.after = after
         self.count = count
         self.data = data
 
     def pack(self, mav: "MAVLink", force_mavlink1: bool = False) -> bytes:
-        return self._pack(mav, self.crc_extra, self.unpacker.pack(self.offset, self.timeout, self.seq, self.target_system, self.target_component, self.flags, self.count, self.data[0], self.data[1], self.data[2], self.data[3], self.data[4], self.data[5], self.data[6], self.data[7], self.data[8], self.data[9], self.data[10], self.data[11], self.data[12], self.data[13], self.data[14], self.data[15], self.data[16], self.data[17], self.data[18], self.data[19], self.data[20], self.data[21], self.data[22], self.data[23], self.data[24], self.data[25], self.data[26], self.data[27], self.data[28], self.data[29], self.data[30], self.data[31], self.data[32], self.data[33], self.data[34], self.data[35], self.data[36], self.data[37], self.data[38], self.data[39], self.data[40], self.data[41], self.data[42], self.data[43], self.data[44], self.data[45], self.data[46], self.data[47], self.data[48], self.data[49], self.data[50], self.data[51], self.data[52], self.data[53], self.data[54], self.data[55], self.data[56], self.data[57], self.data[58], self.data[59], self.data[60], self.data[61], self.data[62], self.data[63]), force_mavlink1=force_mavlink1)
+        return self._pack(mav, self.crc_extra, self.unpacker.pack(self.offset, self.base, self.timeout, self.seq, self.after, self.target_system, self.target_component, self.flags, self.count, self.data[0], self.data[1], self.data[2], self.data[3], self.data[4], self.data[5], self.data[6], self.data[7], self.data[8], self.data[9], self.data[10], self.data[11], self.data[12], self.data[13], self.data[14], self.data[15], self.data[16], self.data[17], self.data[18], self.data[19], self.data[20], self.data[21], self.data[22], self.data[23], self.data[24], self.data[25], self.data[26], self.data[27], self.data[28], self.data[29], self.data[30], self.data[31], self.data[32], self.data[33], self.data[34], self.data[35], self.data[36], self.data[37], self.data[38], self.data[39], self.data[40], self.data[41], self.data[42], self.data[43], self.data[44], self.data[45], self.data[46], self.data[47], self.data[48], self.data[49], self.data[50], self.data[51], self.data[52], self.data[53], self.data[54], self.data[55], self.data[56], self.data[57], self.data[58], self.data[59], self.data[60], self.data[61], self.data[62], self.data[63]), force_mavlink1=force_mavlink1)
 
 
 # Define name on the class for backwards compatibility (it is now msgname).
@@ -17808,55 +17812,63 @@ class MAVLink(object):
         """
         self.send(self.amussel_sleep_order_encode(target_system, mussel_id, interval, awake), force_mavlink1=force_mavlink1)
 
-    def apad_modem_serial_encode(self, target_system: int, target_component: int, flags: int, timeout: int, seq: int, offset: int, count: int, data: Sequence[int]) -> MAVLink_apad_modem_serial_message:
+    def apad_modem_serial_encode(self, target_system: int, target_component: int, flags: int, timeout: int, seq: int, offset: int, base: int, after: int, count: int, data: Sequence[int]) -> MAVLink_apad_modem_serial_message:
         """
         Bytes to or from the nanomodem on one aPad's serial port:
         SERIAL_CONTROL's passthrough with the target SERIAL_CONTROL
         lacks (several aPads share one link), made whole over a lossy
         link. The GCS writes count bytes of data to the modem of aPad
-        target_system, numbered by seq (a repeat is not written
-        again); with flags RESPOND it asks for the modem's output from
-        offset on, which confirms what came before. The aPad answers
-        (flags REPLY) as soon as there is output, or after timeout ms
-        with none, with the unconfirmed output from offset on, again
-        until it is confirmed.
+        target_system, numbered by seq: the aPad writes each number
+        once and in order. With flags RESPOND the GCS asks for the
+        modem's output from offset on, which confirms what came
+        before. The aPad answers (flags REPLY) as soon as there is
+        output, or after timeout ms with none, with its unconfirmed
+        output from base on, again until it is confirmed. Each reply
+        says after which write its output was written, so the GCS
+        tells a late answer to an earlier command.
 
         target_system             : System ID of the aPad whose modem is meant; in a reply, the GCS's. (type:uint8_t)
         target_component          : Component ID (0: any). (type:uint8_t)
         flags                     : SERIAL_CONTROL's flags: REPLY, RESPOND. (type:uint8_t, values:SERIAL_CONTROL_FLAG)
         timeout                   : How long the aPad may hold a RESPOND request for output before it answers with none. [ms] (type:uint16_t)
-        seq                       : The GCS's write number (1, 2, ... wrapping past 65535 to 1; 0: no write yet); in a reply, the last write the modem had been given when this output began. (type:uint16_t)
+        seq                       : The GCS's write number (1, 2, ... wrapping past 65535 to 1; 0: no write yet); in a reply, the last write the aPad gave its modem. (type:uint16_t)
         offset                    : In a request, how many bytes of the modem's output the GCS holds (all before are confirmed); in a reply, where in the modem's output this data begins. [bytes] (type:uint32_t)
+        base                      : In a reply, where the aPad's unconfirmed output begins: what came before was confirmed, or dropped past the aPad's bound. 0 in a request. [bytes] (type:uint32_t)
+        after                     : In a reply, the write after which the modem wrote this data: output that follows an earlier write than the GCS's last is a late answer to an earlier command. 0 in a request. (type:uint16_t)
         count                     : How many bytes of data are meaningful. [bytes] (type:uint8_t)
         data                      : Serial bytes. (type:uint8_t)
 
         """
-        return MAVLink_apad_modem_serial_message(target_system, target_component, flags, timeout, seq, offset, count, data)
+        return MAVLink_apad_modem_serial_message(target_system, target_component, flags, timeout, seq, offset, base, after, count, data)
 
-    def apad_modem_serial_send(self, target_system: int, target_component: int, flags: int, timeout: int, seq: int, offset: int, count: int, data: Sequence[int], force_mavlink1: bool = False) -> None:
+    def apad_modem_serial_send(self, target_system: int, target_component: int, flags: int, timeout: int, seq: int, offset: int, base: int, after: int, count: int, data: Sequence[int], force_mavlink1: bool = False) -> None:
         """
         Bytes to or from the nanomodem on one aPad's serial port:
         SERIAL_CONTROL's passthrough with the target SERIAL_CONTROL
         lacks (several aPads share one link), made whole over a lossy
         link. The GCS writes count bytes of data to the modem of aPad
-        target_system, numbered by seq (a repeat is not written
-        again); with flags RESPOND it asks for the modem's output from
-        offset on, which confirms what came before. The aPad answers
-        (flags REPLY) as soon as there is output, or after timeout ms
-        with none, with the unconfirmed output from offset on, again
-        until it is confirmed.
+        target_system, numbered by seq: the aPad writes each number
+        once and in order. With flags RESPOND the GCS asks for the
+        modem's output from offset on, which confirms what came
+        before. The aPad answers (flags REPLY) as soon as there is
+        output, or after timeout ms with none, with its unconfirmed
+        output from base on, again until it is confirmed. Each reply
+        says after which write its output was written, so the GCS
+        tells a late answer to an earlier command.
 
         target_system             : System ID of the aPad whose modem is meant; in a reply, the GCS's. (type:uint8_t)
         target_component          : Component ID (0: any). (type:uint8_t)
         flags                     : SERIAL_CONTROL's flags: REPLY, RESPOND. (type:uint8_t, values:SERIAL_CONTROL_FLAG)
         timeout                   : How long the aPad may hold a RESPOND request for output before it answers with none. [ms] (type:uint16_t)
-        seq                       : The GCS's write number (1, 2, ... wrapping past 65535 to 1; 0: no write yet); in a reply, the last write the modem had been given when this output began. (type:uint16_t)
+        seq                       : The GCS's write number (1, 2, ... wrapping past 65535 to 1; 0: no write yet); in a reply, the last write the aPad gave its modem. (type:uint16_t)
         offset                    : In a request, how many bytes of the modem's output the GCS holds (all before are confirmed); in a reply, where in the modem's output this data begins. [bytes] (type:uint32_t)
+        base                      : In a reply, where the aPad's unconfirmed output begins: what came before was confirmed, or dropped past the aPad's bound. 0 in a request. [bytes] (type:uint32_t)
+        after                     : In a reply, the write after which the modem wrote this data: output that follows an earlier write than the GCS's last is a late answer to an earlier command. 0 in a request. (type:uint16_t)
         count                     : How many bytes of data are meaningful. [bytes] (type:uint8_t)
         data                      : Serial bytes. (type:uint8_t)
 
         """
-        self.send(self.apad_modem_serial_encode(target_system, target_component, flags, timeout, seq, offset, count, data), force_mavlink1=force_mavlink1)
+        self.send(self.apad_modem_serial_encode(target_system, target_component, flags, timeout, seq, offset, base, after, count, data), force_mavlink1=force_mavlink1)
 
     def sys_status_encode(self, onboard_control_sensors_present: int, onboard_control_sensors_enabled: int, onboard_control_sensors_health: int, load: int, voltage_battery: int, current_battery: int, battery_remaining: int, drop_rate_comm: int, errors_comm: int, errors_count1: int, errors_count2: int, errors_count3: int, errors_count4: int, onboard_control_sensors_present_extended: int = 0, onboard_control_sensors_enabled_extended: int = 0, onboard_control_sensors_health_extended: int = 0) -> MAVLink_sys_status_message:
         """
