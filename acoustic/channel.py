@@ -36,6 +36,9 @@ class Outcome(Enum):
     HALF_DUPLEX = "half_duplex"
 
 
+_BY_CODE = (Outcome.DELIVERED, Outcome.COLLISION, Outcome.HALF_DUPLEX, Outcome.PACKET_ERROR)  # `_decide`'s codes
+
+
 @dataclass(frozen=True)
 class Transmission:
     """One packet on the water. `payload_bytes` 0 is a ping or command packet (0.105 s)."""
@@ -168,20 +171,14 @@ class Medium:
             o_start = other.arrival_s[receivers]
             strong = other.snr_db[receivers] >= self.params.interference_snr_db
             collision |= ~own & strong & (o_start < end) & (o_start + other.airtime_s > start)
-        p_ok = tx.p_ok[receivers]
         draws = np.asarray(self.rng.random(receivers.shape[0]))  # one per reception, in receiver order: deterministic
-        out: list[Reception] = []
-        for k, node in enumerate(receivers.tolist()):
-            if half_duplex[k]:
-                outcome = Outcome.HALF_DUPLEX
-            elif collision[k]:
-                outcome = Outcome.COLLISION
-            else:
-                outcome = Outcome.DELIVERED if draws[k] < p_ok[k] else Outcome.PACKET_ERROR
+        codes = np.where(half_duplex, 2, np.where(collision, 1, np.where(draws < tx.p_ok[receivers], 0, 3)))
+        outcomes = [_BY_CODE[c] for c in codes.tolist()]
+        for outcome in outcomes:
             self.counts[outcome.value] += 1
-            out.append(Reception(tx, node, float(start[k]), float(end[k]), float(tx.range_m[node]),
-                                 float(tx.snr_db[node]), outcome))
-        return out
+        return [Reception(tx, node, t0, t1, r, snr, outcome) for node, t0, t1, r, snr, outcome in zip(
+            receivers.tolist(), start.tolist(), end.tolist(), tx.range_m[receivers].tolist(),
+            tx.snr_db[receivers].tolist(), outcomes, strict=True)]
 
     def _prune(self, now_s: float) -> None:
         """Drop decided packets that no reception can still overlap: those gone from the water

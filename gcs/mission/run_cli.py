@@ -33,6 +33,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from acoustic import per
 from gcs.link.faultproxy import LinkFaults
 from gcs.mission import flags
 from gcs.mission.days import days_table
@@ -370,6 +371,8 @@ def _folders(results: list[RunResult]) -> str:
 def _run_all(jobs: list[Job], n_jobs: int, console: Console) -> list[RunResult]:
     kept = [j.finished for j in jobs if j.finished is not None]
     to_run = [j for j in jobs if j.finished is None]
+    if any(j.scenario.acoustic.enabled for j in to_run):
+        per.load()  # the channel's curve imports scipy.special at first use: here, not in a mission's time
     return kept + (_run_jobs(to_run, n_jobs, console) if to_run else [])
 
 
