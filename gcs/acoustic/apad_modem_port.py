@@ -40,6 +40,7 @@ HOLD_MS = 250  # how long the aPad may hold a request for output
 LATE_S = 0.25  # past its hold by this much, a request (or a write) is taken as lost and sent again
 MAX_INBOX = 4096  # bytes of output waiting for the driver
 MAX_UNCONFIRMED = 64  # writes kept for sending again until the aPad shows it took them
+STREAM_MAX = 0xFFFF_FFFF  # APAD_MODEM_SERIAL.offset is a uint32 (4 GB of a modem's output)
 
 
 class ApadModemPort:
@@ -132,8 +133,8 @@ class ApadModemPort:
             return
         if not msg.flags & REPLY or msg.target_system not in (0, self._link.codec.system_id):
             return  # a request (ours, as the link hands it round), or an answer to another GCS
-        if not 0 <= msg.count <= CHUNK or msg.offset < msg.base:
-            self.dropped["invalid_reply"] += 1
+        if not 0 <= msg.count <= CHUNK or msg.offset < msg.base or msg.offset + msg.count > STREAM_MAX:
+            self.dropped["invalid_reply"] += 1  # (a stream position past the field's range could not be asked for)
             return
         self._asked_us = None
         self._follow(msg.seq)

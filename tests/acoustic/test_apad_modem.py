@@ -214,3 +214,15 @@ def test_a_spoofed_write_number_or_stream_position_is_caught_up_with() -> None:
     assert rig.driver.status().outcome is Outcome.NO_REPLY
     assert rig.port.dropped["stream_resync"] == 1
     assert rig.driver.status().ok
+
+
+def test_a_stream_position_past_the_fields_range_is_refused_not_packed() -> None:
+    rig = Rig()
+    assert rig.driver.status().ok
+    codec = Codec(1, 1)
+    rig.apad_end.send(codec.encode(mavlink.MAVLink_apad_modem_serial_message(
+        rig.link.codec.system_id, 0, mavlink.SERIAL_CONTROL_FLAG_REPLY, 0, 1, 0xFFFF_FFF0, 0xFFFF_FFF0, 1, 64,
+        b"#".ljust(64, b"x"))))
+    rig.clock.sleep(0.1)
+    assert rig.port.dropped["invalid_reply"] == 1
+    assert rig.driver.status().ok  # its next request still packs
