@@ -56,6 +56,7 @@ class ApadModemPort:
         self._unconfirmed: deque[tuple[int, bytes]] = deque()  # (write number, bytes) not shown taken
         self._resend_us: int | None = None  # when the unconfirmed writes go again
         self._asked_us: int | None = None  # when the outstanding request went; None: none outstanding
+        self._older_since: int | None = None  # since when every answer has been older than `_taken`
         self._behind = 0  # answers in a row that said the aPad's output ends before what we hold
         self.dropped: Counter[str] = Counter()
         self.sent = 0  # APAD_MODEM_SERIAL messages sent (writes, requests, their repeats)
@@ -106,18 +107,32 @@ class ApadModemPort:
 
     def _follow(self, taken: int) -> None:
         """The aPad's last write is `taken`: the writes up to it are done with; the rest must follow it in
-        order. Where they do not (a spoof moved either side's numbers, or a late answer showed an older
-        state) they go again numbered on from it: the aPad writes a number once, so none is written twice."""
+        order. An answer older than one already had is a late one, left alone (believed only when nothing
+        else has come for twice the patience: a spoof had moved the count on). A number past every one
+        given here is a restarted GCS's count or a spoof: the pending writes go again numbered on from
+        it. The aPad writes a number once, so none is written twice."""
+        now = self._clock.now_us
+        if self._taken and newer(self._taken, taken):  # older than an answer already had: a late one
+            if self._older_since is None:
+                self._older_since = now
+            if now - self._older_since < 2 * self._patience_us():
+                self.dropped["late_seq"] += 1
+                return  # (only such answers, for longer: believed, below; a spoof had moved _taken)
+        self._older_since = None
+        if newer(taken, self._seq):  # past every number given here: a restarted GCS's, or a spoof
+            self.dropped["seq_resync"] += 1
+            if self._unconfirmed:
+                self._renumber(taken)  # none of them can have been written
+            else:
+                self._seq = taken
+            return
         self._taken = taken
         while self._unconfirmed and not newer(self._unconfirmed[0][0], taken):
             self._unconfirmed.popleft()
             self._resend_us = self._clock.now_us + self._patience_us()
-        if self._unconfirmed and self._unconfirmed[0][0] != next_seq(taken):
+        if self._unconfirmed and self._unconfirmed[0][0] != next_seq(taken):  # a spoof moved the numbers
             self.dropped["seq_resync"] += 1
             self._renumber(taken)
-        elif not self._unconfirmed and newer(taken, self._seq):  # the aPad took a number past ours: a spoof
-            self.dropped["seq_resync"] += 1
-            self._seq = taken
 
     def _renumber(self, taken: int) -> None:
         """The writes the aPad has not shown taken go again, numbered on from `taken`."""
