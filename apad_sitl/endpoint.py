@@ -13,6 +13,7 @@ MAVSDK's plugins on one `System`:
     param_server.py      the PARAM protocol (and MAVLink FTP, NAKed)
     mission_protocol.py  an empty mission list
     modem_serial.py      the aPad's own nanomodem over APAD_MODEM_SERIAL (when it has one)
+    status_intake.py     the fleet's AMUSSEL_STATUS frames in one batch, into the fix table
 
 A part never sees this class: it is built with the `PartHost` this class is (`host.py`: receive,
 send, log, count, the time), the `ApadState`, the command table if it answers commands, and the
@@ -38,7 +39,7 @@ from acoustic.nanomodem.ports import BytePort
 from apad_sitl import messages as msgs
 from apad_sitl.commands import CommandTable
 from apad_sitl.dege7 import DegE7
-from apad_sitl.docking import CheckedStatuses, Docking, MusselFixTable, checked_statuses
+from apad_sitl.docking import Docking, MusselFixTable
 from apad_sitl.energy import EnergyMeter
 from apad_sitl.energy_counters import EnergyCounters
 from apad_sitl.geofence import Geofence
@@ -53,9 +54,10 @@ from apad_sitl.param_server import ParamServer
 from apad_sitl.params import ApadParams, with_param
 from apad_sitl.primitives import PrimitiveState
 from apad_sitl.state import ApadState
+from apad_sitl.status_intake import take_statuses
 from apad_sitl.streams import DEFAULT_RATES_HZ, Streams
 from apad_sitl.vehicle import VehicleState
-from mavlink_dialect import Codec, Transport, hot, hot_decode, mavlink, signing
+from mavlink_dialect import Codec, Transport, mavlink, signing
 from mavlink_dialect.transport import Bell, ring_on
 from missiontime import US_PER_S, Scheduler, Task
 from mussel_sim.geo import LocalFrame
@@ -63,20 +65,6 @@ from mussel_sim.geo import LocalFrame
 __all__ = ["DEFAULT_RATES_HZ", "PHYSICS_HZ", "Geofence", "MusselFixTable", "SitlVehicle"]
 
 PHYSICS_HZ = 10.0
-# One for every vehicle of the process: the aPads of a swarm get the same status datagrams (hot_decode.SharedDecode).
-_STATUS_DECODE = hot_decode.SharedDecode()
-_last_checked: tuple[hot_decode.HotFrames, CheckedStatuses] | None = None
-
-
-def _checked(split: hot_decode.Split) -> CheckedStatuses:
-    """The fix table's checks of shared status frames, made once for all the aPads that got them."""
-    global _last_checked
-    last = _last_checked
-    if last is None or last[0] is not split.hot:
-        f = split.hot.fields
-        last = _last_checked = split.hot, checked_statuses(f["mussel_id"], f["lat"], f["lon"], f["state"])
-    return last[1]
-
 
 class SitlVehicle:
     """A simulated aPad speaking MAVLink on `transport`. Call `attach(scheduler)` to run it."""
@@ -340,23 +328,12 @@ class SitlVehicle:
         return bool(datagrams)
 
     def _bulk_statuses(self, datagrams: list[bytes]) -> list[bytes]:
-        """Take the fleet's AMUSSEL_STATUS frames in one batch (`mavlink_dialect.hot`) into the fix
-        table (and the .tlog); return every other frame for the codec."""
+        """The fleet's AMUSSEL_STATUS frames in one batch (`status_intake`); every other frame for the codec."""
         try:
-            keep_raw = self.log is not None
-            split = _STATUS_DECODE.decode(datagrams, hot.AMUSSEL_STATUS, self.codec.stats, keep_raw=keep_raw)
-            if len(split.hot):
-                self.mussels.take(_checked(split))
-                if self.energy.listening:  # an aMussel latched here: its gain is drawn from the battery
-                    f = split.hot.fields
-                    self.energy.heard(zip(f["mussel_id"].tolist(), f["battery"].tolist(),
-                                          split.hot.src_system.tolist(), strict=True))
-                if self.log is not None and split.hot.raw is not None:
-                    self.log.messages(self.now_us, split.hot.raw)
+            return take_statuses(datagrams, self.codec.stats, self.mussels, self.energy, self.log, self.now_us)
         except Exception as exc:  # the batch path promises not to raise; a promise is not a proof
             self._handler_error("AMUSSEL_STATUS batch", exc)
             return []
-        return split.others
 
     def _handler_error(self, message: str, exc: Exception) -> None:
         self.dropped[f"handler_error:{message}"] += 1

@@ -29,7 +29,7 @@ from collections import Counter
 from collections.abc import Callable
 from typing import Any
 
-from acoustic.nanomodem.ports import BytePort, PortClosed
+from acoustic.nanomodem.ports import BytePort, PipeEnd, PortClosed
 from apad_sitl.host import PartHost
 from mavlink_dialect import mavlink
 from missiontime import US_PER_S, Scheduler, Task
@@ -89,7 +89,7 @@ class ModemSerial:
     # ---- the scheduler's poller: the modem's output
     def ring_on(self, bell: Doorbell) -> bool:
         """An in-process pipe rings the scheduler's doorbell on each write into it (polled only then)."""
-        if hasattr(self.port, "bell"):
+        if isinstance(self.port, PipeEnd):
             self.port.bell = bell
             return True
         return False

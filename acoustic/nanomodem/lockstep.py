@@ -28,7 +28,7 @@ class Attached:
     def __init__(self, core: ModemEmulator, port: PipeEnd, clock: Clock, hosted: tuple[PipeEnd, ...] = ()) -> None:
         if len(hosted) != len(core.units) - 1:
             raise ValueError(f"{len(core.units) - 1} hosted units, {len(hosted)} ports")
-        self.core, self.port, self.clock = core, port, clock
+        self.core, self.clock = core, clock
         self.ports = (port, *hosted)
         self.gone: set[PipeEnd] = set()  # ports whose other end has closed
         self.task: Task = clock.scheduler.every(IDLE_S, self._due, "nanomodem emulator", start_us=clock.now_us)

@@ -73,8 +73,7 @@ class CallUps:
         self.counts["call_ups_from_apad_unit" if own else "call_ups_from_gcs_unit"] += 1
         sent = 0  # call-ups gone on the water
         for attempt in range(1, CALL_UP_TRIES + 1):
-            slot_start = (self._own_slot(apad_id, sleep, None if sent else wanted) if own
-                          else self._take_unit(apad_id, sleep, None if sent else wanted))
+            slot_start = self._take_unit(apad_id, sleep, None if sent else wanted, shared=own is None)
             if slot_start is None:
                 return self._abandoned(mussel_id, apad_id)
             driver.sleep = sleep
@@ -129,32 +128,25 @@ class CallUps:
     def _apad_field(self, apad_id: int) -> dict[str, int]:
         return {"apad": apad_id} if len(self.tdma.apad_ids) > 1 else {}
 
-    def _take_unit(self, apad_id: int, sleep: Callable[[float], None],
-                   wanted: Callable[[], bool] | None) -> float | None:
-        """The unit held for `apad_id` at the start of one of its slots (the caller frees it): that
-        slot's start; None, and not held, if it is no longer `wanted`, now or at that slot."""
+    def _take_unit(self, apad_id: int, sleep: Callable[[float], None], wanted: Callable[[], bool] | None,
+                   shared: bool) -> float | None:
+        """The start of one of `apad_id`'s slots, its unit ready to send: the GCS's unit (`shared`) held
+        for it (the caller frees it), or the aPad's own. None, and not held, if it is no longer
+        `wanted`, now or at that slot."""
         if wanted is not None and not wanted():
             return None
         while True:
-            while self.holder is not None:
+            while shared and self.holder is not None:
                 sleep(MODEM_BUSY_POLL_S)
             start_s = self._wait_for_slot(apad_id, sleep)
-            if self.holder is None:
+            if not shared or self.holder is None:
                 break
             self.counts["modem_busy_waits"] += 1  # another aPad's try began meanwhile: the next slot
         if wanted is not None and not wanted():
             return None
-        self.holder = apad_id
+        if shared:
+            self.holder = apad_id
         return start_s
-
-    def _own_slot(self, apad_id: int, sleep: Callable[[float], None],
-                  wanted: Callable[[], bool] | None) -> float | None:
-        """The start of `apad_id`'s next slot, for its own unit; None if it is no longer `wanted`, now
-        or at that slot."""
-        if wanted is not None and not wanted():
-            return None
-        start_s = self._wait_for_slot(apad_id, sleep)
-        return None if wanted is not None and not wanted() else start_s
 
     def _wait_for_slot(self, apad_id: int, sleep: Callable[[float], None]) -> float:
         """Until the start of the aPad's next slot (now, if one starts now); that start (s)."""

@@ -17,6 +17,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
@@ -67,15 +68,25 @@ def apad_unit_addresses(apad_ids: list[int], mussel_ids: list[int]) -> dict[int,
     return addresses
 
 
+@dataclass(frozen=True)
+class ApadModem:
+    """An aPad's own unit on the water: its address, the aPad's end of its pipe, the GCS's port to it."""
+
+    address: int
+    modem_end: PipeEnd
+    port: ApadModemPort
+
+
 class AcousticNetwork:
     def __init__(self, emulator: Attached | None, modems: MusselModems, uplink: AcousticUplink, call_ups: CallUps,
-                 ledger: KnowledgeLedger, registry: VehicleRegistry, fleet: FleetRunner) -> None:
+                 ledger: KnowledgeLedger, registry: VehicleRegistry, fleet: FleetRunner,
+                 apad_modems: dict[int, ApadModem] | None = None,
+                 water_origin_m: tuple[float, float] = (0.0, 0.0)) -> None:
+        """`apad_modems`: the aPads' own units, by aPad; `water_origin_m`: the GCS's unit in the fleet's frame."""
         self.emulator, self.modems, self.uplink, self.call_ups, self.ledger = emulator, modems, uplink, call_ups, ledger
         self.registry, self.fleet = registry, fleet
-        self.apad_modem_ends: dict[int, PipeEnd] = {}  # the aPads' side of their units' pipes, by aPad
-        self.apad_unit_address: dict[int, int] = {}
-        self.apad_ports: dict[int, ApadModemPort] = {}  # the GCS's ports to them, by aPad
-        self._water_origin_m = (0.0, 0.0)  # the GCS's unit, in the fleet's frame
+        self.apad_modems = dict(apad_modems or {})
+        self._water_origin_m = water_origin_m
         # Each aPad's loop's view of the fleet (its own drains, sleep orders included), as it plans;
         # none yet: no loop plans, so there is no belief to sample.
         self.planners: dict[int, Planner] = {}
@@ -105,7 +116,7 @@ class AcousticNetwork:
         hx, hy = homes[apad_ids[0]]
         emulator: Attached | None = None
         apad_ends: dict[int, PipeEnd] = {}
-        addresses: dict[int, int] = {}
+        addresses: dict[int, int] = {}  # the aPads' own units' addresses, by aPad
         if unit is None:  # lockstep: the emulator in-process, its local unit the GCS's, on a byte pipe
             addresses = apad_unit_addresses(apad_ids, ids) if apad_modems else {}
             s = fleet.state
@@ -129,12 +140,10 @@ class AcousticNetwork:
         driver = ModemDriver(port, clock, params.sound_speed_mps)
         uplink = AcousticUplink(driver, link.registry, clock, tdma)
         uplink.register(clock.scheduler)
-        ports = {a: ApadModemPort(link, a, clock) for a in apad_ends}
-        apad_units = {a: ModemDriver(port, clock, params.sound_speed_mps) for a, port in ports.items()}
+        own = {a: ApadModem(addresses[a], end, ApadModemPort(link, a, clock)) for a, end in apad_ends.items()}
+        apad_units = {a: ModemDriver(m.port, clock, params.sound_speed_mps) for a, m in own.items()}
         network = cls(emulator, modems, uplink, CallUps(driver, clock, events, tdma, apad_units),
-                      KnowledgeLedger(fleet.state.ids), link.registry, fleet)
-        network.apad_ports = ports
-        network.apad_modem_ends, network.apad_unit_address, network._water_origin_m = apad_ends, addresses, (hx, hy)
+                      KnowledgeLedger(fleet.state.ids), link.registry, fleet, own, (hx, hy))
         network._task = clock.scheduler.every(SAMPLE_S, network.sample, "acoustic-knowledge", clock.now_us)
         return network
 
@@ -145,11 +154,12 @@ class AcousticNetwork:
 
     def place_apad_unit(self, apad_id: int, position_deg: tuple[float, float]) -> None:
         """aPad `apad_id`'s own unit where the aPad is now (its modem port calls this before each write)."""
-        if self.emulator is None or apad_id not in self.apad_unit_address:
+        modem = self.apad_modems.get(apad_id)
+        if self.emulator is None or modem is None:
             return
         x, y = self._local(self.fleet, position_deg)
         hx, hy = self._water_origin_m
-        self.emulator.move([self.apad_unit_address[apad_id]], np.array([[x - hx, y - hy, APAD_MODEM_DEPTH_M]]))
+        self.emulator.move([modem.address], np.array([[x - hx, y - hy, APAD_MODEM_DEPTH_M]]))
 
     def close(self) -> None:
         """Let go of the serial port and the sea's socket (an in-process pipe has nothing to free)."""
@@ -192,8 +202,8 @@ class AcousticNetwork:
         counts = {**self.uplink.counts, **self.call_ups.counts}  # apart: reports heard; tries and outcomes
         # What crossed each aPad's MAVLink to its modem, and what its port dropped (a link that loses
         # and repeats shows here as requests asked again and output taken once)
-        units = {str(a): {"messages_sent": port.sent, "dropped": dict(sorted(port.dropped.items()))}
-                 for a, port in self.apad_ports.items()}
+        units = {str(a): {"messages_sent": m.port.sent, "dropped": dict(sorted(m.port.dropped.items()))}
+                 for a, m in self.apad_modems.items()}
         return {**self.uplink.summary(), "counts": dict(sorted(counts.items())),
                 **({"apad_units": units} if units else {}),
                 "fleet": dict(sorted(self.modems.counts.items())),

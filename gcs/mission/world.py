@@ -342,10 +342,10 @@ def _apad_modem(world: World, a: ApadConfig) -> tuple[BytePort, Callable[[], Non
     """The aPad's own nanomodem on the acoustic network's water (its port, and what puts it where the
     aPad is before each write); None without the channel, or where the GCS's unit speaks for it."""
     network = world.acoustic
-    end = network.apad_modem_ends.get(a.system_id) if network is not None else None
-    if network is None or end is None:
+    modem = network.apad_modems.get(a.system_id) if network is not None else None
+    if network is None or modem is None:
         return None
-    return end, lambda: network.place_apad_unit(a.system_id, world.vehicles[a.system_id].position_deg)
+    return modem.modem_end, lambda: network.place_apad_unit(a.system_id, world.vehicles[a.system_id].position_deg)
 
 
 def lockstep_world(
