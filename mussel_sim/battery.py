@@ -13,6 +13,7 @@ minutes (paper: theta = 30, 1 Hz steps).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from types import MappingProxyType
 
 import numpy as np
@@ -71,9 +72,14 @@ class ChargeProfile:
 
     def rate_per_min(self, battery_frac: NDArray[np.float64]) -> NDArray[np.float64]:
         """Charge rate of each u `(n,)`, chosen from the band of u (the value before the step)."""
+        thresholds, rates = self._arrays
         # side="left": u exactly at a threshold stays in the lower band, as eq. (2) writes it.
-        band = np.searchsorted(np.asarray(self.thresholds), battery_frac, side="left")
-        return np.asarray(self.rates_per_min)[band]
+        return rates[thresholds.searchsorted(battery_frac, side="left")]
+
+    @cached_property
+    def _arrays(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The bands as arrays, made once: every step of a docked aMussel looks its rate up."""
+        return np.asarray(self.thresholds, float), np.asarray(self.rates_per_min, float)
 
 
 DISCHARGE_PROFILES: MappingProxyType[str, DischargeProfile] = MappingProxyType(
@@ -137,7 +143,7 @@ def step_battery(
     """
     dt_min = sim_minutes(theta, dt_s)
     out = battery_frac - discharge.rate_per_min * dt_min
-    idx = np.flatnonzero(charging)
+    idx = charging.nonzero()[0]
     if idx.size:  # usually a handful of docked agents: rate lookup on the subset only
         u = battery_frac[idx]
         out[idx] = u + charge.rate_per_min(u) * dt_min

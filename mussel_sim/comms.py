@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 
 from mavlink_dialect import Codec, hot, mavlink
 from mavlink_dialect.transport import Transport
-from missiontime import US_PER_S, Scheduler, Task
+from missiontime import US_PER_S, Scheduler, Task, seconds_to_us
 from mussel_sim.battery import to_millivolts
 from mussel_sim.fleet import apply_latches, step
 from mussel_sim.fleet_orders import PendingOrders
@@ -51,6 +51,7 @@ from mussel_sim.fleet_state import FleetInputs, FleetParams, FleetState, StepEve
 from mussel_sim.geo import LocalFrame
 from mussel_sim.inbox_checks import invalid_field
 from mussel_sim.recorder import Recorder
+from mussel_sim.report_policy import ReportByException
 from mussel_sim.sensors import DummySensors, SensorField
 from mussel_sim.startconfig import MAX_MUSSEL_ID
 from mussel_sim.vocabulary import MusselCommand, MusselState
@@ -60,6 +61,8 @@ FLEET_COMPONENT_ID = 25
 DEG_E7 = 1e7
 STATUSTEXT_MAX = 50
 SURFACE_DEPTH_M = 0.01  # this shallow an aMussel is at the surface, in WiFi's reach (floating and docked: 0 m)
+HEARTBEAT_PERIOD_S = 1.0
+MODEL_STEP_S = 1.0  # the model steps at 1 Hz of mission time (the paper's ROS node)
 LAST_WORDS = 10  # publishes of each message a depleted aMussel still makes; 0.4 ** 10: 1e-4 all lost at 40 %
 
 
@@ -81,9 +84,11 @@ class MusselIdCollision(RuntimeError):
 
 @dataclass(frozen=True)
 class CommsConfig:
-    step_period_s: float = 1.0  # the model's 1 Hz of mission time
+    step_period_s: float = MODEL_STEP_S
     status_rate_hz: float = 1.0  # AMUSSEL_STATUS per aMussel
     sensors_rate_hz: float = 0.2  # AMUSSEL_SENSORS per aMussel
+    # An aMussel whose state has not changed reports only this often (`report_policy`); 0: every publish.
+    status_keepalive_s: float = 0.0
     apad_ids: frozenset[int] | None = None  # systems whose positions and slots are an aPad's; None: any
     commanders: frozenset[int] | None = None  # systems whose AMUSSEL_COMMAND is obeyed (a GCS); None: any
     report_refusals: bool = True  # STATUSTEXT for surface commands refused for safety
@@ -146,6 +151,11 @@ class FleetRunner:
         self.orders = PendingOrders(self._ids)  # heard since the last step, for the next
         self._published_us: dict[int, int] = {}  # message id -> mission time of its last publish
         self._depleted_publishes: dict[int, NDArray[np.int64]] = {}  # message id -> (n,) publishes since depleted
+        # A companion node bridging its aMussels, not a vehicle (the GCS makes no vehicle of it).
+        self._heartbeat = mavlink.MAVLink_heartbeat_message(
+            mavlink.MAV_TYPE_ONBOARD_CONTROLLER, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, mavlink.MAV_STATE_ACTIVE, 3)
+        self.reports = ReportByException(state.n, seconds_to_us(self.config.status_keepalive_s),
+                                         seconds_to_us(1.0 / self.config.status_rate_hz))
 
     # --- periodic tasks ----------------------------------------------------------------------------
 
@@ -164,6 +174,7 @@ class FleetRunner:
         )
         return [
             self._step_task,
+            scheduler.every(HEARTBEAT_PERIOD_S, self.heartbeat_task, "mussel-heartbeat", start_us),
             scheduler.every(1.0 / cfg.status_rate_hz, self.publish_status_task, "mussel-status", start_us),
             scheduler.every(1.0 / cfg.sensors_rate_hz, self.publish_sensors_task, "mussel-sensors", start_us),
         ]
@@ -193,10 +204,16 @@ class FleetRunner:
         if self.on_events is not None:
             self.on_events(events)
 
+    def heartbeat_task(self, now_us: int) -> None:
+        """The fleet's node says it is there, as every MAVLink system does: its aMussels report by
+        exception (`report_policy`), so seconds may pass without a status while the link is alive."""
+        self._send(self._heartbeat)
+
     def publish_status_task(self, now_us: int) -> None:
-        s, rows = self.state, self._speaking(hot.AMUSSEL_STATUS, now_us)
+        s = self.state
+        rows = self.reports.due(s.state, self._speaking(hot.AMUSSEL_STATUS, now_us), now_us)
         ids, x, y, depth, u, state = s.ids, s.x_m, s.y_m, s.depth_m, s.battery_frac, s.state
-        if rows is not None:  # some are asleep (or under water, acoustic): the others only
+        if rows is not None:  # some are asleep (or under water, acoustic), or foreseen: the others only
             if not rows.size:
                 return  # nobody speaks: no positions to convert
             ids, x, y, depth, u, state = ids[rows], x[rows], y[rows], depth[rows], u[rows], state[rows]

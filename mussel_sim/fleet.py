@@ -160,10 +160,8 @@ def step(
 ) -> tuple[FleetState, StepEvents]:
     """Advance the fleet by `dt_s` seconds of mission time (simulated time: theta * dt_s)."""
     ids = state.ids
-    st = state.state.copy()
-    timer = state.timer_s.copy()
-    dock_apad = state.dock_apad.copy()
-    dock_slot = state.dock_slot.copy()
+    # The last state's arrays are read-only: copied before the first change (most steps change none).
+    st, timer, dock_apad, dock_slot = state.state, state.timer_s, state.dock_apad, state.dock_slot
     time_us = state.time_us + round(dt_s * US_PER_S)
 
     # --- sleep orders, commands and dock events ------------------------------------------------
@@ -173,16 +171,18 @@ def step(
     sleepers = Sleepers.of(state, table, profile, next_wake, params.theta, time_us)
     has_commands = (inputs.release_ids.size + inputs.dock_ids.size + inputs.sink_ids.size + inputs.surface_ids.size
                     + unknown_orders.size + inputs.wake_ids.size + (sleepers is not None and sleepers.any_held_awake()))
-    applied = (
-        _apply_commands(state, inputs, params, st, timer, dock_apad, dock_slot, sleepers, unknown_orders)
-        if has_commands else _NOTHING
-    )
+    applied = _NOTHING
+    if has_commands:
+        st, timer, dock_apad, dock_slot = st.copy(), timer.copy(), dock_apad.copy(), dock_slot.copy()
+        applied = _apply_commands(state, inputs, params, st, timer, dock_apad, dock_slot, sleepers, unknown_orders)
 
     # --- SURFACING / SINKING timers (a command given now has already run for this step) ----
-    trans = np.flatnonzero((st == SURFACING) | (st == SINKING))
+    trans = _IN_TRANSIT[st].nonzero()[0]
     trans_at_start = trans.size
     floating = resumed = trans[:0]
     if trans.size:
+        if not has_commands:
+            st, timer = st.copy(), timer.copy()
         timer[trans] -= dt_s
         done = trans[timer[trans] <= TIMER_EPS_S]
         timer[done] = 0.0
@@ -201,6 +201,8 @@ def step(
     empty = u <= 0.0
     newly_depleted = np.flatnonzero(empty & ~docked_mask & (st != DEPLETED)) if empty.any() else _NONE
     if newly_depleted.size:
+        st = st.copy() if st is state.state else st
+        timer = timer.copy() if timer is state.timer_s else timer
         st[newly_depleted] = DEPLETED
         timer[newly_depleted] = 0.0
 
@@ -223,7 +225,7 @@ def step(
         drift = random_drift_m(rng, state.n, params.drift_half_width_m)
         x += drift[0]
         y += drift[1]
-    docked = np.flatnonzero(docked_mask)
+    docked = docked_mask.nonzero()[0]
     if docked.size:
         # Docked agents sit on their aPad: no current, no drift; they stay put while its position is unknown.
         x[docked] = state.x_m[docked]
@@ -315,6 +317,11 @@ _NO_EVENTS = StepEvents(
     ignored_command_ids=_NO_IDS, unknown_ids=EMPTY_IDS, docked_ids=_NO_IDS, docked_submerged_ids=_NO_IDS,
     released_ids=_NO_IDS, floating_ids=_NO_IDS, resumed_ids=_NO_IDS, depleted_ids=_NO_IDS,
 )
+
+
+_IN_TRANSIT = np.zeros(N_STATES, bool)  # SURFACING or SINKING: a timer runs
+_IN_TRANSIT[[SURFACING, SINKING]] = True
+_IN_TRANSIT.flags.writeable = False
 
 
 @cache

@@ -8,6 +8,7 @@ wholly in the state the aMussel ended it in, as eq. (3) counts activity.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -17,6 +18,14 @@ from mussel_sim.fleet_state import DEPLETED, N_STATES
 from mussel_sim.vocabulary import MusselState
 
 NEVER = -1  # first_depleted_us of an aMussel that never depleted
+
+
+@cache
+def _rows(n: int) -> NDArray[np.intp]:
+    """0 .. n - 1, made once per fleet size: every step indexes its rows so."""
+    rows = np.arange(n)
+    rows.flags.writeable = False
+    return rows
 
 
 @dataclass
@@ -36,9 +45,11 @@ class StateTimes:
     def add(self, state: NDArray[np.uint8], dt_us: int) -> None:
         """Count one step of `dt_us` that ended in `state` `(n,)` (uint8 MusselState)."""
         self.elapsed_us += dt_us
-        self.state_us[np.arange(state.size), state] += dt_us
-        newly = (state == DEPLETED) & (self.first_depleted_us == NEVER)
-        self.first_depleted_us[newly] = self.elapsed_us
+        self.state_us[_rows(state.size), state] += dt_us
+        depleted = state == DEPLETED
+        if depleted.any():
+            newly = depleted & (self.first_depleted_us == NEVER)
+            self.first_depleted_us[newly] = self.elapsed_us
 
     def copy(self) -> StateTimes:
         return StateTimes(self.state_us.copy(), self.first_depleted_us.copy(), self.elapsed_us)

@@ -34,15 +34,14 @@ def run_down_start(report_us: int, report_frac: float, anchor: tuple[int, float]
     return (report_us, report_frac) if anchor is None or anchor[0] <= report_us else anchor
 
 
-def believed_battery(view: MusselView, now_us: int, drain_per_s: float, released: bool = False,
+def believed_battery(view: MusselView, now_us: int, drain_per_s: float,
                      anchor: tuple[int, float] | None = None) -> float:
     """Its battery now as the GCS can know it: under water, the report run down at `drain_per_s`
-    since it was made (never below empty); at the surface or depleted, as reported. `released`: its
-    last report says docked but no slot holds it now, so it is sinking out of WiFi's reach and its
-    next report comes in its slot: under water too. `anchor`: (mission us, battery) believed when its
-    duty last changed (a sleep order); after the report, the run-down at `drain_per_s` (the new duty's)
-    starts there, the old duty's having run to it."""
-    if view.state not in UNDERWATER and not (released and view.state == MusselState.DOCKED):
+    since it was made (never below empty); at the surface or depleted, as reported (the planner runs
+    those forward in the model's steps: `gcs.mission.foresight`). `anchor`: (mission us, battery)
+    believed when its duty last changed (a sleep order); after the report, the run-down at
+    `drain_per_s` (the new duty's) starts there, the old duty's having run to it."""
+    if view.state not in UNDERWATER:
         return view.battery_frac
     since_us, battery = run_down_start(view.time_us, view.battery_frac, anchor)
     return max(battery - drain_per_s * max(now_us - since_us, 0) / US_PER_S, 0.0)

@@ -110,7 +110,9 @@ class VehicleRegistry:
         # When (our clock) each aMussel reported alone, as real agents do; the simulated fleet's
         # batches arrive every second and are not tracked here.
         self.mussel_heard_us: dict[int, int] = {}
-        self.fleet_heard_us = -1  # when (our clock) the last aMussel status of any kind arrived; -1: never
+        # When (our clock) an aPad last said a slot let go of each aMussel: charged till then, not since.
+        self.released_us: dict[int, int] = {}
+        self.fleet_heard_us = -1  # when (our clock) the fleet last spoke (a status, its node's heartbeat); -1: never
         self._seq: dict[tuple[int, int], int] = {}  # (system, component) -> the last sequence number taken
         self.version = 0  # bumped on every change a screen could show
 
@@ -158,6 +160,10 @@ class VehicleRegistry:
                 if view.expected is not None and view.expected.matches(record):
                     view.expected.seen = True
             case SlotView():
+                held = view.slots.get(record.slot)
+                if held is not None and held.latch == Latch.LATCHED and held.mussel_id and (
+                        record.latch != Latch.LATCHED or record.mussel_id != held.mussel_id):
+                    self.released_us[held.mussel_id] = now_us  # it charged until now (`gcs.mission.foresight`)
                 view.slots[record.slot] = record
             case Battery():
                 if record.voltage_v is not None:

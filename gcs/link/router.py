@@ -292,7 +292,10 @@ class Link:
         if isinstance(record, CommandAck):
             if record.target_system in (0, self.codec.system_id):  # not an answer to another GCS
                 self.commands.on_ack(src, record)
-        elif record is not None:
+        elif record is None:
+            if origin is not None and src == origin.system_id and msg.get_msgId() == mavlink.MAVLINK_MSG_ID_HEARTBEAT:
+                self.registry.fleet_heard_us = self.clock.now_us  # the fleet's node (its aMussels report by exception)
+        else:
             if origin is None and isinstance(record, MusselView) and record.simulated and len(self._local_systems) > 1:
                 self.dropped["AMUSSEL_STATUS.source"] += 1  # our simulated fleet is a local party
                 return False

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 from gcs.mission.scenario import Scenario
 from gcs.mission.scenario_models import fleet_params
-from mussel_sim.battery import sim_minutes
+from mussel_sim.battery import ChargeProfile, sim_minutes
 from mussel_sim.behaviour import BehaviourProfile, duty_cycle_rate_per_min
 from mussel_sim.wake import next_wake_s
 
@@ -20,16 +20,20 @@ from mussel_sim.wake import next_wake_s
 @dataclass(frozen=True)
 class Duty:
     """rate_per_min: battery fraction used per simulated minute while deployed; interval_s, awake_s: the
-    wake schedule in the aMussel's own seconds (interval 0: always on); ordered: set by a sleep order."""
+    wake schedule in the aMussel's own seconds (interval 0: always on); ordered: set by a sleep order;
+    charge: its charge profile on a slot (None: the loop's default, `LoopSettings.mussel_charge`; a sleep
+    order keeps the aMussel's own)."""
 
     rate_per_min: float
     interval_s: float = 0.0
     awake_s: float = 0.0
     ordered: bool = False
+    charge: ChargeProfile | None = None
 
     @classmethod
     def of_profile(cls, profile: BehaviourProfile) -> Duty:
-        return cls(profile.discharge.rate_per_min, profile.wake_interval_s or 0.0, profile.awake_s or 0.0)
+        return cls(profile.discharge.rate_per_min, profile.wake_interval_s or 0.0, profile.awake_s or 0.0,
+                   charge=profile.charge)
 
     @classmethod
     def of_order(cls, interval_s: float, awake_s: float) -> Duty:

@@ -12,17 +12,21 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from apad_sitl.vocabulary import Latch
-from gcs.acoustic.knowledge import age_s, believed_battery
+from gcs.acoustic.knowledge import UNDERWATER, age_s, believed_battery
 from gcs.api import ApadApi, Location
 from gcs.link.telemetry import SlotView
 from gcs.mission.control import LoopLog, LoopSettings
 from gcs.mission.duty import Duty, OrdersSent
+from gcs.mission.foresight import MODEL_STEP_US, foreseen_battery
 from gcs.mission.real_fleet import MAX_REPORT_AGE_S, RealFleet
 from gcs.mission.strategies import Outlook, traits
 from gcs.mission.swarm import FleetShares, orphans
 from missiontime import Clock
-from mussel_sim.battery import charge_profile, discharge_profile, sim_minutes
+from mussel_sim.battery import ChargeProfile, charge_profile, discharge_profile, sim_minutes
+from mussel_sim.comms import MODEL_STEP_S
 from mussel_sim.geo import pair_distance_m
 from mussel_sim.vocabulary import MusselState
 
@@ -77,6 +81,8 @@ class FleetKnowledge:
         self.unreachable: set[int] = set()
         self.orders = orders if orders is not None else OrdersSent()
         self._default_duty = Duty(discharge_profile(settings.mussel_discharge).rate_per_min)
+        self._default_charge = charge_profile(settings.mussel_charge)
+        self._largest_profile_drain: float | None = None
         self._log = log
 
     # --- the charging pool ----------------------------------------------------------------------
@@ -87,7 +93,7 @@ class FleetKnowledge:
         floated, is left out with one `unreachable` event instead of being tried again and again)."""
         threshold = self.settings.mission.pool_threshold
         if self.acoustic is None:
-            ids = self.api.mussels.select((MusselState.ACTIVE,), battery_below=threshold)
+            ids = self._active_below(threshold)
         else:  # heard now and then: the estimate decides, and one silent too long is not planned for
             ids = [m for m in self.api.mussels.select((MusselState.ACTIVE,))
                    if self.battery(m) < threshold and self.heard_alive(m)]
@@ -108,6 +114,24 @@ class FleetKnowledge:
                 where = self.api.get_location(m)
                 self._log("unreachable", mussel=m, lat=where.lat, lon=where.lon, why="outside the geofence")
         return out
+
+    def _active_below(self, threshold: float) -> list[int]:
+        """Ids of ACTIVE aMussels whose battery (`battery`) is below `threshold`, lowest first. Run
+        forward from its report, a deployed one's battery only falls: those already below by the report,
+        and those the largest drain since their report could have brought there, are looked at one by one."""
+        t = self.api.mussels
+        steps = np.maximum(self.clock.now_us - t.time_us, 0) // MODEL_STEP_US
+        maybe = (t.state == MusselState.ACTIVE) & (t.battery_frac - steps * self._largest_drain_step() < threshold)
+        return [m for m in np.sort(t.ids[maybe]).tolist() if self.battery(m) < threshold]
+
+    def _largest_drain_step(self) -> float:
+        """The most any aMussel's duty drains in one model step (scenario profiles, orders, the default)."""
+        theta = self.settings.mission.theta
+        if self._largest_profile_drain is None:
+            duties = [self._default_duty, *self.settings.duties.values()]
+            self._largest_profile_drain = max(d.drain_per_s(theta) for d in duties)
+        ordered = (d.drain_per_s(theta) for d in self.orders.duties.values())
+        return max([self._largest_profile_drain, *ordered]) * MODEL_STEP_S
 
     def cannot_collect(self, mussel_id: int) -> str | None:
         """Why the aPad should not set off for this aMussel now, or None: it has depleted (below
@@ -238,18 +262,30 @@ class FleetKnowledge:
         return self.api.mussels[mussel_id].state
 
     def battery(self, mussel_id: int) -> float:
-        """As last reported; for a real aMussel out of the water, estimated since (`RealFleet`); in an
-        acoustic scenario, for one under water, run down since its last report (`believed_battery`)."""
+        """As the GCS can know it now. A simulated aMussel: its last report run forward in the model's
+        steps (`foresight`: the fleet reports by exception); in an acoustic scenario, one under water
+        run down since its last report (`believed_battery`). A real one out of the water: estimated since
+        its report (`RealFleet`)."""
         view = self.api.mussels[mussel_id]
-        if self.acoustic is not None and view.simulated:
-            released = view.state == MusselState.DOCKED and mussel_id not in self.docked().values()
-            return believed_battery(view, self.clock.now_us, self.drain_per_s(mussel_id), released,
-                                    self.orders.changed.get(mussel_id))
-        if self.real is not None and not view.simulated and mussel_id in self.real.heard_us:
+        if view.simulated:
+            if self.acoustic is not None and view.state in UNDERWATER:
+                return believed_battery(view, self.clock.now_us, self.drain_per_s(mussel_id),
+                                        self.orders.changed.get(mussel_id))
+            released_us = None
+            if view.state == MusselState.DOCKED and mussel_id not in self.docked().values():
+                released_us = max(self.api.link.registry.released_us.get(mussel_id, view.time_us), view.time_us)
+            return foreseen_battery(view, self.clock.now_us, self.drain_per_s(mussel_id), self.charge(mussel_id),
+                                    self.settings.mission.theta, released_us)
+        if self.real is not None and mussel_id in self.real.heard_us:
             on_slot = mussel_id in self.docked().values()
             return self.real.estimate(mussel_id, self.clock.now_us, on_slot, self.drain_per_min(mussel_id),
                                       self.orders.changed.get(mussel_id)).battery_frac
         return view.battery_frac
+
+    def charge(self, mussel_id: int) -> ChargeProfile:
+        """Its charge profile on a slot: its scenario profile's (a sleep order keeps it), else the loop's."""
+        own = self.profile_duty(mussel_id).charge
+        return own if own is not None else self._default_charge
 
     def distance_to(self, mussel_id: int) -> float:
         here, there = self.api.position(self.apad_id), self.api.get_location(mussel_id)

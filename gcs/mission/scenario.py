@@ -23,6 +23,7 @@ from missiontime.durations import MAX_MISSION_S
 from missiontime.durations import parse_duration_s as parse_duration_s
 from mussel_sim.battery import CHARGE_PROFILES, DISCHARGE_PROFILES
 from mussel_sim.behaviour import BEHAVIOURS, DEFAULT_BEHAVIOUR, SLEEP_CHARGE
+from mussel_sim.report_policy import STATUS_KEEPALIVE_S
 
 MISSIONS_DIR = Path(__file__).resolve().parents[2] / "missions"
 MAX_DURATION_S = MAX_MISSION_S
@@ -46,6 +47,7 @@ class FleetConfig:
     sinking_time_s: float
     status_rate_hz: float
     sensors_rate_hz: float
+    status_keepalive_s: float  # an aMussel whose state has not changed reports this often (0: every publish)
     sensor_field: str  # "anoxic_patch" or "dummy"
     # Real aMussels expected on the bridge (`vil gcs --bridge`), beside the simulated ones. An id that is
     # also simulated is refused at start, unless the real one is to replace the simulated one.
@@ -236,6 +238,10 @@ def read_scenario(root: Fields, path: Path) -> Scenario:
         sinking_time_s=f.number("sinking_time_s", 20.0, lo=0.0, hi=3600.0),
         status_rate_hz=f.number("status_rate_hz", 1.0, lo=0.01, hi=50.0),
         sensors_rate_hz=f.number("sensors_rate_hz", 0.2, lo=0.01, hi=50.0),
+        status_keepalive_s=f.number("status_keepalive_s", STATUS_KEEPALIVE_S, lo=0.0, hi=3600.0,
+                                    about="an aMussel whose state has not changed reports this often, one that "
+                                          "changed at once; the GCS runs the battery model between (0: every "
+                                          "aMussel at every status publish, the paper's 1 Hz)"),
         sensor_field=f.text("sensor_field", "anoxic_patch", ("anoxic_patch", "dummy")),
         real_ids=f.integers("real_ids", 1, 65535, about="real aMussels expected on the bridge (vil gcs --bridge)"),
         real_replaces_simulated=f.flag("real_replaces_simulated",

@@ -229,6 +229,7 @@ def build_world(
         state, params, rng, frame,
         Codec(FLEET_SYSTEM_ID, FLEET_COMPONENT_ID), port.send_bytes, sensor_field(scenario, area, frame),
         CommsConfig(status_rate_hz=scenario.fleet.status_rate_hz, sensors_rate_hz=scenario.fleet.sensors_rate_hz,
+                    status_keepalive_s=scenario.fleet.status_keepalive_s,
                     apad_ids=apad_ids, commanders=frozenset({link.codec.system_id}),
                     wifi_at_surface_only=scenario.acoustic.enabled),
         recorder=Recorder(state.ids, sinking_counts_active=scenario.mission.sinking_counts_active,

@@ -26,13 +26,6 @@ def test_at_the_surface_or_depleted_the_report_stands(state: MusselState) -> Non
     assert believed_battery(view(state), 60_000_000, DRAIN) == 0.6
 
 
-def test_one_released_since_its_last_docked_report_is_believed_under_water() -> None:
-    # Its last WiFi report said docked; no slot holds it now, so it sinks, silent until its slot.
-    assert believed_battery(view(MusselState.DOCKED), 30_000_000, DRAIN, released=True) == pytest.approx(0.57)
-    # `released` says nothing of one that is not docked by its report.
-    assert believed_battery(view(MusselState.FLOATING), 30_000_000, DRAIN, released=True) == 0.6
-
-
 def test_after_a_duty_change_the_run_down_starts_where_the_old_duty_left_it() -> None:
     # Reported at 0 s; a sleep order at 20 s, when 0.6 - 20 x DRAIN was believed; a tenth of the drain since.
     anchor = (20_000_000, 0.58)

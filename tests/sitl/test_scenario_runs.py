@@ -171,6 +171,12 @@ def test_table_ii_seed_1_is_what_it_was_before_the_redesign(run: str, request: p
     (cost, cycles, travel identical). avg uptime: pool12 cautious 73.61 -> 74.67 (+1.06),
     greedy 62.95 -> 64.27 (+1.32), bay24 greedy 62.06 -> 62.58 (+0.53), pool12 none unchanged
     (no releases); active 8.83 -> 8.96, 7.55 -> 7.71, 14.89 -> 15.02.
+
+    Moved by issue 20, "the fleet reports by exception" (`mussel_sim.report_policy`, keep-alive 5 s):
+    cost and travel by 0.03-0.09 m (pool12 cautious 277.837 -> 277.921 m), as the aPad heads for
+    positions heard up to 5 s before and the aMussels drift millimetres since; every uptime, the
+    active means and the cycles are identical (between reports the GCS runs the battery forward in
+    the model's steps, `gcs.mission.foresight`, so it decides when it decided before).
     """
     scenario, strategy = run.split("-")
     r: RunResult = request.getfixturevalue(scenario)[strategy]

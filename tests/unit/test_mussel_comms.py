@@ -249,3 +249,27 @@ def test_lockstep_over_an_in_memory_link() -> None:
             if m.get_type() == "AMUSSEL_STATUS":
                 last[m.mussel_id] = m.state
     assert last == {3: MusselState.ACTIVE, 5: MusselState.FLOATING}
+
+
+def test_with_a_keep_alive_an_unchanged_fleet_reports_each_window_and_a_change_at_once() -> None:
+    runner, wire = make_runner(config=CommsConfig(status_keepalive_s=5.0))
+    clock = VirtualClock()
+    runner.register(clock.scheduler)
+    clock.sleep(4.5)  # publishes at 0 .. 4: everyone at 0, then nothing changes
+    statuses = wire.messages()
+    heard = [(m.get_type(), getattr(m, "time_us", None)) for m in statuses]
+    assert heard.count(("AMUSSEL_STATUS", 0)) == 3 and sum(1 for k, _ in heard if k == "AMUSSEL_STATUS") == 3
+    # Every second its node's heartbeat (the link is alive between reports), a companion, not a vehicle.
+    beats = [m for m in statuses if m.get_type() == "HEARTBEAT"]
+    assert len(beats) == 5 and {(m.type, m.autopilot) for m in beats} == {
+        (mavlink.MAV_TYPE_ONBOARD_CONTROLLER, mavlink.MAV_AUTOPILOT_INVALID)}
+    runner.feed(apad_position(0.0, 0.0))  # an aPad in acoustic range
+    runner.feed(command(5, MusselCommand.SURFACE))  # heard at 4.5 s: surfacing from the step at 5
+    clock.sleep(2.0)  # publishes at 5 (a window: all) and 6 (none changed again)
+    at = [(m.mussel_id, m.time_us, m.state) for m in wire.messages("AMUSSEL_STATUS")]
+    assert at == [(3, 5_000_000, MusselState.ACTIVE), (5, 5_000_000, MusselState.SURFACING),
+                  (8, 5_000_000, MusselState.ACTIVE)]
+    runner.feed(command(3, MusselCommand.SURFACE))
+    clock.sleep(1.0)  # the step at 7 changes aMussel 3: it alone reports, at once
+    assert [(m.mussel_id, m.time_us) for m in wire.messages("AMUSSEL_STATUS")] == [(3, 7_000_000)]
+    assert runner.reports.held == 3 * 4 + 3 + 2

@@ -1,0 +1,56 @@
+"""What a report every model step would say now: a simulated aMussel's battery run forward from its last report.
+
+The fleet reports by exception (`mussel_sim.report_policy`): an aMussel whose state has not changed
+reports every few seconds, not every step. Between its reports the GCS takes the model's steps itself,
+from the report to the last step at or before now, with the battery models the planner already plans
+with: deployed (on the seabed, on its way up or down, floating), eq. (1) at its duty's drain; on a slot
+of an aPad, eq. (2) by its charge profile; depleted, as reported. Whole steps, not the time since: at
+any instant the GCS believes what the last report of a fleet reporting every step would have said, so
+the planner's decisions fall where they fell then (to float rounding: the report is float32).
+
+Pure: the caller passes the report, the time and the models.
+"""
+
+from __future__ import annotations
+
+from bisect import bisect_left
+
+from gcs.link.telemetry import MusselView
+from mussel_sim.battery import ChargeProfile, sim_minutes
+from mussel_sim.comms import MODEL_STEP_S
+from mussel_sim.vocabulary import MusselState
+
+MODEL_STEP_US = round(MODEL_STEP_S * 1_000_000)
+
+
+def steps_since(report_us: int, now_us: int) -> int:
+    """The model's whole steps from a report made at `report_us` to `now_us`."""
+    return max(now_us - report_us, 0) // MODEL_STEP_US
+
+
+def charged_forward(battery: float, steps: int, charge: ChargeProfile, theta: float) -> float:
+    """eq. (2) for `steps` steps from `battery`, as the fleet steps it (the band of the value before each step)."""
+    dt_min = sim_minutes(theta, MODEL_STEP_S)
+    thresholds, rates = charge.thresholds, charge.rates_per_min
+    u = battery
+    for _ in range(steps):
+        if u >= 1.0:
+            return 1.0
+        u = min(u + rates[bisect_left(thresholds, u)] * dt_min, 1.0)
+    return u
+
+
+def foreseen_battery(view: MusselView, now_us: int, drain_per_s: float, charge: ChargeProfile, theta: float,
+                     released_us: int | None = None) -> float:
+    """The battery a report made now would carry: `view` run forward in whole model steps, drained at
+    `drain_per_s` (never below 0); one DOCKED charged by `charge`, up to `released_us` if a slot has let
+    go of it since (the fleet charges it through the step the release reached it in, and drains it after).
+    """
+    steps = steps_since(view.time_us, now_us)
+    if steps == 0 or view.state == MusselState.DEPLETED:
+        return view.battery_frac
+    battery, drained = view.battery_frac, steps
+    if view.state == MusselState.DOCKED:
+        charging = steps if released_us is None else min(steps_since(view.time_us, released_us), steps)
+        battery, drained = charged_forward(battery, charging, charge, theta), steps - charging
+    return max(battery - drained * drain_per_s * MODEL_STEP_S, 0.0) if drained else battery

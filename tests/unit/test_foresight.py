@@ -1,0 +1,68 @@
+"""The GCS's foresight of a simulated aMussel between its reports (`gcs.mission.foresight`), against the
+fleet's own model stepped the same seconds: what a report every step would have said."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gcs.link.telemetry import MusselView
+from gcs.mission.foresight import MODEL_STEP_US, charged_forward, foreseen_battery, steps_since
+from mussel_sim.battery import DISCHARGE_ACTIVE_PER_MIN, charge_profile, discharge_profile, sim_minutes, step_battery
+from mussel_sim.vocabulary import MusselState
+
+THETA = 30.0
+CHARGE = charge_profile("secondary")
+DISCHARGE = discharge_profile("active")
+DRAIN_PER_S = DISCHARGE_ACTIVE_PER_MIN * sim_minutes(THETA, 1.0)
+
+
+def view(state: MusselState, battery: float, time_us: int = 0) -> MusselView:
+    return MusselView(7, 0, 0, 0.0, battery, 4000, state, True, time_us)
+
+
+def stepped(battery: float, docked: list[bool]) -> float:
+    """The fleet's eqs. (1)-(2), one 1 s step per entry (docked: charging)."""
+    u = np.array([battery])
+    for d in docked:
+        u = step_battery(u, np.array([d]), DISCHARGE, CHARGE, THETA, 1.0)
+    return float(u[0])
+
+
+def test_whole_steps_only_a_report_within_its_step_stands() -> None:
+    assert steps_since(5 * MODEL_STEP_US, 5 * MODEL_STEP_US + 999_999) == 0
+    assert steps_since(5 * MODEL_STEP_US, 8 * MODEL_STEP_US + 500_000) == 3
+    assert steps_since(9 * MODEL_STEP_US, 8 * MODEL_STEP_US) == 0  # a report from the future: none
+    assert foreseen_battery(view(MusselState.ACTIVE, 0.6), 999_999, DRAIN_PER_S, CHARGE, THETA) == 0.6
+
+
+@pytest.mark.parametrize("state", [MusselState.ACTIVE, MusselState.SURFACING, MusselState.SINKING,
+                                   MusselState.FLOATING])
+def test_a_deployed_one_drains_as_the_fleet_steps_it(state: MusselState) -> None:
+    got = foreseen_battery(view(state, 0.6), 4 * MODEL_STEP_US + 300_000, DRAIN_PER_S, CHARGE, THETA)
+    assert got == pytest.approx(stepped(0.6, [False] * 4), abs=1e-15)
+    assert foreseen_battery(view(state, 0.001), 10 * MODEL_STEP_US, DRAIN_PER_S, CHARGE, THETA) == 0.0
+
+
+@pytest.mark.parametrize("battery", [0.1, 0.1619, 0.5632, 0.97, 0.9995])
+def test_a_docked_one_charges_by_the_bands_as_the_fleet_steps_it(battery: float) -> None:
+    # Across a band's edge (0.16197, 0.5634) the rate is chosen from the value before each step; full stays full.
+    got = foreseen_battery(view(MusselState.DOCKED, battery), 5 * MODEL_STEP_US, DRAIN_PER_S, CHARGE, THETA)
+    assert got == pytest.approx(stepped(battery, [True] * 5), abs=1e-15)
+    assert charged_forward(1.0, 5, CHARGE, THETA) == 1.0
+
+
+def test_a_released_one_charged_till_the_release_and_drains_after() -> None:
+    # Reported docked at 10 s, let go at 12.4 s: charged in the steps at 11 and 12, drained at 13 .. 16.
+    released_us = 12 * MODEL_STEP_US + 400_000
+    got = foreseen_battery(view(MusselState.DOCKED, 0.7, 10 * MODEL_STEP_US), 16 * MODEL_STEP_US + 200_000,
+                           DRAIN_PER_S, CHARGE, THETA, released_us=released_us)
+    assert got == pytest.approx(stepped(0.7, [True] * 2 + [False] * 4), abs=1e-15)
+    # Released at its report: drained all the way.
+    got = foreseen_battery(view(MusselState.DOCKED, 0.7, 10 * MODEL_STEP_US), 16 * MODEL_STEP_US,
+                           DRAIN_PER_S, CHARGE, THETA, released_us=10 * MODEL_STEP_US)
+    assert got == pytest.approx(stepped(0.7, [False] * 6), abs=1e-15)
+
+
+def test_a_depleted_one_stays_as_reported() -> None:
+    assert foreseen_battery(view(MusselState.DEPLETED, 0.0), 60 * MODEL_STEP_US, DRAIN_PER_S, CHARGE, THETA) == 0.0
