@@ -150,7 +150,9 @@ class FleetRunner:
         self.dropped: Counter[str] = Counter()  # received messages refused, by reason
         self.orders = PendingOrders(self._ids)  # heard since the last step, for the next
         self._published_us: dict[int, int] = {}  # message id -> mission time of its last publish
-        self._depleted_publishes: dict[int, NDArray[np.int64]] = {}  # message id -> (n,) publishes since depleted
+        # message id -> (n,) publishes since depleted (None: nobody depleted at the last publish)
+        self._depleted_publishes: dict[int, NDArray[np.int64] | None] = {}
+        self._depleted_of: tuple[NDArray[np.uint8] | None, NDArray[np.bool_] | None] = (None, None)
         # A companion node bridging its aMussels, not a vehicle (the GCS makes no vehicle of it).
         self._heartbeat = mavlink.MAVLink_heartbeat_message(
             mavlink.MAV_TYPE_ONBOARD_CONTROLLER, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, mavlink.MAV_STATE_ACTIVE, 3)
@@ -254,7 +256,14 @@ class FleetRunner:
 
     def _powered(self, msg_id: int, rows: NDArray[np.intp] | None) -> NDArray[np.intp] | None:
         """`rows` (None: all) but the aMussels depleted for more than LAST_WORDS publishes of `msg_id`."""
-        depleted = self.state.state == MusselState.DEPLETED
+        st = self.state.state
+        if st is not self._depleted_of[0]:  # a state array is read-only: its mask is made once
+            mask = st == MusselState.DEPLETED
+            self._depleted_of = (st, mask if mask.any() else None)
+        depleted = self._depleted_of[1]
+        if depleted is None:  # none depleted: no count runs
+            self._depleted_publishes[msg_id] = None
+            return rows
         before = self._depleted_publishes.get(msg_id)
         count = np.where(depleted, (0 if before is None else before) + 1, 0)
         self._depleted_publishes[msg_id] = count
@@ -346,7 +355,13 @@ class FleetRunner:
         return dict(self._apads_m)
 
     def _take_inputs(self) -> FleetInputs:
-        return self.orders.take(self._apads_local())
+        """The queued inputs, with the aPads' positions as the step uses them: where an aMussel rides on
+        one (docked, or docking now), or is called up (a command, or one held for a sleeper's wake). In
+        any other step they are not looked at, so the last ones go again, unconverted."""
+        s = self.state
+        if self.orders.pending or (s.state == MusselState.DOCKED).any() or s.surface_held.any():
+            return self.orders.take(self._apads_local())
+        return self.orders.take(self._apads_m)
 
     def _report(self, events: StepEvents) -> None:
         for mussel_id in events.surface_refused_out_of_range_ids:

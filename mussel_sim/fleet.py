@@ -231,17 +231,18 @@ def step(
         x[docked] = state.x_m[docked]
         y[docked] = state.y_m[docked]
         if inputs.apad_ids.size:
-            row = np.full(256, -1, np.intp)
-            row[inputs.apad_ids] = np.arange(inputs.apad_ids.size)
-            r = row[dock_apad[docked]]
+            r = _apad_rows(inputs.apad_ids)[dock_apad[docked]]
             has = r >= 0
             x[docked[has]] = inputs.apad_x_m[r[has]]
             y[docked[has]] = inputs.apad_y_m[r[has]]
 
     # --- depth -------------------------------------------------------------------------------
     # ACTIVE on the seabed, FLOATING/DOCKED at the surface, DEPLETED where it stopped; in transit linear.
-    fixed = _depth_lut(params.seabed_depth_m)[st]
-    depth = np.where(np.isnan(fixed), state.depth_m, fixed)
+    if st is state.state and not trans.size and state.step_index:
+        depth = state.depth_m  # no state changed and none in transit: every depth as the last step left it
+    else:
+        fixed = _depth_lut(params.seabed_depth_m)[st]
+        depth = np.where(np.isnan(fixed), state.depth_m, fixed)
     if trans.size:  # still in transit: the timers' agents that neither arrived nor ran flat
         trans = trans[(st[trans] == SURFACING) | (st[trans] == SINKING)]
     if trans.size:
@@ -255,8 +256,9 @@ def step(
         depth[trans] = params.seabed_depth_m * np.clip(frac_down, 0.0, 1.0)
 
     for fresh in (x, y, depth, u, st, timer, dock_apad, dock_slot, profile, held, next_wake, taken, due):
-        fresh.flags.writeable = False  # ours alone (or the last state's, read-only): kept as they are
-    new_state = FleetState(
+        if fresh.flags.writeable:  # ours alone (the last state's are read-only already): kept as they are
+            fresh.flags.writeable = False
+    new_state = FleetState.of_step(
         ids=ids,
         x_m=x,
         y_m=y,
@@ -322,6 +324,20 @@ _NO_EVENTS = StepEvents(
 _IN_TRANSIT = np.zeros(N_STATES, bool)  # SURFACING or SINKING: a timer runs
 _IN_TRANSIT[[SURFACING, SINKING]] = True
 _IN_TRANSIT.flags.writeable = False
+
+
+_last_apad_rows: list[tuple[NDArray[np.int64], NDArray[np.intp]]] = []
+
+
+def _apad_rows(apad_ids: NDArray[np.int64]) -> NDArray[np.intp]:
+    """aPad system id -> its row in the inputs' aPad arrays (-1: none), made again only for another
+    array (a quiet step's inputs are the last ones again, `FleetInputs.make`)."""
+    if _last_apad_rows and _last_apad_rows[0][0] is apad_ids:
+        return _last_apad_rows[0][1]
+    row = np.full(256, -1, np.intp)
+    row[apad_ids] = np.arange(apad_ids.size)
+    _last_apad_rows[:] = [(apad_ids, row)]  # the array is kept: its id cannot be another's meanwhile
+    return row
 
 
 @cache

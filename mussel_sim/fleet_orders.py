@@ -43,6 +43,11 @@ class PendingOrders:
         return dict(self._docked_at)
 
     @property
+    def pending(self) -> bool:
+        """Whether anything waits for the next step."""
+        return bool(self._surface or self._sink or self._dock or self._release or self._sleep or self._wake)
+
+    @property
     def latches_changed(self) -> bool:
         """A dock or a release waits for the next step."""
         return bool(self._dock or self._release)

@@ -34,8 +34,17 @@ WAKE_EPS = 1e-9
 
 def sleeping_fleet(table: ProfileTable, profile: NDArray[np.uint16]) -> bool:
     """Whether any aMussel may be on a wake schedule: False for the always-on fleet (everyone on the
-    first profile, which has none), decided without a gather."""
-    return bool(table.scheduled[0] or profile.any())
+    first profile, which has none), decided without a gather, and once per profile array (a state's is
+    read-only, and the steps pass it on until a sleep order makes another)."""
+    if _last_answer and _last_answer[0][0] is table and _last_answer[0][1] is profile:
+        return _last_answer[0][2]
+    answer = bool(table.scheduled[0] or profile.any())
+    if not profile.flags.writeable:
+        _last_answer[:] = [(table, profile, answer)]  # both kept: their ids cannot be another's meanwhile
+    return answer
+
+
+_last_answer: list[tuple[ProfileTable, NDArray[np.uint16], bool]] = []
 
 
 def apply_orders(

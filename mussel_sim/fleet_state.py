@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, fields
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -177,6 +178,14 @@ class FleetState:
             view = np.asarray(value).view()
             view.flags.writeable = False
             object.__setattr__(self, name, view)
+
+    @classmethod
+    def of_step(cls, **fields: Any) -> FleetState:
+        """A state the model's step made, every array read-only already (its own, made so, or the last
+        state's): built without the views and checks a state from outside gets (a step's tenth)."""
+        state = object.__new__(cls)
+        state.__dict__.update(fields)
+        return state
 
     @property
     def n(self) -> int:

@@ -45,7 +45,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from mussel_sim.day_ledger import DayLedger
 from mussel_sim.fleet_state import ACTIVE, DEPLETED, N_STATES, SINKING, FleetState
-from mussel_sim.state_time import NEVER, StateTimes
+from mussel_sim.state_time import StateTimes
 
 DEFAULT_MAX_TRACE_BYTES = 64 * 2**20
 DEFAULT_MAX_TRACE_ROWS = 8192
@@ -118,6 +118,7 @@ class Recorder:
         self.times = StateTimes.zeros(self.ids.size)
         self.start_us = int(start_us)  # mission time of the state before the first step
         self._last_us = int(start_us)
+        self._alive_of: tuple[NDArray[np.uint8] | None, int] = (None, 0)  # a state array and its count not depleted
         self._trace_ids_arg = None if trace_ids is None else np.asarray(trace_ids, np.int64)
         self._max_trace_bytes = int(max_trace_bytes)
         self._max_trace_rows = int(max_trace_rows)
@@ -150,8 +151,7 @@ class Recorder:
     def record(self, state: FleetState, dt_us: int | None = None) -> None:
         """Count one step of `dt_us` (default: since the last state recorded) that ended in `state`
         (state.ids must be this recorder's ids)."""
-        alive_before = int(np.count_nonzero(self.times.first_depleted_us == NEVER)) if self.days is not None else 0
-        self.times.add(state.state, state.time_us - self._last_us if dt_us is None else dt_us)
+        newly_depleted = self.times.add(state.state, state.time_us - self._last_us if dt_us is None else dt_us)
         self._last_us = state.time_us
         self.samples_taken, self.samples_due = state.samples_taken, state.samples_due  # read-only: no copy
         active = self._counts[state.state]
@@ -164,8 +164,9 @@ class Recorder:
         self._time_us[k] = state.time_us
         self.n_steps = k + 1
         if self.days is not None:
-            never = int(np.count_nonzero(self.times.first_depleted_us == NEVER))
-            self.days.add(state.time_us, n_active, int(np.count_nonzero(state.state != DEPLETED)), alive_before - never)
+            if state.state is not self._alive_of[0]:  # a state array is read-only: counted once
+                self._alive_of = (state.state, int(np.count_nonzero(state.state != DEPLETED)))
+            self.days.add(state.time_us, n_active, self._alive_of[1], newly_depleted)
         if self.trace_stride > 0 and k % self.trace_stride == 0:
             if len(self._trace_rows) >= self._max_rows:
                 self._decimate()

@@ -42,14 +42,17 @@ class StateTimes:
     def zeros(cls, n: int) -> StateTimes:
         return cls(np.zeros((n, N_STATES), np.int64), np.full(n, NEVER, np.int64))
 
-    def add(self, state: NDArray[np.uint8], dt_us: int) -> None:
-        """Count one step of `dt_us` that ended in `state` `(n,)` (uint8 MusselState)."""
+    def add(self, state: NDArray[np.uint8], dt_us: int) -> int:
+        """Count one step of `dt_us` that ended in `state` `(n,)` (uint8 MusselState); returns how many
+        depleted for the first time in it."""
         self.elapsed_us += dt_us
         self.state_us[_rows(state.size), state] += dt_us
         depleted = state == DEPLETED
-        if depleted.any():
-            newly = depleted & (self.first_depleted_us == NEVER)
-            self.first_depleted_us[newly] = self.elapsed_us
+        if not depleted.any():
+            return 0
+        newly = depleted & (self.first_depleted_us == NEVER)
+        self.first_depleted_us[newly] = self.elapsed_us
+        return int(np.count_nonzero(newly))
 
     def copy(self) -> StateTimes:
         return StateTimes(self.state_us.copy(), self.first_depleted_us.copy(), self.elapsed_us)
