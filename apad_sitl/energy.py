@@ -38,6 +38,9 @@ HOME_STILL_MPS = 0.05  # slower than this over ground: the hull can be plugged i
 VOLT_RANGE = BATTERY_FULL_V - BATTERY_EMPTY_V
 
 
+_ON_SLOT = (Latch.LATCHED, Latch.RELEASING)
+
+
 class EnergyMeter:
     """The aPad's energy part: aMussels' gains drawn from its battery, and home charging."""
 
@@ -115,7 +118,9 @@ class EnergyMeter:
                 and state.ground_speed_mps < HOME_STILL_MPS)
 
     def _latched(self) -> set[int]:
-        return {s.mussel_id for s in self.apad.primitive.slots if s.mussel_id and s.latch == Latch.LATCHED}
+        """The aMussels on a slot: latched, or being let go (what they reported up to the release was charged
+        here: the fleet reports one as its slot releases it, `mussel_sim.comms`)."""
+        return {s.mussel_id for s in self.apad.primitive.slots if s.mussel_id and s.latch in _ON_SLOT}
 
     def _set_volts(self, volts: float) -> None:
         self.apad.state = replace(self.apad.state, battery_v=min(BATTERY_FULL_V, max(BATTERY_EMPTY_V, volts)))

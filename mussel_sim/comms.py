@@ -156,6 +156,7 @@ class FleetRunner:
         # A companion node bridging its aMussels, not a vehicle (the GCS makes no vehicle of it).
         self._heartbeat = mavlink.MAVLink_heartbeat_message(
             mavlink.MAV_TYPE_ONBOARD_CONTROLLER, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, mavlink.MAV_STATE_ACTIVE, 3)
+        self._latched: dict[tuple[int, int], int] = {}  # (aPad, slot) -> the aMussel its latch closed on
         self.reports = ReportByException(state.n, seconds_to_us(self.config.status_keepalive_s),
                                          seconds_to_us(1.0 / self.config.status_rate_hz))
 
@@ -212,20 +213,41 @@ class FleetRunner:
         self._send(self._heartbeat)
 
     def publish_status_task(self, now_us: int) -> None:
+        rows = self.reports.due(self.state.state, self._speaking(hot.AMUSSEL_STATUS, now_us), now_us)
+        if rows is None or rows.size:  # nobody speaks: no positions to convert
+            self._send_statuses(rows, now_us)
+
+    def _send_statuses(self, rows: NDArray[np.intp] | None, time_us: int) -> None:
+        """AMUSSEL_STATUS of the state's `rows` (None: every aMussel), stamped `time_us`."""
         s = self.state
-        rows = self.reports.due(s.state, self._speaking(hot.AMUSSEL_STATUS, now_us), now_us)
         ids, x, y, depth, u, state = s.ids, s.x_m, s.y_m, s.depth_m, s.battery_frac, s.state
         if rows is not None:  # some are asleep (or under water, acoustic), or foreseen: the others only
-            if not rows.size:
-                return  # nobody speaks: no positions to convert
             ids, x, y, depth, u, state = ids[rows], x[rows], y[rows], depth[rows], u[rows], state[rows]
         lat, lon = self.frame.to_geodetic(x, y)
         self._send_batch(hot.AMUSSEL_STATUS, {
-            "time_us": now_us, "mussel_id": ids, "lat": np.round(lat * DEG_E7).astype(np.int64),
+            "time_us": time_us, "mussel_id": ids, "lat": np.round(lat * DEG_E7).astype(np.int64),
             "lon": np.round(lon * DEG_E7).astype(np.int64), "depth": depth, "battery": u,
             "battery_voltage": np.round(to_millivolts(u)).astype(np.int64), "state": state,
             "simulated": 1,
         })
+
+    def _report_for_charger(self, apad: int, slot: int, mussel_id: int, latch: int, released: int | None) -> None:
+        """The aPad's charger meters what it passed by the reports it hears while its slot holds an
+        aMussel (`apad_sitl.energy`): from the first after the latch closed to the last before it opened.
+        Reported by exception, one may not speak for seconds, so both are made here as a report every
+        step made them: at the next publish after its slot latched, and as the slot lets go, at once,
+        still docked as the last step left it (its charge since the last report would go unpaid)."""
+        key = (apad, slot)
+        if latch == mavlink.DOCK_LATCH_STATE_LATCHED and mussel_id in self._ids:
+            if self._latched.get(key) != mussel_id:
+                self._latched[key] = mussel_id
+                self.reports.again(self.state.index_of([mussel_id])[0])
+        else:
+            self._latched.pop(key, None)
+        if released is not None:
+            idx, known = self.state.index_of([released])
+            if known[0] and self.state.state[idx[0]] == MusselState.DOCKED:
+                self._send_statuses(idx[:1], self.state.time_us)
 
     publish_task = publish_status_task
 
@@ -319,7 +341,9 @@ class FleetRunner:
         if isinstance(msg, mavlink.MAVLink_global_position_int_message):
             self.apad_positions[src] = (msg.lat / DEG_E7, msg.lon / DEG_E7)
         elif isinstance(msg, mavlink.MAVLink_dock_slot_status_message):
-            self.orders.slot_status(src, msg.slot, msg.mussel_id, msg.latch)
+            released = self.orders.slot_status(src, msg.slot, msg.mussel_id, msg.latch)
+            if self.reports.keepalive_us:
+                self._report_for_charger(src, msg.slot, msg.mussel_id, msg.latch, released)
         elif isinstance(msg, mavlink.MAVLink_amussel_command_message):
             self.orders.command(msg.mussel_id, MusselCommand.SURFACE if msg.command == MusselCommand.SURFACE
                                 else MusselCommand.SINK)

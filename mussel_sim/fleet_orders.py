@@ -71,8 +71,10 @@ class PendingOrders:
             self._wake.append(mussel_id)  # in the step with the call-up: held as asleep, then let go at once
         self.command(mussel_id, command)
 
-    def slot_status(self, apad: int, slot: int, mussel_id: int, latch: int) -> None:
-        """An aPad's report of one slot: a change of what it holds queues a dock or a release."""
+    def slot_status(self, apad: int, slot: int, mussel_id: int, latch: int) -> int | None:
+        """An aPad's report of one slot: a change of what it holds queues a dock or a release; returns
+        the aMussel whose release it queued, if any."""
+        released = None
         key = (apad, slot)
         held = mussel_id if latch in HOLDING_LATCHES and mussel_id != 0 else 0
         prev = self._slot_holds.get(key)
@@ -83,6 +85,7 @@ class PendingOrders:
                 del self._dock[prev]
             else:
                 self._release.append(prev)
+                released = prev
         if held and held in self._ids and self._docked_at.get(held) != key:
             old = self._docked_at.get(held)
             if old is not None:  # moved to another slot: the old slot no longer claims it
@@ -90,6 +93,7 @@ class PendingOrders:
             self._docked_at[held] = key
             self._slot_holds[key] = held
             self._dock[held] = key
+        return released
 
     def take(self, apads: dict[int, tuple[float, float]]) -> FleetInputs:
         """Everything queued, as the next step's inputs with the aPads' positions (metres); the queue

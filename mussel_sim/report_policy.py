@@ -47,6 +47,12 @@ class ReportByException:
         self._depleted = False  # some aMussel's last report says DEPLETED (it reports every publish)
         self.held = 0  # reports a publish left out (the GCS foresaw them): the link's saving, counted
 
+    def again(self, rows: NDArray[np.intp]) -> None:
+        """Report these at the next publish, changed or not."""
+        reported = self.reported_state.copy()
+        reported[rows] = NEVER
+        self.reported_state = reported
+
     def due(self, state: NDArray[np.uint8], speaking: NDArray[np.intp] | None,
             now_us: int) -> NDArray[np.intp] | None:
         """The rows to report now among `speaking` (None: every row; so is the answer None for all)."""
