@@ -17,7 +17,7 @@ BAD = [("mussel_id", 0), ("lat", 900_000_001), ("lat", -900_000_001), ("lon", 1_
 
 
 @pytest.mark.parametrize(("field", "value"), BAD)
-@pytest.mark.parametrize("n", [1, 12, 120])
+@pytest.mark.parametrize("n", [1, 5, 8, 9, 12, 120])  # row by row up to 8, reductions above
 def test_one_bad_row_among_good_ones_is_found(field: str, value: float, n: int) -> None:
     wire = {f: np.full(n, v, np.uint64 if f == "time_us" else (float if isinstance(v, float) else np.int64))
             for f, v in GOOD.items()}
