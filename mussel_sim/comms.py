@@ -25,9 +25,10 @@ run in lockstep is deterministic. Refused surface commands are reported as STATU
 
 A sleeping aMussel (ACTIVE on a wake schedule) speaks only when awake: its AMUSSEL_STATUS and
 AMUSSEL_SENSORS go out at the first publish after a wake (`fleet_sleep.publish_rows`). A depleted
-aMussel says so LAST_WORDS times more (its brown-out reports: enough that 40 % loss does not hide it),
+aMussel says so `report_policy.LAST_WORDS` times more (its brown-out reports: enough that 40 % loss does not hide it),
 then its radio is off, as its acoustic modem is (`mussel_sim.modems`): a fleet that depleted costs the
-link and the GCS nothing. Every other aMussel's go out at every publish.
+link and the GCS nothing. Every aMussel that speaks reports by exception (`report_policy`): at once when
+its state changes, else at each keep-alive window's start; the fleet's node sends a HEARTBEAT every second.
 """
 
 from __future__ import annotations
@@ -51,7 +52,7 @@ from mussel_sim.fleet_state import FleetInputs, FleetParams, FleetState, StepEve
 from mussel_sim.geo import LocalFrame
 from mussel_sim.inbox_checks import invalid_field
 from mussel_sim.recorder import Recorder
-from mussel_sim.report_policy import ReportByException
+from mussel_sim.report_policy import ChargerReports, LastWords, ReportByException
 from mussel_sim.sensors import DummySensors, SensorField
 from mussel_sim.startconfig import MAX_MUSSEL_ID
 from mussel_sim.vocabulary import MusselCommand, MusselState
@@ -63,7 +64,6 @@ STATUSTEXT_MAX = 50
 SURFACE_DEPTH_M = 0.01  # this shallow an aMussel is at the surface, in WiFi's reach (floating and docked: 0 m)
 HEARTBEAT_PERIOD_S = 1.0
 MODEL_STEP_S = 1.0  # the model steps at 1 Hz of mission time (the paper's ROS node)
-LAST_WORDS = 10  # publishes of each message a depleted aMussel still makes; 0.4 ** 10: 1e-4 all lost at 40 %
 
 
 # Where a co-located router takes whole batches: (message id, frames, columns by wire field name).
@@ -150,15 +150,13 @@ class FleetRunner:
         self.dropped: Counter[str] = Counter()  # received messages refused, by reason
         self.orders = PendingOrders(self._ids)  # heard since the last step, for the next
         self._published_us: dict[int, int] = {}  # message id -> mission time of its last publish
-        # message id -> (n,) publishes since depleted (None: nobody depleted at the last publish)
-        self._depleted_publishes: dict[int, NDArray[np.int64] | None] = {}
-        self._depleted_of: tuple[NDArray[np.uint8] | None, NDArray[np.bool_] | None] = (None, None)
+        self.last_words = LastWords()
         # A companion node bridging its aMussels, not a vehicle (the GCS makes no vehicle of it).
         self._heartbeat = mavlink.MAVLink_heartbeat_message(
             mavlink.MAV_TYPE_ONBOARD_CONTROLLER, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, mavlink.MAV_STATE_ACTIVE, 3)
-        self._latched: dict[tuple[int, int], int] = {}  # (aPad, slot) -> the aMussel its latch closed on
         self.reports = ReportByException(state.n, seconds_to_us(self.config.status_keepalive_s),
                                          seconds_to_us(1.0 / self.config.status_rate_hz))
+        self.charger = ChargerReports(self.reports)
 
     # --- periodic tasks ----------------------------------------------------------------------------
 
@@ -232,18 +230,10 @@ class FleetRunner:
         })
 
     def _report_for_charger(self, apad: int, slot: int, mussel_id: int, latch: int, released: int | None) -> None:
-        """The aPad's charger meters what it passed by the reports it hears while its slot holds an
-        aMussel (`apad_sitl.energy`): from the first after the latch closed to the last before it opened.
-        Reported by exception, one may not speak for seconds, so both are made here as a report every
-        step made them: at the next publish after its slot latched, and as the slot lets go, at once,
-        still docked as the last step left it (its charge since the last report would go unpaid)."""
-        key = (apad, slot)
-        if latch == mavlink.DOCK_LATCH_STATE_LATCHED and mussel_id in self._ids:
-            if self._latched.get(key) != mussel_id:
-                self._latched[key] = mussel_id
-                self.reports.again(self.state.index_of([mussel_id])[0])
-        else:
-            self._latched.pop(key, None)
+        """What the aPad's charger meters by (`report_policy.ChargerReports`): a report after its slot
+        latched, and one now, still docked as the last step left it, of an aMussel its slot lets go."""
+        idx, known = self.state.index_of([mussel_id])
+        self.charger.slot(apad, slot, mussel_id, latch, int(idx[0]) if known[0] else None)
         if released is not None:
             idx, known = self.state.index_of([released])
             if known[0] and self.state.state[idx[0]] == MusselState.DOCKED:
@@ -277,23 +267,7 @@ class FleetRunner:
         return at_surface if rows is None else np.intersect1d(rows, at_surface)
 
     def _powered(self, msg_id: int, rows: NDArray[np.intp] | None) -> NDArray[np.intp] | None:
-        """`rows` (None: all) but the aMussels depleted for more than LAST_WORDS publishes of `msg_id`."""
-        st = self.state.state
-        if st is not self._depleted_of[0]:  # a state array is read-only: its mask is made once
-            mask = st == MusselState.DEPLETED
-            self._depleted_of = (st, mask if mask.any() else None)
-        depleted = self._depleted_of[1]
-        if depleted is None:  # none depleted: no count runs
-            self._depleted_publishes[msg_id] = None
-            return rows
-        before = self._depleted_publishes.get(msg_id)
-        count = np.where(depleted, (0 if before is None else before) + 1, 0)
-        self._depleted_publishes[msg_id] = count
-        off = count > LAST_WORDS
-        if not off.any():
-            return rows
-        on = np.flatnonzero(~off)
-        return on if rows is None else np.intersect1d(rows, on)
+        return self.last_words.powered(self.state.state, msg_id, rows)
 
     def heard_acoustically(self, mussel_id: int, command: MusselCommand | None) -> None:
         """An aMussel's modem heard the GCS: a `command` for it (a call-up: SURFACE), or, with None,

@@ -12,7 +12,9 @@ mission's time. So, with a keep-alive period, an aMussel reports:
 - with every other speaking aMussel at the first publish of each keep-alive window (mission time a
   whole number of windows since 0, so a resumed mission keeps the phase, and most publishes between
   send nothing at all, which is where the time goes: a publish costs by the call, not by the row);
-- every publish while depleted (its last words, `comms.LAST_WORDS`, are few and must get through).
+- every publish while depleted (its last words, `LAST_WORDS` of them, are few and must get through);
+- for an aPad's charger, at the next publish after its slot latched (`ChargerReports`; the fleet also
+  reports one at once as its slot lets go).
 
 Between reports the GCS runs the battery forward in the model's steps (`gcs.mission.belief`), so it
 plans on what a report every step would have said, to float rounding. Keep-alive 0: every speaking
@@ -24,13 +26,17 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from mavlink_dialect import mavlink
 from mussel_sim.vocabulary import MusselState
+
+LATCHED = mavlink.DOCK_LATCH_STATE_LATCHED
 
 # A scenario's default keep-alive (`[fleet] status_keepalive_s`): five steps of the model. A lost
 # report costs the GCS five seconds of foresight, not knowledge: it runs the model meanwhile.
 STATUS_KEEPALIVE_S = 5.0
 _NO_ROWS = np.zeros(0, np.intp)
 _NO_ROWS.flags.writeable = False
+LAST_WORDS = 10  # publishes of each message a depleted aMussel still makes; 0.4 ** 10: 1e-4 all lost at 40 %
 NEVER = 255  # the state of an aMussel never reported: no state has that code
 
 
@@ -88,3 +94,52 @@ class ReportByException:
         rows = np.flatnonzero(due)
         self.held += (state.size if speaking is None else speaking.size) - rows.size
         return rows
+
+
+class LastWords:
+    """A depleted aMussel's brown-out reports: LAST_WORDS more publishes of each message, then its radio
+    is off (as its acoustic modem is, `mussel_sim.modems`): a fleet that depleted costs the link nothing."""
+
+    def __init__(self) -> None:
+        # message id -> (n,) publishes since depleted (None: nobody depleted at the last publish)
+        self._counts: dict[int, NDArray[np.int64] | None] = {}
+        self._of: tuple[NDArray[np.uint8] | None, NDArray[np.bool_] | None] = (None, None)
+
+    def powered(self, state: NDArray[np.uint8], msg_id: int, rows: NDArray[np.intp] | None) -> NDArray[np.intp] | None:
+        """`rows` (None: all) but the aMussels depleted for more than LAST_WORDS publishes of `msg_id`."""
+        if state is not self._of[0]:  # a state array is read-only: its mask is made once
+            mask = state == MusselState.DEPLETED
+            self._of = (state, mask if mask.any() else None)
+        depleted = self._of[1]
+        if depleted is None:  # none depleted: no count runs
+            self._counts[msg_id] = None
+            return rows
+        before = self._counts.get(msg_id)
+        count = np.where(depleted, (0 if before is None else before) + 1, 0)
+        self._counts[msg_id] = count
+        off = count > LAST_WORDS
+        if not off.any():
+            return rows
+        on = np.flatnonzero(~off)
+        return on if rows is None else np.intersect1d(rows, on)
+
+
+class ChargerReports:
+    """An aPad's charger meters what it passes by the reports it hears while its slot holds an aMussel
+    (`apad_sitl.energy`): from the first after the latch closed to the last before it opened. Reported by
+    exception one may not speak for seconds, so the fleet makes both as a report every step made them:
+    `latched` asks for one at the next publish after a slot latched an aMussel (once per latch), and the
+    fleet reports one at once as its slot lets go (`comms`)."""
+
+    def __init__(self, reports: ReportByException) -> None:
+        self.reports = reports
+        self._latched: dict[tuple[int, int], int] = {}  # (aPad, slot) -> the aMussel its latch closed on
+
+    def slot(self, apad: int, slot: int, mussel_id: int, latch: int, row: int | None) -> None:
+        """An aPad's report of a slot; `row`: the aMussel's in the fleet's state (None: not one of ours)."""
+        key = (apad, slot)
+        if latch != LATCHED or row is None:
+            self._latched.pop(key, None)
+        elif self._latched.get(key) != mussel_id:
+            self._latched[key] = mussel_id
+            self.reports.again(np.array([row], np.intp))

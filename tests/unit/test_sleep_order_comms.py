@@ -11,9 +11,10 @@ import pytest
 from mavlink_dialect import Codec, mavlink
 from missiontime import VirtualClock
 from mussel_sim.behaviour import HOURLY_WAKE_AWAKE_S, HOURLY_WAKE_INTERVAL_S, duty_cycle_rate_per_min
-from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, LAST_WORDS, CommsConfig, FleetRunner
+from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner
 from mussel_sim.fleet_state import FleetParams, state_from_arrays
 from mussel_sim.geo import LocalFrame
+from mussel_sim.report_policy import LAST_WORDS
 from mussel_sim.vocabulary import MusselState
 from mussel_sim.wake import next_wake_s
 
