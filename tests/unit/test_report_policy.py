@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mussel_sim.report_policy import ReportByException
+from apad_sitl.vocabulary import Latch
+from mussel_sim.report_policy import LAST_WORDS, ChargerReports, LastWords, ReportByException
 from mussel_sim.vocabulary import MusselState
 
 S = 1_000_000
@@ -56,3 +57,29 @@ def test_the_window_follows_mission_time_not_the_start_of_the_policy() -> None:
     assert policy.due(s, None, 12 * S).tolist() == [0, 1]  # never reported: everyone
     assert policy.due(s, None, 13 * S).tolist() == [] and policy.due(s, None, 14 * S).tolist() == []
     assert policy.due(s, None, 15 * S) is None
+
+
+def test_a_slot_that_latches_asks_for_one_report_per_latch() -> None:
+    policy = ReportByException(2, 5 * S, S)
+    charger = ChargerReports(policy)
+    s = states(D, A)
+    assert policy.due(s, None, 0) is None
+    charger.slot(apad=1, slot=2, mussel_id=7, latch=int(Latch.CLOSING), row=0)  # closing: not yet
+    assert policy.due(s, None, S).tolist() == []
+    charger.slot(apad=1, slot=2, mussel_id=7, latch=int(Latch.LATCHED), row=0)
+    assert policy.due(s, None, 2 * S).tolist() == [0]  # latched: at the next publish, unchanged or not
+    charger.slot(apad=1, slot=2, mussel_id=7, latch=int(Latch.LATCHED), row=0)  # the slot's periodic status
+    assert policy.due(s, None, 3 * S).tolist() == []
+    charger.slot(apad=1, slot=2, mussel_id=0, latch=int(Latch.OPEN), row=None)
+    charger.slot(apad=1, slot=2, mussel_id=7, latch=int(Latch.LATCHED), row=0)  # latched again: again
+    assert policy.due(s, None, 4 * S).tolist() == [0]
+    charger.slot(apad=1, slot=3, mussel_id=99, latch=int(Latch.LATCHED), row=None)  # not ours: nothing
+    assert policy.due(s, None, 6 * S).tolist() == []
+
+
+def test_last_words_then_silence() -> None:
+    words = LastWords()
+    s = states(X, A)
+    heard = [words.powered(s, 1, None) for _ in range(LAST_WORDS + 2)]
+    assert all(h is None for h in heard[:LAST_WORDS]) and heard[LAST_WORDS].tolist() == [1]
+    assert words.powered(states(A, A), 1, np.array([0, 1])).tolist() == [0, 1]  # none depleted: all speak
