@@ -151,6 +151,8 @@ class FleetRunner:
         self.orders = PendingOrders(self._ids)  # heard since the last step, for the next
         self._published_us: dict[int, int] = {}  # message id -> mission time of its last publish
         self.last_words = LastWords()
+        # A state's arrays, and whether an aMussel of it needs the aPads' positions in a step (docked, held)
+        self._rides_of: tuple[NDArray[np.uint8] | None, NDArray[np.bool_] | None, bool] = (None, None, True)
         # A companion node bridging its aMussels, not a vehicle (the GCS makes no vehicle of it).
         self._heartbeat = mavlink.MAVLink_heartbeat_message(
             mavlink.MAV_TYPE_ONBOARD_CONTROLLER, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, mavlink.MAV_STATE_ACTIVE, 3)
@@ -357,11 +359,16 @@ class FleetRunner:
         one (docked, or docking now), or is called up (a command, or one held for a sleeper's wake). In
         any other step they are not looked at, so the last ones go again, unconverted."""
         s = self.state
-        if self.orders.pending or (s.state == MusselState.DOCKED).any() or s.surface_held.any():
+        if s.state is not self._rides_of[0] or s.surface_held is not self._rides_of[1]:  # read-only: once each
+            rides = bool((s.state == MusselState.DOCKED).any() or s.surface_held.any())
+            self._rides_of = (s.state, s.surface_held, rides)
+        if self.orders.pending or self._rides_of[2]:
             return self.orders.take(self._apads_local())
         return self.orders.take(self._apads_m)
 
     def _report(self, events: StepEvents) -> None:
+        if not (events.surface_refused_out_of_range_ids.size or events.surface_refused_depleted_ids.size):
+            return
         for mussel_id in events.surface_refused_out_of_range_ids:
             self._warn(f"aMussel {mussel_id}: SURFACE refused, no aPad in {self.params.acoustic_range_m:g} m")
         for mussel_id in events.surface_refused_depleted_ids:

@@ -21,6 +21,14 @@ N_SLOTS = 4  # an aPad's docking slots (apad_sitl.vocabulary.N_SLOTS; the fleet 
 MAX_LAT_E7, MAX_LON_E7 = 90 * 10**7, 180 * 10**7
 
 
+# What the fleet acts on (`FleetRunner.handle`; everything else it ignores): a router need give it nothing more.
+HEARD_MESSAGES = frozenset({
+    mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS,
+    mavlink.MAVLINK_MSG_ID_AMUSSEL_COMMAND, mavlink.MAVLINK_MSG_ID_AMUSSEL_SLEEP_ORDER,
+    mavlink.MAVLINK_MSG_ID_AMUSSEL_STATUS,
+})
+
+
 def invalid_field(msg: mavlink.MAVLink_message, src: int, apads: Collection[int] | None,
                   commanders: Collection[int] | None, ids: Collection[int]) -> str | None:
     """The first field of `msg` from system `src` that the fleet may not act on, or None. `apads`: the

@@ -68,14 +68,16 @@ class Port:
     """
 
     def __init__(self, link: _Wiring, handler: Handler | None, forward: frozenset[int] | None = None,
-                 system_id: int | None = None) -> None:
+                 system_id: int | None = None, hears: frozenset[int] | None = None) -> None:
         """`forward`: the message ids of this party that go out to the vehicles (None: all of them);
-        a router sends a listener what it uses, as mavlink-router's filters do. `system_id`: the
-        party's own MAVLink system; a transport frame claiming it is a spoof."""
+        a router sends a listener what it uses, as mavlink-router's filters do, and `hears`: the ids
+        `handler` is given (None: every one). `system_id`: the party's own MAVLink system; a transport
+        frame claiming it is a spoof."""
         self.link = link
         self.handler = handler
         self.forward = forward
         self.system_id = system_id
+        self.hears = hears
 
     def _out(self, data: bytes) -> None:
         if self.forward is None or frame_msg_id(data) in self.forward:
@@ -217,8 +219,8 @@ class Link:
             poller.codec.enable_signing(key, link_id, ticks)
 
     def attach(self, handler: Handler | None, forward: frozenset[int] | None = None,
-               system_id: int | None = None) -> Port:
-        port = Port(self._wiring, handler, forward, system_id)
+               system_id: int | None = None, hears: frozenset[int] | None = None) -> Port:
+        port = Port(self._wiring, handler, forward, system_id, hears)
         self._ports.append(port)
         if system_id is not None:
             self._local_systems.add(system_id)
@@ -306,8 +308,9 @@ class Link:
             if refused is not None:
                 self.dropped[refused] += 1
                 return False
+        msg_id = msg.get_msgId()
         for port in self._ports:
-            if port is not origin and port.handler is not None:
+            if port is not origin and port.handler is not None and (port.hears is None or msg_id in port.hears):
                 port.handler(msg)
         return True
 

@@ -13,6 +13,7 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
 
 from apad_sitl.vocabulary import Latch
 from gcs.acoustic.knowledge import UNDERWATER, age_s, believed_battery
@@ -82,7 +83,8 @@ class FleetKnowledge:
         self.orders = orders if orders is not None else OrdersSent()
         self._default_duty = Duty(discharge_profile(settings.mussel_discharge).rate_per_min)
         self._default_charge = charge_profile(settings.mussel_charge)
-        self._largest_profile_drain: float | None = None
+        self._drains: tuple[tuple[int, int], NDArray[np.float64]] | None = None  # (table size, duty changes)
+        self._duties_changed = 0
         self._log = log
 
     # --- the charging pool ----------------------------------------------------------------------
@@ -116,22 +118,25 @@ class FleetKnowledge:
         return out
 
     def _active_below(self, threshold: float) -> list[int]:
-        """Ids of ACTIVE aMussels whose battery (`battery`) is below `threshold`, lowest first. Run
-        forward from its report, a deployed one's battery only falls: those already below by the report,
-        and those the largest drain since their report could have brought there, are looked at one by one."""
+        """Ids of ACTIVE aMussels whose battery (`battery`) is below `threshold`, lowest first: the
+        simulated ones' run forward from their reports in one go (as `foresight.foreseen_battery` runs
+        one, operation for operation), a real one by its estimate."""
         t = self.api.mussels
+        active = t.state == MusselState.ACTIVE
         steps = np.maximum(self.clock.now_us - t.time_us, 0) // MODEL_STEP_US
-        maybe = (t.state == MusselState.ACTIVE) & (t.battery_frac - steps * self._largest_drain_step() < threshold)
-        return [m for m in np.sort(t.ids[maybe]).tolist() if self.battery(m) < threshold]
+        belief = np.maximum(t.battery_frac - steps * self._drain_rows() * MODEL_STEP_S, 0.0)
+        ids = t.ids[active & t.simulated & (belief < threshold)].tolist()
+        ids += [m for m in t.ids[active & ~t.simulated].tolist() if self.battery(m) < threshold]
+        return sorted(ids)
 
-    def _largest_drain_step(self) -> float:
-        """The most any aMussel's duty drains in one model step (scenario profiles, orders, the default)."""
-        theta = self.settings.mission.theta
-        if self._largest_profile_drain is None:
-            duties = [self._default_duty, *self.settings.duties.values()]
-            self._largest_profile_drain = max(d.drain_per_s(theta) for d in duties)
-        ordered = (d.drain_per_s(theta) for d in self.orders.duties.values())
-        return max([self._largest_profile_drain, *ordered]) * MODEL_STEP_S
+    def _drain_rows(self) -> NDArray[np.float64]:
+        """Each table row's aMussel's drain per mission second (`drain_per_s`), made again only when the
+        table grew or a sleep order changed a duty."""
+        t = self.api.mussels
+        key = (t.ids.size, self._duties_changed)
+        if self._drains is None or self._drains[0] != key:
+            self._drains = key, np.array([self.drain_per_s(m) for m in t.ids.tolist()], float)
+        return self._drains[1]
 
     def cannot_collect(self, mussel_id: int) -> str | None:
         """Why the aPad should not set off for this aMussel now, or None: it has depleted (below
@@ -221,6 +226,7 @@ class FleetKnowledge:
         if heard_now_and_then:
             self.orders.changed[mussel_id] = (self.clock.now_us, self.battery(mussel_id))
         self.orders.duties[mussel_id] = duty
+        self._duties_changed += 1
 
     def drain_per_s(self, mussel_id: int) -> float:
         return self.duty(mussel_id).drain_per_s(self.settings.mission.theta)

@@ -49,6 +49,7 @@ from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, F
 from mussel_sim.day_ledger import day_us
 from mussel_sim.fleet_state import initial_state
 from mussel_sim.geo import LocalFrame
+from mussel_sim.inbox_checks import HEARD_MESSAGES
 from mussel_sim.placement import load_area
 from mussel_sim.recorder import Recorder
 from mussel_sim.startconfig import StartConfig
@@ -223,7 +224,7 @@ def build_world(
     link = Link(clock, tlog_path=folder.gcs_tlog if folder else None, tlog_epoch_us=epoch_us,
                 append=append_logs, apad_ids=apad_ids)
     events = EventLog(folder.events if folder else None, append=append_logs)
-    port = link.attach(None, forward=APAD_HEARS_FROM_FLEET, system_id=FLEET_SYSTEM_ID)
+    port = link.attach(None, forward=APAD_HEARS_FROM_FLEET, system_id=FLEET_SYSTEM_ID, hears=HEARD_MESSAGES)
     state = initial_state(config, frame, params, clock.now_us)
     fleet = FleetRunner(
         state, params, rng, frame,
