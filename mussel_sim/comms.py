@@ -234,8 +234,10 @@ class FleetRunner:
     def _report_for_charger(self, apad: int, slot: int, mussel_id: int, latch: int, released: int | None) -> None:
         """What the aPad's charger meters by (`report_policy.ChargerReports`): a report after its slot
         latched, and one now, still docked as the last step left it, of an aMussel its slot lets go."""
-        idx, known = self.state.index_of([mussel_id])
-        self.charger.slot(apad, slot, mussel_id, latch, int(idx[0]) if known[0] else None)
+        row = None
+        if latch == mavlink.DOCK_LATCH_STATE_LATCHED and mussel_id in self._ids:  # mostly a slot's periodic news
+            row = int(self.state.index_of([mussel_id])[0][0])
+        self.charger.slot(apad, slot, mussel_id, latch, row)
         if released is not None:
             idx, known = self.state.index_of([released])
             if known[0] and self.state.state[idx[0]] == MusselState.DOCKED:

@@ -51,6 +51,7 @@ class ReportByException:
         self.reported_state: NDArray[np.uint8] = np.full(n, NEVER, np.uint8)
         self.spoke: NDArray[np.bool_] | None = np.zeros(n, bool)  # None: every aMussel spoke
         self._depleted = False  # some aMussel's last report says DEPLETED (it reports every publish)
+        self._seen: NDArray[np.uint8] | None = None  # the state array of the last publish
         self.held = 0  # reports a publish left out (the GCS foresaw them): the link's saving, counted
 
     def again(self, rows: NDArray[np.intp]) -> None:
@@ -58,6 +59,7 @@ class ReportByException:
         reported = self.reported_state.copy()
         reported[rows] = NEVER
         self.reported_state = reported
+        self._seen = None  # no short cut at the next publish: these are owed
 
     def due(self, state: NDArray[np.uint8], speaking: NDArray[np.intp] | None,
             now_us: int) -> NDArray[np.intp] | None:
@@ -75,6 +77,8 @@ class ReportByException:
             return _NO_ROWS
         if window:
             due = talking
+        elif state is self._seen and not self._depleted and self.spoke is not None and talking is not None:
+            due = talking & ~self.spoke  # the state last seen (every change of it reported then): who woke
         else:
             due = (state != self.reported_state) | (state == MusselState.DEPLETED)
             if self.spoke is not None:  # one that starts speaking again reports at once
@@ -82,6 +86,7 @@ class ReportByException:
             if talking is not None:
                 due &= talking
         self.spoke = talking
+        self._seen = state
         if due is None:
             self.reported_state = state  # the fleet's state arrays are read-only: kept as they are
             self._depleted = bool((state == MusselState.DEPLETED).any())

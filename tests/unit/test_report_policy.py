@@ -83,3 +83,14 @@ def test_last_words_then_silence() -> None:
     heard = [words.powered(s, 1, None) for _ in range(LAST_WORDS + 2)]
     assert all(h is None for h in heard[:LAST_WORDS]) and heard[LAST_WORDS].tolist() == [1]
     assert words.powered(states(A, A), 1, np.array([0, 1])).tolist() == [0, 1]  # none depleted: all speak
+
+
+def test_sleepers_between_windows_the_woken_report_and_a_latch_is_still_owed() -> None:
+    policy = ReportByException(3, 5 * S, S)
+    s = states(A, A, D)
+    assert policy.due(s, np.array([2]), 0).tolist() == [2]  # 0 and 1 asleep
+    assert policy.due(s, np.array([2]), S).tolist() == []
+    assert policy.due(s, np.array([0, 2]), 2 * S).tolist() == [0]  # 0 woke: at once
+    assert policy.due(s, np.array([0, 2]), 3 * S).tolist() == []
+    ChargerReports(policy).slot(apad=1, slot=1, mussel_id=9, latch=int(Latch.LATCHED), row=2)
+    assert policy.due(s, np.array([0, 2]), 4 * S).tolist() == [2]  # the same state, but owed to the charger
