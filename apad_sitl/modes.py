@@ -51,6 +51,7 @@ class Modes:
         self.failsafe_holds = 0  # times the failsafe stopped what the aPad was doing and held
         self._scheduler: Scheduler | None = None
         self._deadline: Task | None = None
+        self._timeout_of: tuple[object, int] = (None, 0)  # (the parameters, FS_GCS_TIMEOUT in us) last read
         host.on(mavlink.MAVLINK_MSG_ID_HEARTBEAT, self._on_heartbeat)
         host.on(mavlink.MAVLINK_MSG_ID_SET_MODE, self._on_set_mode)
         commands.register(mavlink.MAV_CMD_DO_SET_MODE, self._cmd_set_mode, stateful=True)
@@ -133,7 +134,10 @@ class Modes:
             self._scheduler.reschedule(self._deadline, next_us=host.now_us + self._timeout_us())
 
     def _timeout_us(self) -> int:
-        return round(self._apad.params.fs_gcs_timeout_s * US_PER_S)
+        params = self._apad.params
+        if params is not self._timeout_of[0]:  # a parameter set swaps the whole ApadParams: once per set
+            self._timeout_of = (params, round(params.fs_gcs_timeout_s * US_PER_S))
+        return self._timeout_of[1]
 
     def _on_deadline(self, now_us: int) -> None:
         host = self._host
