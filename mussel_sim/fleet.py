@@ -332,8 +332,9 @@ _last_apad_rows: list[tuple[NDArray[np.int64], NDArray[np.intp]]] = []
 def _apad_rows(apad_ids: NDArray[np.int64]) -> NDArray[np.intp]:
     """aPad system id -> its row in the inputs' aPad arrays (-1: none), made again only for another
     array (a quiet step's inputs are the last ones again, `FleetInputs.make`)."""
-    if _last_apad_rows and _last_apad_rows[0][0] is apad_ids:
-        return _last_apad_rows[0][1]
+    last = _last_apad_rows[0] if _last_apad_rows else None  # read once: fleets of a threaded sweep share it
+    if last is not None and last[0] is apad_ids:
+        return last[1]
     row = np.full(256, -1, np.intp)
     row[apad_ids] = np.arange(apad_ids.size)
     _last_apad_rows[:] = [(apad_ids, row)]  # the array is kept: its id cannot be another's meanwhile

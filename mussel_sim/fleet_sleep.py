@@ -36,8 +36,9 @@ def sleeping_fleet(table: ProfileTable, profile: NDArray[np.uint16]) -> bool:
     """Whether any aMussel may be on a wake schedule: False for the always-on fleet (everyone on the
     first profile, which has none), decided without a gather, and once per profile array (a state's is
     read-only, and the steps pass it on until a sleep order makes another)."""
-    if _last_answer and _last_answer[0][0] is table and _last_answer[0][1] is profile:
-        return _last_answer[0][2]
+    last = _last_answer[0] if _last_answer else None  # read once: fleets of a threaded sweep share it
+    if last is not None and last[0] is table and last[1] is profile:
+        return last[2]
     answer = bool(table.scheduled[0] or profile.any())
     if not profile.flags.writeable:
         _last_answer[:] = [(table, profile, answer)]  # both kept: their ids cannot be another's meanwhile
