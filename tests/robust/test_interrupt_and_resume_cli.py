@@ -86,7 +86,10 @@ def test_ctrl_c_of_several_runs_to_the_process_group_then_the_printed_command_fi
     """Ctrl-C in a terminal reaches every process of the job (the parallel runs' workers too): one
     line; the printed command keeps the run that had finished, resumes the one that kept a
     checkpoint and runs the others."""
-    args = ["run", "--duration", "10min", "--out", "out", "--jobs", "1"]  # Table II: four runs, one at a time
+    # Table II: four runs, one at a time. Missions long enough (a second or so each) that the run caught with a
+    # checkpoint is still running when the signal lands, on a loaded machine too (10-minute ones took a
+    # quarter of a second once the fleet reported by exception, and the Ctrl-C could land on the next run).
+    args = ["run", "--duration", "40min", "--out", "out", "--jobs", "1"]
     proc = subprocess.Popen([*VIL, *args], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env={**os.environ, "PYTHONPATH": str(ROOT)}, start_new_session=True)
     out = tmp_path / "out"
