@@ -32,7 +32,8 @@ def _vil(cwd: Path, *args: str) -> subprocess.CompletedProcess[str]:
 
 
 def test_ctrl_c_of_vil_run_is_one_line_with_the_command_that_resumes_it(tmp_path: Path) -> None:
-    args = ["run", "pool12", "--strategy", "greedy", "--duration", "10min", "--out", "out"]
+    # 40 minutes: a run lasts a second or so, so the signal lands in it on a loaded machine too.
+    args = ["run", "pool12", "--strategy", "greedy", "--duration", "40min", "--out", "out"]
     folder = RunFolder(tmp_path / "out" / "pool12-greedy-seed1-run1")
     proc = subprocess.Popen([*VIL, *args], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env={**os.environ, "PYTHONPATH": str(ROOT)})

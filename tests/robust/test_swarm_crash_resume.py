@@ -57,7 +57,7 @@ def _run_killed_after(args: list[str], folder: RunFolder, after_s: float, resume
 # Each: the scenario, and the mission times of the checkpoints after which the five kills fall (bay120's
 # aPad 3 falls silent between two of them: the share is taken over, and the resumes replay that too).
 CASES = {
-    "pool12x2": (["pool12x2", "--duration", "12min"], (100, 200, 300, 400, 500)),
+    "pool12x2": (["pool12x2", "--duration", "20min"], (100, 200, 300, 400, 500)),  # time to spare after the last kill
     "bay120-fail-apad": (["bay120", "--duration", "8min", "--fail-apad", "3:130s"], (40, 100, 160, 220, 280)),
 }
 CI_KILLS = (1, 3)  # `make test` kills at two of the five points (bay120's on both sides of the aPad's silence)
