@@ -1,10 +1,11 @@
 """What the GCS believes of an aMussel it hears only now and then, and how far that belief is from the truth.
 
 `believed_battery` is the estimate the planner plans with in an acoustic scenario: the battery last
-heard, run down by the aMussel's drain (eq. 1, its duty) over the time since; at the surface (WiFi,
-every second) the report stands as it is. `KnowledgeLedger` samples belief against the simulator's
-truth during a run, for the records: each aMussel's estimate error, and the age of what was known
-(median from a histogram of fixed bins, maximum exact), in bounded memory whatever the duration.
+heard, run down by the aMussel's drain (eq. 1, its duty) over the time since; at the surface (WiFi)
+the planner runs it forward in the model's steps instead (`gcs.mission.foresight`).
+`KnowledgeLedger` samples belief against the simulator's truth during a run, for the records: each
+aMussel's estimate error, and the age of what was known (median from a histogram of fixed bins,
+maximum exact), in bounded memory whatever the duration.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The aMussel table: the latest status heard from every aMussel, simulated or real, as columns.
 
-A fleet of hundreds reports every second, so the table is numpy columns `(n,)` in the order ids
+A fleet of hundreds reports every few seconds, so the table is numpy columns `(n,)` in the order ids
 were first heard, updated one report at a time (a real node) or a whole batch at once (the
 simulated fleet in the same process). Reads by id build a `MusselView` on demand;
 questions over the whole fleet (`select`) are vectorised.

@@ -181,8 +181,9 @@ class FleetKnowledge:
 
     def heard_alive(self, mussel_id: int) -> bool:
         """Whether the aMussel may still be alive as far as the GCS can know: always, where every aMussel
-        reports every second; in an acoustic scenario, heard within MAX_REPORT_AGE_S and not believed
-        empty (a depleted aMussel under water falls silent: its estimate and its silence tell)."""
+        reports over WiFi (at least every keep-alive window); in an acoustic scenario, heard within
+        MAX_REPORT_AGE_S and not believed empty (a depleted aMussel under water falls silent: its
+        estimate and its silence tell)."""
         view = self.api.mussels[mussel_id]
         if self.acoustic is None or not view.simulated:  # a real one's report carries its own clock: `RealFleet`
             return True

@@ -7,7 +7,8 @@ eq. 2 charging while it is on one of our slots, which we know from the aPad what
 last said), the position at the last fix (the random drift has zero mean; an active aMussel sits on
 the seabed). Every estimate carries its age, and nothing shows it as
 more than that. One silent for longer than MAX_REPORT_AGE_S is not planned for: the aPad would go
-to a unit that may be dead. Simulated aMussels report every second and need none of this.
+to a unit that may be dead. Simulated aMussels report at least every keep-alive window (5 s) and are run forward in the
+model's steps between (`gcs.mission.foresight`).
 """
 
 from __future__ import annotations

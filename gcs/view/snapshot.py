@@ -54,7 +54,8 @@ class ApadSnapshot:
     ended: str | None
 
 
-# Knowledge older than this is stale (its row marked): a surfaced aMussel reports every second, an
+# Knowledge older than this is stale (its row marked): a surfaced aMussel reports every keep-alive window
+# (5 s; at once when its state changes: `mussel_sim.report_policy`), an
 # acoustic one in its TDMA slot once a frame (17 s in pool12-acoustic, 34 s in bay24-acoustic), so an
 # age past a minute means reports were lost or it has fallen silent.
 STALE_S = 60.0
