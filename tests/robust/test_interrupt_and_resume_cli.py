@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 import pytest
+from testkit import sigint_as_in_a_terminal
 
 from gcs.records.checkpoint import CheckpointError, load
 from gcs.records.run_folder import RunFolder
@@ -35,8 +36,9 @@ def test_ctrl_c_of_vil_run_is_one_line_with_the_command_that_resumes_it(tmp_path
     # 40 minutes: a run lasts a second or so, so the signal lands in it on a loaded machine too.
     args = ["run", "pool12", "--strategy", "greedy", "--duration", "40min", "--out", "out"]
     folder = RunFolder(tmp_path / "out" / "pool12-greedy-seed1-run1")
-    proc = subprocess.Popen([*VIL, *args], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env={**os.environ, "PYTHONPATH": str(ROOT)})
+    with sigint_as_in_a_terminal():  # a suite started in the background would have its children ignore it
+        proc = subprocess.Popen([*VIL, *args], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                text=True, env={**os.environ, "PYTHONPATH": str(ROOT)})
     try:
         deadline = time.monotonic() + WALL_TIMEOUT_S
         while True:  # well into the mission: a checkpoint to keep
@@ -91,8 +93,9 @@ def test_ctrl_c_of_several_runs_to_the_process_group_then_the_printed_command_fi
     # checkpoint is still running when the signal lands, on a loaded machine too (10-minute ones took a
     # quarter of a second once the fleet reported by exception, and the Ctrl-C could land on the next run).
     args = ["run", "--duration", "40min", "--out", "out", "--jobs", "1"]
-    proc = subprocess.Popen([*VIL, *args], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env={**os.environ, "PYTHONPATH": str(ROOT)}, start_new_session=True)
+    with sigint_as_in_a_terminal():
+        proc = subprocess.Popen([*VIL, *args], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                text=True, env={**os.environ, "PYTHONPATH": str(ROOT)}, start_new_session=True)
     out = tmp_path / "out"
     try:
         deadline = time.monotonic() + WALL_TIMEOUT_S
