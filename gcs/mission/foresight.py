@@ -44,7 +44,8 @@ def foreseen_battery(view: MusselView, now_us: int, drain_per_s: float, charge: 
                      released_us: int | None = None) -> float:
     """The battery a report made now would carry: `view` run forward in whole model steps, drained at
     `drain_per_s` (never below 0); one DOCKED charged by `charge`, up to `released_us` if a slot has let
-    go of it since (the fleet charges it through the step the release reached it in, and drains it after).
+    go of it since (the fleet takes a release at its next step, which drains: every step up to the
+    release's instant charged it, every one after drains it).
     """
     steps = steps_since(view.time_us, now_us)
     if steps == 0 or view.state == MusselState.DEPLETED:
