@@ -22,10 +22,12 @@ from typing import Any
 from apad_sitl import messages as msgs
 from apad_sitl import primitives as prim
 from apad_sitl.host import ACCEPT, DENY, Command, CommandRegistry, PartHost, Reply, invalid, whole
+from apad_sitl.params import ApadParams
 from apad_sitl.state import ApadState
 from apad_sitl.vocabulary import Primitive, Progress, RoverMode
 from mavlink_dialect import mavlink
 from missiontime import US_PER_S, Scheduler, Task
+from mussel_sim.memo import LastMade
 
 UINT8_MAX = 0xFF
 UINT32_MAX = 0xFFFF_FFFF
@@ -51,7 +53,7 @@ class Modes:
         self.failsafe_holds = 0  # times the failsafe stopped what the aPad was doing and held
         self._scheduler: Scheduler | None = None
         self._deadline: Task | None = None
-        self._timeout_of: tuple[object, int] = (None, 0)  # (the parameters, FS_GCS_TIMEOUT in us) last read
+        self._timeout = LastMade(_timeout_us)  # read once per parameter set (PARAM_SET swaps them whole)
         host.on(mavlink.MAVLINK_MSG_ID_HEARTBEAT, self._on_heartbeat)
         host.on(mavlink.MAVLINK_MSG_ID_SET_MODE, self._on_set_mode)
         commands.register(mavlink.MAV_CMD_DO_SET_MODE, self._cmd_set_mode, stateful=True)
@@ -134,10 +136,7 @@ class Modes:
             self._scheduler.reschedule(self._deadline, next_us=host.now_us + self._timeout_us())
 
     def _timeout_us(self) -> int:
-        params = self._apad.params
-        if params is not self._timeout_of[0]:  # a parameter set swaps the whole ApadParams: once per set
-            self._timeout_of = (params, round(params.fs_gcs_timeout_s * US_PER_S))
-        return self._timeout_of[1]
+        return self._timeout(self._apad.params)
 
     def _on_deadline(self, now_us: int) -> None:
         host = self._host
@@ -168,3 +167,8 @@ class Modes:
             silent_us = host.now_us - (self.last_gcs_heartbeat_us or 0)
             host.event("failsafe", reason="gcs heartbeat lost", silent_s=round(silent_us / US_PER_S, 6))
             self.enter_hold()
+
+
+def _timeout_us(params: ApadParams) -> int:
+    """FS_GCS_TIMEOUT in mission microseconds."""
+    return round(params.fs_gcs_timeout_s * US_PER_S)

@@ -44,6 +44,7 @@ from numpy.typing import NDArray
 from mavlink_dialect import Codec, hot, mavlink
 from mavlink_dialect.transport import Transport
 from missiontime import US_PER_S, Scheduler, Task, seconds_to_us
+from mussel_sim.apad_fixes import ApadFixes
 from mussel_sim.battery import to_millivolts
 from mussel_sim.fleet import apply_latches, step
 from mussel_sim.fleet_orders import PendingOrders
@@ -143,16 +144,12 @@ class FleetRunner:
         self._step_task: Task | None = None
         self.last_events: StepEvents | None = None
         self._ids = {int(i) for i in state.ids}
-        self.apad_positions: dict[int, tuple[float, float]] = {}  # system id -> (lat_deg, lon_deg)
-        self._apads_key: tuple[tuple[int, tuple[float, float]], ...] = ()
-        self._apads_m: dict[int, tuple[float, float]] = {}
+        self.apads = ApadFixes(frame)  # the aPads' positions as heard, and as a step uses them
         self.real_mussel_ids: set[int] = set()
         self.dropped: Counter[str] = Counter()  # received messages refused, by reason
         self.orders = PendingOrders(self._ids)  # heard since the last step, for the next
         self._published_us: dict[int, int] = {}  # message id -> mission time of its last publish
         self.last_words = LastWords()
-        # A state's arrays, and whether an aMussel of it needs the aPads' positions in a step (docked, held)
-        self._rides_of: tuple[NDArray[np.uint8] | None, NDArray[np.bool_] | None, bool] = (None, None, True)
         # A companion node bridging its aMussels, not a vehicle (the GCS makes no vehicle of it).
         self._heartbeat = mavlink.MAVLink_heartbeat_message(
             mavlink.MAV_TYPE_ONBOARD_CONTROLLER, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, mavlink.MAV_STATE_ACTIVE, 3)
@@ -214,7 +211,7 @@ class FleetRunner:
 
     def publish_status_task(self, now_us: int) -> None:
         rows = self.reports.due(self.state.state, self._speaking(hot.AMUSSEL_STATUS, now_us), now_us)
-        if rows is None or rows.size:  # nobody speaks: no positions to convert
+        if rows is None or rows.size:  # none due: nothing sent, no positions converted
             self._send_statuses(rows, now_us)
 
     def _send_statuses(self, rows: NDArray[np.intp] | None, time_us: int) -> None:
@@ -317,7 +314,7 @@ class FleetRunner:
             self.dropped[f"invalid:{msg.get_type()}:{bad}"] += 1
             return
         if isinstance(msg, mavlink.MAVLink_global_position_int_message):
-            self.apad_positions[src] = (msg.lat / DEG_E7, msg.lon / DEG_E7)
+            self.apads.deg[src] = (msg.lat / DEG_E7, msg.lon / DEG_E7)
         elif isinstance(msg, mavlink.MAVLink_dock_slot_status_message):
             released = self.orders.slot_status(src, msg.slot, msg.mussel_id, msg.latch)
             if self.reports.keepalive_us:
@@ -343,30 +340,8 @@ class FleetRunner:
 
     # --- internals --------------------------------------------------------------------------------------
 
-    def _apads_local(self) -> dict[int, tuple[float, float]]:
-        """The aPads' last positions in the fleet's metres (converted again only when they moved)."""
-        key = tuple(sorted(self.apad_positions.items()))
-        if key != self._apads_key:
-            apads = {}
-            if key:
-                lat = np.array([p[0] for _, p in key])
-                lon = np.array([p[1] for _, p in key])
-                x, y = self.frame.to_local(lat, lon)
-                apads = {a: (float(x[k]), float(y[k])) for k, (a, _) in enumerate(key)}
-            self._apads_key, self._apads_m = key, apads
-        return dict(self._apads_m)
-
     def _take_inputs(self) -> FleetInputs:
-        """The queued inputs, with the aPads' positions as the step uses them: where an aMussel rides on
-        one (docked, or docking now), or is called up (a command, or one held for a sleeper's wake). In
-        any other step they are not looked at, so the last ones go again, unconverted."""
-        s = self.state
-        if s.state is not self._rides_of[0] or s.surface_held is not self._rides_of[1]:  # read-only: once each
-            rides = bool((s.state == MusselState.DOCKED).any() or s.surface_held.any())
-            self._rides_of = (s.state, s.surface_held, rides)
-        if self.orders.pending or self._rides_of[2]:
-            return self.orders.take(self._apads_local())
-        return self.orders.take(self._apads_m)
+        return self.orders.take(self.apads.for_step(self.state, self.orders.pending))
 
     def _report(self, events: StepEvents) -> None:
         if not (events.surface_refused_out_of_range_ids.size or events.surface_refused_depleted_ids.size):

@@ -57,6 +57,7 @@ from mussel_sim.fleet_state import (
     StepEvents,
 )
 from mussel_sim.geo import planar_distance_m
+from mussel_sim.memo import LastMade
 
 
 @dataclass
@@ -326,19 +327,15 @@ _IN_TRANSIT[[SURFACING, SINKING]] = True
 _IN_TRANSIT.flags.writeable = False
 
 
-_last_apad_rows: list[tuple[NDArray[np.int64], NDArray[np.intp]]] = []
-
-
-def _apad_rows(apad_ids: NDArray[np.int64]) -> NDArray[np.intp]:
-    """aPad system id -> its row in the inputs' aPad arrays (-1: none), made again only for another
-    array (a quiet step's inputs are the last ones again, `FleetInputs.make`)."""
-    last = _last_apad_rows[0] if _last_apad_rows else None  # read once: fleets of a threaded sweep share it
-    if last is not None and last[0] is apad_ids:
-        return last[1]
+def _make_apad_rows(apad_ids: NDArray[np.int64]) -> NDArray[np.intp]:
+    """aPad system id -> its row in the inputs' aPad arrays (-1: none)."""
     row = np.full(256, -1, np.intp)
     row[apad_ids] = np.arange(apad_ids.size)
-    _last_apad_rows[:] = [(apad_ids, row)]  # the array is kept: its id cannot be another's meanwhile
     return row
+
+
+# Made again only for another array: a quiet step's inputs are the last ones again (`FleetInputs.make`).
+_apad_rows = LastMade(_make_apad_rows)
 
 
 @cache

@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from mussel_sim.behaviour import BEHAVIOURS, MAX_TABLE, ProfileTable
 from mussel_sim.fleet_state import ACTIVE, FleetInputs, FleetState
+from mussel_sim.memo import LastMade
 from mussel_sim.wake import next_wake_sim_s, phase, sim_s
 
 # A wake this close after the step's end (relative) is looked at in the step: never missed to rounding.
@@ -36,16 +37,14 @@ def sleeping_fleet(table: ProfileTable, profile: NDArray[np.uint16]) -> bool:
     """Whether any aMussel may be on a wake schedule: False for the always-on fleet (everyone on the
     first profile, which has none), decided without a gather, and once per profile array (a state's is
     read-only, and the steps pass it on until a sleep order makes another)."""
-    last = _last_answer[0] if _last_answer else None  # read once: fleets of a threaded sweep share it
-    if last is not None and last[0] is table and last[1] is profile:
-        return last[2]
-    answer = bool(table.scheduled[0] or profile.any())
-    if not profile.flags.writeable:
-        _last_answer[:] = [(table, profile, answer)]  # both kept: their ids cannot be another's meanwhile
-    return answer
+    return (_any_scheduled if profile.flags.writeable else _any_scheduled_once)(table, profile)
 
 
-_last_answer: list[tuple[ProfileTable, NDArray[np.uint16], bool]] = []
+def _any_scheduled(table: ProfileTable, profile: NDArray[np.uint16]) -> bool:
+    return bool(table.scheduled[0] or profile.any())
+
+
+_any_scheduled_once = LastMade(_any_scheduled)
 
 
 def apply_orders(

@@ -45,6 +45,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from mussel_sim.day_ledger import DayLedger
 from mussel_sim.fleet_state import ACTIVE, DEPLETED, N_STATES, SINKING, FleetState
+from mussel_sim.memo import LastMade
 from mussel_sim.state_time import StateTimes
 
 DEFAULT_MAX_TRACE_BYTES = 64 * 2**20
@@ -118,7 +119,7 @@ class Recorder:
         self.times = StateTimes.zeros(self.ids.size)
         self.start_us = int(start_us)  # mission time of the state before the first step
         self._last_us = int(start_us)
-        self._alive_of: tuple[NDArray[np.uint8] | None, int] = (None, 0)  # a state array and its count not depleted
+        self._alive = LastMade(_alive)  # a state array is read-only: counted once
         self._trace_ids_arg = None if trace_ids is None else np.asarray(trace_ids, np.int64)
         self._max_trace_bytes = int(max_trace_bytes)
         self._max_trace_rows = int(max_trace_rows)
@@ -164,9 +165,7 @@ class Recorder:
         self._time_us[k] = state.time_us
         self.n_steps = k + 1
         if self.days is not None:
-            if state.state is not self._alive_of[0]:  # a state array is read-only: counted once
-                self._alive_of = (state.state, int(np.count_nonzero(state.state != DEPLETED)))
-            self.days.add(state.time_us, n_active, self._alive_of[1], newly_depleted)
+            self.days.add(state.time_us, n_active, self._alive(state.state), newly_depleted)
         if self.trace_stride > 0 and k % self.trace_stride == 0:
             if len(self._trace_rows) >= self._max_rows:
                 self._decimate()
@@ -302,3 +301,8 @@ class Recorder:
             min_uptime_pct=float(up.min()) if up.size else 0.0,
             avg_active=float(counts.mean()) if counts.size else 0.0,
         )
+
+
+def _alive(state: NDArray[np.uint8]) -> int:
+    """How many aMussels are not depleted."""
+    return int(np.count_nonzero(state != DEPLETED))

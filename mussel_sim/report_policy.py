@@ -16,7 +16,7 @@ mission's time. So, with a keep-alive period, an aMussel reports:
 - for an aPad's charger, at the next publish after its slot latched (`ChargerReports`; the fleet also
   reports one at once as its slot lets go).
 
-Between reports the GCS runs the battery forward in the model's steps (`gcs.mission.belief`), so it
+Between reports the GCS runs the battery forward in the model's steps (`gcs.mission.foresight`), so it
 plans on what a report every step would have said, to float rounding. Keep-alive 0: every speaking
 aMussel at every publish, as before. Pure bookkeeping: the caller passes the state and the time.
 """
@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mavlink_dialect import mavlink
+from mussel_sim.memo import LastMade
 from mussel_sim.vocabulary import MusselState
 
 LATCHED = mavlink.DOCK_LATCH_STATE_LATCHED
@@ -71,14 +72,16 @@ class ReportByException:
             talking = np.zeros(state.size, bool)
             talking[speaking] = True
         window = now_us % self.keepalive_us < self.publish_period_us  # a window starts: everyone speaking
-        if not window and speaking is None and self.spoke is None and state is self.reported_state \
-                and not self._depleted:  # the very state last reported (the model changed nothing): none
-            self.held += state.size
-            return _NO_ROWS
         if window:
             due = talking
-        elif state is self._seen and not self._depleted and self.spoke is not None and talking is not None:
-            due = talking & ~self.spoke  # the state last seen (every change of it reported then): who woke
+        elif state is self._seen and not self._depleted:
+            # The state of the last publish, whose changes it reported (none owed since, `again`): only
+            # who starts speaking now. Mostly nobody: the publish sends nothing.
+            due = None if self.spoke is None else ~self.spoke if talking is None else talking & ~self.spoke
+            if due is None or not due.any():
+                self.spoke = talking
+                self.held += state.size if speaking is None else speaking.size
+                return _NO_ROWS
         else:
             due = (state != self.reported_state) | (state == MusselState.DEPLETED)
             if self.spoke is not None:  # one that starts speaking again reports at once
@@ -108,14 +111,11 @@ class LastWords:
     def __init__(self) -> None:
         # message id -> (n,) publishes since depleted (None: nobody depleted at the last publish)
         self._counts: dict[int, NDArray[np.int64] | None] = {}
-        self._of: tuple[NDArray[np.uint8] | None, NDArray[np.bool_] | None] = (None, None)
+        self._depleted = LastMade(_depleted_mask)  # a state array is read-only: its mask is made once
 
     def powered(self, state: NDArray[np.uint8], msg_id: int, rows: NDArray[np.intp] | None) -> NDArray[np.intp] | None:
         """`rows` (None: all) but the aMussels depleted for more than LAST_WORDS publishes of `msg_id`."""
-        if state is not self._of[0]:  # a state array is read-only: its mask is made once
-            mask = state == MusselState.DEPLETED
-            self._of = (state, mask if mask.any() else None)
-        depleted = self._of[1]
+        depleted = self._depleted(state)
         if depleted is None:  # none depleted: no count runs
             self._counts[msg_id] = None
             return rows
@@ -129,11 +129,17 @@ class LastWords:
         return on if rows is None else np.intersect1d(rows, on)
 
 
+def _depleted_mask(state: NDArray[np.uint8]) -> NDArray[np.bool_] | None:
+    """Which aMussels are depleted; None: none."""
+    mask = state == MusselState.DEPLETED
+    return mask if mask.any() else None
+
+
 class ChargerReports:
     """An aPad's charger meters what it passes by the reports it hears while its slot holds an aMussel
     (`apad_sitl.energy`): from the first after the latch closed to the last before it opened. Reported by
     exception one may not speak for seconds, so the fleet makes both as a report every step made them:
-    `latched` asks for one at the next publish after a slot latched an aMussel (once per latch), and the
+    `slot` asks for one at the next publish after a slot latched an aMussel (once per latch), and the
     fleet reports one at once as its slot lets go (`comms`)."""
 
     def __init__(self, reports: ReportByException) -> None:

@@ -287,7 +287,7 @@ class Link:
         if origin is None and src in self._local_systems:  # only a local party speaks as itself
             self.dropped[f"spoofed_source:{msg.get_type()}"] += 1
             return False
-        record = read(msg)
+        record, msg_id = read(msg), msg.get_msgId()
         if isinstance(record, Rejected):
             self.dropped[record.reason] += 1
             return False
@@ -295,7 +295,7 @@ class Link:
             if record.target_system in (0, self.codec.system_id):  # not an answer to another GCS
                 self.commands.on_ack(src, record)
         elif record is None:
-            if origin is not None and src == origin.system_id and msg.get_msgId() == mavlink.MAVLINK_MSG_ID_HEARTBEAT:
+            if origin is not None and src == origin.system_id and msg_id == mavlink.MAVLINK_MSG_ID_HEARTBEAT:
                 self.registry.fleet_heard_us = self.clock.now_us  # the fleet's node (its aMussels report by exception)
         else:
             if origin is None and isinstance(record, MusselView) and record.simulated and len(self._local_systems) > 1:
@@ -308,7 +308,6 @@ class Link:
             if refused is not None:
                 self.dropped[refused] += 1
                 return False
-        msg_id = msg.get_msgId()
         for port in self._ports:
             if port is not origin and port.handler is not None and (port.hears is None or msg_id in port.hears):
                 port.handler(msg)

@@ -263,8 +263,8 @@ class FuzzWorld:
         if not (np.all(np.isfinite(t.depth_m)) and np.all(t.state < 6)):
             out.append("an aMussel depth or state out of range in the GCS's table")
         fleet = w.fleet
-        if set(fleet.apad_positions) - expected:
-            out.append(f"the fleet believes in aPads {sorted(fleet.apad_positions)}")
+        if set(fleet.apads.deg) - expected:
+            out.append(f"the fleet believes in aPads {sorted(fleet.apads.deg)}")
         for mussel_id, (apad, slot) in fleet.orders.docked_at.items():
             if apad not in expected or not 1 <= slot <= 4:
                 out.append(f"the fleet docked aMussel {mussel_id} on aPad {apad} slot {slot}")

@@ -151,7 +151,7 @@ def test_the_fleet_alone_takes_hostile_frames_without_raising_or_believing_them(
         assert not [k for k in fleet.dropped if "handler_error" in k]
         assert {"invalid:DOCK_SLOT_STATUS:slot", "invalid:GLOBAL_POSITION_INT:lat_lon",
                 "invalid:AMUSSEL_COMMAND:command"} <= set(fleet.dropped)
-        assert all(abs(lat) <= 90 and abs(lon) <= 180 for lat, lon in fleet.apad_positions.values())
+        assert all(abs(lat) <= 90 and abs(lon) <= 180 for lat, lon in fleet.apads.deg.values())
         assert all(1 <= slot <= 4 for _, slot in fleet.orders.docked_at.values())
     finally:
         fuzz.close()
