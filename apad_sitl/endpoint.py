@@ -44,7 +44,6 @@ from apad_sitl.energy import EnergyMeter
 from apad_sitl.energy_counters import EnergyCounters
 from apad_sitl.geofence import Geofence
 from apad_sitl.host import MessageHandler, invalid_reason, unsupported_reason
-from apad_sitl.hull_step import step_hull
 from apad_sitl.logs import VehicleLog
 from apad_sitl.mission_protocol import MissionProtocol
 from apad_sitl.modem_serial import ModemSerial
@@ -52,6 +51,7 @@ from apad_sitl.modes import Modes, mode_name
 from apad_sitl.navigation import Navigation
 from apad_sitl.param_server import ParamServer
 from apad_sitl.params import ApadParams, with_param
+from apad_sitl.parking import PhysicsTicks
 from apad_sitl.primitives import PrimitiveState
 from apad_sitl.state import ApadState
 from apad_sitl.status_intake import take_statuses
@@ -59,12 +59,13 @@ from apad_sitl.streams import DEFAULT_RATES_HZ, Streams
 from apad_sitl.vehicle import VehicleState
 from mavlink_dialect import Codec, Transport, mavlink, signing
 from mavlink_dialect.transport import Bell, ring_on
-from missiontime import US_PER_S, Scheduler, Task
+from missiontime import Scheduler
 from mussel_sim.geo import LocalFrame
 
 __all__ = ["DEFAULT_RATES_HZ", "PHYSICS_HZ", "Geofence", "MusselFixTable", "SitlVehicle"]
 
 PHYSICS_HZ = 10.0
+
 
 class SitlVehicle:
     """A simulated aPad speaking MAVLink on `transport`. Call `attach(scheduler)` to run it."""
@@ -86,13 +87,15 @@ class SitlVehicle:
         geofence_deg: Sequence[tuple[float, float]] | None = None,
         log_append: bool = False,
         modem: tuple[BytePort, Callable[[], None] | None] | None = None,
+        park_at_rest: bool = True,
     ) -> None:
         """`rates_hz` overrides DEFAULT_RATES_HZ per message id; `log_epoch_us` offsets .tlog stamps and
         is the Unix time of t = 0 for signing timestamps. With `signing_key` every frame we send is
         signed and so must be everything received, the swarm's AMUSSEL_STATUS too. `geofence_deg`
         is the water area as a (lat, lon) ring: Go To targets outside it and undocking outside it are refused.
         `modem`: the aPad's own nanomodem, its serial port and what puts it where the aPad is before
-        each write (`modem_serial.py`); None: the aPad has none.
+        each write (`modem_serial.py`); None: the aPad has none. `park_at_rest` False ticks the physics
+        at its rate throughout (`apad_sitl.parking`: the same result, at a cost).
         """
         self.transport = transport
         self.system_id = system_id
@@ -104,8 +107,9 @@ class SitlVehicle:
         self.frame = LocalFrame(home_lat_deg, home_lon_deg)
         self.geofence = Geofence.of(geofence_deg, self.frame) if geofence_deg else None
         self.home_lat_deg, self.home_lon_deg = home_lat_deg, home_lon_deg
-        self.current_mps = current_mps  # (east, north) m/s; scenarios may change it at run time
+        self._current_mps = current_mps  # (east, north) m/s; scenarios may change it at run time
         self.physics_hz = physics_hz
+        self.park_at_rest = park_at_rest
 
         # The aPad's state (what a checkpoint saves); the parts change it.
         self.apad = ApadState(with_param(params, "SYSID_THISMAV", system_id))
@@ -113,9 +117,8 @@ class SitlVehicle:
         self.closed = False
         self.dropped: Counter[str] = Counter()  # received messages dropped, by reason
 
-        self._last_physics_us: int | None = None
         self._scheduler: Scheduler | None = None
-        self._physics_task: Task | None = None
+        self.physics: PhysicsTicks | None = None  # the physics task, parked while the hull rests
         self._handlers: dict[int, MessageHandler] = {}
         self.log: VehicleLog | None = None
 
@@ -171,7 +174,7 @@ class SitlVehicle:
         self.now_us = max(self.now_us, start_us)
         self.event("start", **self._start_fields)
         name = f"apad{self.system_id}"
-        self._physics_task = scheduler.every(1.0 / self.physics_hz, self._physics, f"{name}.physics", start_us)
+        self.physics = PhysicsTicks(self, scheduler, self.physics_hz, f"{name}.physics", start_us, self.park_at_rest)
         self.streams.attach(scheduler, start_us, name)
         if self.modem is not None:
             self.modem.attach(scheduler, start_us, name)
@@ -183,8 +186,8 @@ class SitlVehicle:
         if self.closed:
             return
         self.closed = True
-        if self._physics_task is not None:
-            self._physics_task.active = False
+        if self.physics is not None:
+            self.physics.stop()
         self.streams.stop()
         if self.modem is not None:
             self.modem.close()
@@ -210,6 +213,7 @@ class SitlVehicle:
 
     @params.setter
     def params(self, value: ApadParams) -> None:
+        self.apad.settle()  # the ticks until now ran with the old set
         self.apad.params = value
 
     @property
@@ -221,12 +225,23 @@ class SitlVehicle:
         self.apad.state = value
 
     @property
+    def current_mps(self) -> tuple[float, float]:
+        """The water current (east, north) m/s the hull drifts in."""
+        return self._current_mps
+
+    @current_mps.setter
+    def current_mps(self, value: tuple[float, float]) -> None:
+        self.apad.settle()  # the ticks until now drifted in the old current
+        self._current_mps = value
+
+    @property
     def primitive(self) -> PrimitiveState:
         """The running primitive and the slots; `set_primitive` changes it."""
         return self.apad.primitive
 
     def set_primitive(self, new: PrimitiveState) -> None:
         """Swap in a new primitive state; logged and announced (on-change telemetry) by the listeners."""
+        self.apad.settle()
         self.apad.set_primitive(new)
 
     @property
@@ -236,6 +251,7 @@ class SitlVehicle:
     @mode.setter
     def mode(self, value: int) -> None:
         """Silently, as a checkpoint's restore does; the parts change it with `ApadState.set_mode`."""
+        self.apad.settle()
         self.apad.mode = value
 
     @property
@@ -245,6 +261,7 @@ class SitlVehicle:
     @armed.setter
     def armed(self, value: bool) -> None:
         """Silently, as a checkpoint's restore does; the parts change it with `ApadState.set_armed`."""
+        self.apad.settle()
         self.apad.armed = value
 
     @property
@@ -259,10 +276,12 @@ class SitlVehicle:
     @property
     def energy_counters(self) -> EnergyCounters:
         """Energy passed to aMussels and taken at home (a checkpoint restores it in place)."""
+        self.apad.settle()  # the home charger's top-ups of the ticks a parked physics task skipped
         return self.apad.energy
 
     @energy_counters.setter
     def energy_counters(self, value: EnergyCounters) -> None:
+        self.apad.settle()
         self.apad.energy = value
 
     @property
@@ -273,10 +292,12 @@ class SitlVehicle:
 
     def gcs_link_lost(self) -> bool:
         """True if a GCS was heard and has been silent for FS_GCS_TIMEOUT."""
+        self.apad.settle()  # the time of the last tick, which a parked physics task skipped
         return self.modes.gcs_link_lost()
 
     @property
     def failsafe_active(self) -> bool:
+        self.apad.settle()  # a tick's failsafe check ends it
         return self.modes.failsafe_active
 
     @property
@@ -307,6 +328,9 @@ class SitlVehicle:
         datagrams = self.transport.receive()
         if not datagrams:
             return False
+        physics = self.physics
+        if physics is not None:
+            physics.settle()  # the ticks until now taken (and their time, which the handlers stamp)
         # The batch path takes unsigned frames: with signing on, everything goes through the codec's check.
         bulk = self.transport.datagrams and not self.codec.signing
         for data in self._bulk_statuses(datagrams) if bulk else datagrams:
@@ -325,6 +349,8 @@ class SitlVehicle:
                     handler(msg)
                 except Exception as exc:  # a bug in a handler drops its message, never the vehicle
                     self._handler_error(msg.get_type(), exc)
+        if physics is not None:
+            physics.settle()  # ticking again if what arrived ended the rest (a command, a parameter)
         return bool(datagrams)
 
     def _bulk_statuses(self, datagrams: list[bytes]) -> list[bytes]:
@@ -349,21 +375,6 @@ class SitlVehicle:
     def count_unsupported(self, message: str) -> None:
         """Count a received `message` that asks for something the aPad does not do."""
         self.dropped[unsupported_reason(message)] += 1
-
-    # ------------------------------------------------------------------ physics
-
-    def _physics(self, now_us: int) -> None:
-        self.now_us = now_us
-        last, self._last_physics_us = self._last_physics_us, now_us
-        if last is None:
-            return
-        dt_s = (now_us - last) / US_PER_S
-        if self.log is not None and now_us // US_PER_S != last // US_PER_S:
-            self.log.flush()  # once a second of mission time: a killed process loses little
-        apad = self.apad
-        if apad.params.fs_gcs_enable:
-            self.modes.check_failsafe()
-        step_hull(apad, self.energy, self.mussels, self.current_mps, dt_s)
 
     # ------------------------------------------------------------------ what the parts share
 

@@ -17,15 +17,12 @@ from apad_sitl.state import ApadState
 def step_hull(apad: ApadState, energy: EnergyMeter, mussels: MusselFixTable,
               current_mps: tuple[float, float], dt_s: float) -> None:
     """Advance the hull `dt_s`: in closed form while its rest holds, else stepped (and maybe at rest)."""
-    p, primitive, rest = apad.params, apad.primitive, apad.rest
-    key = (primitive, p, apad.armed, current_mps)
-    if rest is not None:
-        if rest.key == key and rest.dt_s == dt_s:
-            rest.steps += 1  # nothing that moves the hull changed: one more step in closed form
-            if rest.refill_wh is not None:
-                energy.refilled(rest.refill_wh)  # held full at home: what the charger put back this step
+    p, primitive = apad.params, apad.primitive
+    key = rest_key(apad, current_mps)
+    if apad.rest is not None:
+        if rest_steps(apad, energy, key, dt_s, 1):
             return
-        apad.state = apad.state  # something did: the rest's state, stepped again from here
+        apad.state = apad.state  # something that moves the hull changed: the rest's state, stepped from here
     before = apad.state
     setpoint = prim.velocity_setpoint(primitive, before, p) if apad.armed else (0.0, 0.0)
     apad.state = state = veh.step(before, setpoint, p, current_mps, dt_s)
@@ -41,3 +38,21 @@ def step_hull(apad: ApadState, energy: EnergyMeter, mussels: MusselFixTable,
             apad.rest = rest_mod.Rest(state, p, dt_s, key)
     elif apad.state.battery_v == before.battery_v:  # the charger put back exactly what the step drained
         apad.rest = rest_mod.Rest(apad.state, p, dt_s, key, refill_wh=home_wh)
+
+
+def rest_key(apad: ApadState, current_mps: tuple[float, float]) -> tuple[object, ...]:
+    """What a rest holds for: a change of any of these ends it."""
+    return (apad.primitive, apad.params, apad.armed, current_mps)
+
+
+def rest_steps(apad: ApadState, energy: EnergyMeter, key: tuple[object, ...], dt_s: float, n: int) -> bool:
+    """`n` more steps of `dt_s` of the hull's rest in closed form, if it still holds for `key` (`rest_key`);
+    False, and nothing taken, if it does not."""
+    rest = apad.rest
+    if rest is None or rest.key != key or rest.dt_s != dt_s:
+        return False
+    rest.steps += n
+    if rest.refill_wh is not None:  # held full at home: what the charger put back, step by step as stepping adds it
+        for _ in range(n):
+            energy.refilled(rest.refill_wh)
+    return True

@@ -34,6 +34,8 @@ class ApadState:
         self._state = VehicleState()  # the hull: position, velocity, heading, battery
         # Not None: the hull rests at a fixed point and `state` is advanced in closed form (apad_sitl.rest).
         self.rest: Rest | None = None
+        # Set while the physics task is parked at rest (`apad_sitl.parking`): takes the steps it skipped.
+        self.pending: Callable[[], None] | None = None
         self.mode: int = RoverMode.HOLD
         self.armed = True  # boots armed so a mission script needs no arming step
         self.speed_override_mps = 0.0  # DO_CHANGE_SPEED for later Go Tos; 0: SPEED_MAX
@@ -45,15 +47,25 @@ class ApadState:
 
     @property
     def state(self) -> VehicleState:
-        """The hull now; while it rests, the rest's closed form after the steps counted so far."""
+        """The hull now; while it rests, the rest's closed form after the steps counted so far (the
+        steps a parked physics task skipped taken first)."""
+        if self.pending is not None:
+            self.pending()
         rest = self.rest
         return self._state if rest is None else rest.state()
 
     @state.setter
     def state(self, value: VehicleState) -> None:
         """A new hull state (a physics step, a battery draw, a restore) ends any rest."""
+        if self.pending is not None:
+            self.pending()  # the steps skipped so far were taken from the old state
         self.rest = None
         self._state = value
+
+    def settle(self) -> None:
+        """Take the steps a parked physics task skipped (the energy counters are read after this)."""
+        if self.pending is not None:
+            self.pending()
 
     @property
     def primitive(self) -> PrimitiveState:

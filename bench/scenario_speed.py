@@ -38,7 +38,7 @@ PARTS: dict[str, tuple[tuple[str, str], ...]] = {
                       ("mavlink_dialect.hot_decode", "decode_datagrams")),
     "fleet step": (("mussel_sim.fleet", "step"),),
     "planner": (("gcs.mission.strategies", "plan"),),
-    "SITL physics": (("apad_sitl.endpoint", "SitlVehicle._physics"),),
+    "SITL physics": (("apad_sitl.parking", "PhysicsTicks.tick"), ("apad_sitl.parking", "PhysicsTicks.settle")),
 }
 
 

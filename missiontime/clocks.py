@@ -16,7 +16,9 @@ import select
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Protocol, TypeVar
+
+T = TypeVar("T")
 
 US_PER_S = 1_000_000
 # A lockstep instant that keeps producing messages forever is a bug (two parties echoing).
@@ -102,6 +104,12 @@ class Scheduler:
     _rung: dict[int, bool] = field(default_factory=dict, repr=False)  # id(poller) -> rings the bell
     _all_rung: bool = field(default=True, repr=False)
     _quiet_at: int = -1  # the bell's count when every inbox was last seen empty; -1: not known
+    # Where the run is (the clocks and `run_due` set it): the instant, and the order of the task whose
+    # callback runs (None while messages are delivered). A part that skips ticks of its own while
+    # nothing needs them (a resting aPad's physics, `apad_sitl.parking`) tells from it which of them
+    # would have run by now.
+    now_us: int = 0
+    running: int | None = None
 
     def every(self, period_s: float, callback: Callable[[int], None], name: str, start_us: int = 0) -> Task:
         period_us = seconds_to_us(period_s)
@@ -158,6 +166,7 @@ class Scheduler:
     def run_due(self, now_us: int) -> None:
         """Run every task due at or before `now_us`, earliest first; deliver messages after each."""
         queue = self._queue
+        self.now_us, self.running = now_us, None
         while True:
             task = self._head()
             if task is None or task.next_us > now_us:
@@ -167,8 +176,10 @@ class Scheduler:
             while task is not None and task.next_us == instant:
                 task.next_us += task.period_us  # the head's entry replaced by its next: one sift, not two
                 heapq.heapreplace(queue, (task.next_us, task.order, task.generation, task))
+                self.running = task.order
                 task.callback(now_us)
                 task = self._head()
+            self.running = None
             self.drain()
 
     def drain(self) -> None:
@@ -209,6 +220,20 @@ class Clock(Protocol):
 
     def sleep(self, dt_s: float) -> None: ...
 
+    def sleep_until(self, look: Callable[[], T | None], period_s: float) -> T:
+        """Sleep `period_s` at a time until `look()`, called after each sleep, answers (not None);
+        return the answer. What `look` raises is raised here."""
+        ...
+
+
+def sleep_until(clock: Clock, look: Callable[[], T | None], period_s: float) -> T:
+    """`Clock.sleep_until` as a loop of the clock's own sleeps (a clock that runs one script)."""
+    while True:
+        clock.sleep(period_s)
+        answer = look()
+        if answer is not None:
+            return answer
+
 
 class VirtualClock:
     """Lockstep time: `sleep(dt)` runs the world to `t + dt` at CPU speed. Deterministic."""
@@ -227,8 +252,12 @@ class VirtualClock:
     def sleep(self, dt_s: float) -> None:
         self.advance_to(self._now_us + seconds_to_us(max(dt_s, 0.0)))
 
+    def sleep_until(self, look: Callable[[], T | None], period_s: float) -> T:
+        return sleep_until(self, look, period_s)
+
     def advance_to(self, target_us: int) -> None:
         sched = self.scheduler
+        sched.now_us = self._now_us
         sched.drain()
         while True:
             due = sched.next_due_us()
@@ -237,7 +266,7 @@ class VirtualClock:
             # Tasks already overdue (added with an old start) run now; time never goes back.
             self._now_us = max(self._now_us, due)
             sched.run_due(self._now_us)
-        self._now_us = max(self._now_us, target_us)
+        self._now_us = sched.now_us = max(self._now_us, target_us)
         sched.drain()
 
 
@@ -274,6 +303,7 @@ class WallClock:
         sched = self.scheduler
         deadline_us = self.now_us + seconds_to_us(max(dt_s, 0.0))
         while True:
+            sched.now_us = self.now_us
             sched.drain()
             now = self.now_us
             for task in sched.tasks:
@@ -293,6 +323,9 @@ class WallClock:
                 select.select(fds, [], [], timeout_s)
             else:
                 self._wait(timeout_s)
+
+    def sleep_until(self, look: Callable[[], T | None], period_s: float) -> T:
+        return sleep_until(self, look, period_s)
 
 
 class PacedClock(VirtualClock):

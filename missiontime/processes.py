@@ -78,6 +78,11 @@ class ProcessClock:
     def sleep(self, dt_s: float) -> None:
         self._coordinator.park(self._process, self.now_us + seconds_to_us(max(dt_s, 0.0)))
 
+    def sleep_until(self, look: Callable[[], T | None], period_s: float) -> T:
+        """Looked at by whichever thread holds the baton when the script's time comes: a look that
+        does not answer sleeps the script again without waking its thread (no hand-over)."""
+        return self._coordinator.park_until(self._process, look, seconds_to_us(max(period_s, 0.0)))
+
 
 def _held_lock() -> threading.Lock:
     lock = threading.Lock()
@@ -137,6 +142,12 @@ class _Process:
     turn: threading.Lock = field(default_factory=_held_lock)  # released: this process holds the baton
     thread: threading.Thread | None = None  # started by `run`
     stop: bool = False
+    # While it sleeps until an answer (`ProcessClock.sleep_until`): its look, the period between looks,
+    # and what the look answered or raised, for the script to take when it wakes.
+    look: Callable[[], object] | None = None
+    period_us: int = 0
+    answer: object = None
+    raised: BaseException | None = None
 
 
 @dataclass
@@ -199,6 +210,21 @@ class Processes:
         if process.stop:
             raise ProcessStopped(process.name)
 
+    def park_until(self, process: _Process, look: Callable[[], T | None], period_us: int) -> T:
+        """Called from the running script: sleep `period_us` at a time until `look()` answers; the look
+        runs in the thread holding the baton at each wake time, in the order the script's own sleeps
+        would have woken it, and only an answer (or an exception, re-raised here) wakes its thread."""
+        process.look, process.period_us = look, period_us
+        try:
+            self.park(process, self.clock.now_us + period_us)
+        finally:
+            process.look = None
+        answer, raised = process.answer, process.raised
+        process.answer = process.raised = None
+        if raised is not None:
+            raise raised
+        return answer  # type: ignore[return-value]  # a look's answer, never None here
+
     def _push(self, process: _Process, wake_us: int) -> None:
         heapq.heappush(self._queue, (wake_us, self._sequence, process))
         self._sequence += 1
@@ -220,9 +246,23 @@ class Processes:
                     self.clock.sleep(us_to_s(max(wake_us - self.clock.now_us, 0)))
                 except BaseException as exc:  # the world failed: stop every script, then raise it in `run`
                     self._fail(exc)
+            if process.look is not None and self._error is None and not self._looked(process):
+                self._push(process, self.clock.now_us + process.period_us)  # as its own sleep would have
+                continue
             process.stop = self._error is not None
             return process
         return None
+
+    @staticmethod
+    def _looked(process: _Process) -> bool:
+        """Run a sleeping script's look; True if it answered or raised (the script wakes to take it)."""
+        assert process.look is not None
+        try:
+            process.answer = process.look()
+        except BaseException as exc:  # the script's own to raise, in its own thread
+            process.raised = exc
+            return True
+        return process.answer is not None
 
     def _hand_to(self, following: _Process | None) -> None:
         """Give the baton to `following` (to `run` for None); the caller then waits for its own."""

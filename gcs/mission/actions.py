@@ -10,6 +10,7 @@ follows the operator's `LoopControl`; the loop's phases (`gcs.mission.phases`) a
 from __future__ import annotations
 
 from collections.abc import Callable
+from enum import Enum, auto
 from functools import partial
 
 from apad_sitl.vocabulary import Latch, Progress
@@ -29,6 +30,14 @@ GOTO_SLOWNESS = 3.0
 # The aPad unheard this long: the loop starts nothing new (no call-up, no trip) until it is heard.
 LINK_LOST_S = 3.0
 GOTO_HEARD_S = 5.0  # the aPad reports its primitive every second; five lost in a row is rare even at 40 % loss
+
+
+class _Looked(Enum):
+    """What a wait's look after a sleep found (`ApadActions.wait_until`)."""
+
+    DONE = auto()
+    TIMED_OUT = auto()
+    YOURS = auto()  # paused, or the console's hook set: the script's own thread takes the wait on
 
 
 class ApadActions:
@@ -230,10 +239,30 @@ class ApadActions:
         holding = holding_for_s > PACE_WORTH_S or self.status.phase in HOLDING_PHASES
         if holding and self.link_up() and not done():
             self.pace.hold()  # it holds in place until `done`: slow telemetry meanwhile
+        poll_s = self.settings.poll_s
+
+        def look() -> _Looked | None:  # after each sleep, what `sleep` and the loop's head would do
+            if (self.control.paused and not self.control.stop) or self.control.before_wait is not None:
+                return _Looked.YOURS
+            if done():
+                return _Looked.DONE
+            if deadline is not None and self.clock.time() >= deadline:
+                return _Looked.TIMED_OUT
+            if interruptible:
+                self.check_end()
+            return None
+
         while not done():
             if deadline is not None and self.clock.time() >= deadline:
                 return False
-            self.sleep(self.settings.poll_s, interruptible)
+            if interruptible:
+                self.check_end()
+            if self.control.before_wait is not None:  # the console's hook sees every sleep
+                self._wait(poll_s)
+            elif (looked := self.clock.sleep_until(look, poll_s)) is not _Looked.YOURS:
+                return looked is _Looked.DONE
+            while self.control.paused and not self.control.stop:
+                self._wait(poll_s)
         return True
 
     def _moving(self) -> None:

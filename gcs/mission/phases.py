@@ -42,8 +42,13 @@ def idle_wait(crew: Crew) -> None:
             return False
         if knows.orphans() and knows.free_slots() and act.link_up():
             return True  # left floating by a lost aPad: fetch them now
-        need = min(knows.pool_needed(mission.min_pool), len(knows.free_slots()))
-        return need > 0 and len(knows.candidates()) >= need and act.link_up()
+        free = len(knows.free_slots())
+        if not free:
+            return False
+        # The pool first: it is empty at most looks, and the share's count (`pool_needed`, at least 1) is
+        # the dearer of the two.
+        found = len(knows.candidates())
+        return found > 0 and found >= min(knows.pool_needed(mission.min_pool), free) and act.link_up()
 
     act.wait_until(pool_full)
 

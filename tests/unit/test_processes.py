@@ -430,3 +430,100 @@ def test_a_script_runs_with_every_cpu_the_caller_had() -> None:
         procs.spawn(name, script)
     procs.run()
     assert seen == [cpus] * 10 and os.sched_getaffinity(0) == cpus
+
+
+
+def test_sleep_until_looks_when_and_in_the_order_its_sleeps_would_and_hands_over_only_for_an_answer() -> None:
+    """Two scripts wait, looking every 0.5 s and 0.3 s, for the world's counter to pass a mark: with
+    `sleep_until` the looks come at the same times in the same order as a loop of sleeps and looks."""
+    def once(use_sleep_until: bool) -> tuple[list[tuple[str, float]], list[object], int, set[str]]:
+        clock = VirtualClock()
+        counter = [0]
+        clock.scheduler.every(0.1, lambda now_us: counter.__setitem__(0, counter[0] + 1), "world")
+        looks: list[tuple[str, float, str]] = []
+
+        def waiter(name: str, period_s: float, mark: int) -> Callable[[Clock], float]:
+            def body(c: Clock) -> float:
+                def look() -> float | None:
+                    looks.append((name, c.time(), threading.current_thread().name))
+                    return c.time() if counter[0] >= mark else None
+
+                if use_sleep_until:
+                    return c.sleep_until(look, period_s)
+                while True:
+                    c.sleep(period_s)
+                    if (answer := look()) is not None:
+                        return answer
+
+            return body
+
+        procs = Processes(clock)
+        handles = [procs.spawn("a", waiter("a", 0.5, 25)), procs.spawn("b", waiter("b", 0.3, 40))]
+        procs.run()
+        return ([(n, t) for n, t, _ in looks], [h.result for h in handles], procs.hand_overs,
+                {thread for _, _, thread in looks})
+
+    plain, plain_results, plain_hand_overs, _ = once(False)
+    looked, results, hand_overs, threads = once(True)
+    assert looked == plain and results == plain_results == [2.5, 3.9]
+    assert len(looked) == 5 + 13
+    # run -> a -> b (both start and wait) -> a answers (its thread wakes, ends) -> b answers -> run.
+    assert hand_overs == 5 < plain_hand_overs
+    assert threads == {"process-a", "process-b"}  # a look runs in whichever script's thread holds the baton
+
+def test_what_a_look_raises_is_raised_in_its_own_scripts_thread() -> None:
+    clock = VirtualClock()
+    caught: list[tuple[str, str]] = []
+
+    def look() -> None:
+        if clock.time() >= 1.0:
+            raise LookupError("gone")
+
+    def waiter(c: Clock) -> None:
+        try:
+            c.sleep_until(look, 0.25)
+        except LookupError as exc:
+            caught.append((str(exc), threading.current_thread().name))
+
+    def other(c: Clock) -> None:
+        c.sleep(5.0)
+
+    procs = Processes(clock)
+    procs.spawn("waiter", waiter)
+    procs.spawn("other", other)
+    procs.run()
+    assert caught == [("gone", "process-waiter")]
+
+
+def test_a_script_waiting_on_a_look_is_stopped_when_another_fails_and_unwinds() -> None:
+    clock = VirtualClock()
+    unwound: list[str] = []
+
+    def waiter(c: Clock) -> None:
+        try:
+            c.sleep_until(lambda: None, 0.5)  # never answers
+        finally:
+            unwound.append("waiter")
+
+    def failing(c: Clock) -> None:
+        c.sleep(2.0)
+        raise RuntimeError("broke")
+
+    procs = Processes(clock)
+    procs.spawn("waiter", waiter)
+    procs.spawn("failing", failing)
+    with pytest.raises(RuntimeError, match="broke"):
+        procs.run()
+    assert unwound == ["waiter"] and clock.time() == 2.0
+
+
+def test_sleep_until_on_a_plain_clock_is_a_loop_of_its_sleeps() -> None:
+    clock = VirtualClock()
+    seen: list[float] = []
+
+    def look() -> str | None:
+        seen.append(clock.time())
+        return "late enough" if clock.time() >= 1.0 else None
+
+    assert clock.sleep_until(look, 0.3) == "late enough"
+    assert seen == pytest.approx([0.3, 0.6, 0.9, 1.2]) and clock.time() == pytest.approx(1.2)

@@ -1,0 +1,148 @@
+"""The aPad's physics task: a tick every 1/physics_hz of mission time, or none while the hull rests.
+
+A holding aPad's hull rests at a fixed point (`apad_sitl.rest`): each tick only counts one more
+step of the rest and checks the GCS failsafe, which cannot act on a hull that is not busy. In a
+long mission the aPads hold most of the time, and those ticks, ten a second each, were the world's
+largest share of a quiet second. So while the hull rests and its primitive is not busy, the task is
+parked: taken off the scheduler, its ticks skipped. They are taken when they matter, as stepping
+would have left them:
+
+- before the hull is read (`ApadState.state` calls `settle`: a stream, a checkpoint, the outcome)
+  and before it is written (the state's setter settles first);
+- before a message is handled (`wake`: settle, then the task back on the scheduler at its next
+  tick, on the grid it never left), since only a message can change what the rest holds for;
+- at `stop` (the vehicle closes: the ticks up to then ran, as they would have).
+
+Which ticks would have run by now is the scheduler's to say (`Scheduler.now_us` and `running`):
+every tick before this instant, and this instant's too unless the task now running comes before
+the physics task in the instant's order. The skipped ticks are taken in closed form
+(`hull_step.rest_steps`: the rest's step count, the home charger's top-ups added one by one); the
+failsafe is checked at the first and the last of them (only its `failsafe_active` reset can act,
+and whether the link is lost only changes once between two messages). Should the rest not hold
+for them after all (its key changed without a message: a test setting a parameter), they are
+stepped one by one. The result is the one ticking gives, to the bit.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+from apad_sitl.docking import MusselFixTable
+from apad_sitl.energy import EnergyMeter
+from apad_sitl.hull_step import rest_key, rest_steps, step_hull
+from apad_sitl.logs import VehicleLog
+from apad_sitl.modes import Modes
+from apad_sitl.state import ApadState
+from apad_sitl.vocabulary import Primitive, Progress
+from missiontime import US_PER_S, Scheduler, Task
+
+
+class TickHost(Protocol):
+    """What a tick works with: the vehicle core's parts (`apad_sitl.endpoint.SitlVehicle`)."""
+
+    apad: ApadState
+    energy: EnergyMeter
+    mussels: MusselFixTable
+    modes: Modes
+    current_mps: tuple[float, float]
+    now_us: int
+    log: VehicleLog | None
+
+
+class PhysicsTicks:
+    """The physics task of one vehicle on `scheduler`, parked while its hull rests."""
+
+    def __init__(self, host: TickHost, scheduler: Scheduler, rate_hz: float, name: str, start_us: int,
+                 park: bool = True) -> None:
+        """`park` False: a tick at every period, at rest too (what parking must equal)."""
+        self._host = host
+        self._park = park
+        self._scheduler = scheduler
+        self.task: Task = scheduler.every(1.0 / rate_hz, self.tick, name, start_us)
+        self.last_us: int | None = None  # the last tick taken (run, or skipped and settled)
+        self.parked = False
+        self.parks = 0  # times the task was taken off the scheduler (figures for bench/ and tests:
+        self.ticks = 0  # and the ticks it ran)
+
+    def tick(self, now_us: int) -> None:
+        self.ticks += 1
+        host = self._host
+        host.now_us = now_us
+        last, self.last_us = self.last_us, now_us
+        if last is None:
+            return
+        self._step(last, now_us)
+        apad = host.apad
+        rest = apad.rest
+        if self._park and rest is not None and rest.steps and not _busy(apad):  # a rest held for a whole tick
+            self._scheduler.reschedule(self.task, active=False)
+            self.parked = True
+            self.parks += 1
+            apad.pending = self.settle
+
+    def _step(self, last_us: int, now_us: int) -> None:
+        host = self._host
+        if host.log is not None and now_us // US_PER_S != last_us // US_PER_S:
+            host.log.flush()  # once a second of mission time: a killed process loses little
+        apad = host.apad
+        if apad.params.fs_gcs_enable:
+            host.modes.check_failsafe()
+        step_hull(apad, host.energy, host.mussels, host.current_mps, (now_us - last_us) / US_PER_S)
+
+    def settle(self) -> None:
+        """Take the ticks skipped so far (see the module's docstring); parked still if the rest holds."""
+        if not self.parked:
+            return
+        host, sched, task = self._host, self._scheduler, self.task
+        apad = host.apad
+        apad.pending = None  # reading the hull below must not settle again
+        last = self.last_us
+        assert last is not None  # parked after a tick that stepped
+        running = sched.running
+        upto = sched.now_us if running is None or running > task.order else sched.now_us - 1
+        period = task.period_us
+        n = (upto - last) // period
+        if n > 0:
+            now_before, first, end = host.now_us, last + period, last + n * period
+            if rest_steps(apad, host.energy, rest_key(apad, host.current_mps), period / US_PER_S, n):
+                if apad.params.fs_gcs_enable:
+                    for t in (first, end) if n > 1 else (first,):
+                        host.now_us = t
+                        host.modes.check_failsafe()
+                if host.log is not None and last // US_PER_S != end // US_PER_S:
+                    host.log.flush()
+            else:
+                for t in range(first, end + 1, period):
+                    host.now_us = t
+                    self._step(t - period, t)
+            host.now_us = max(now_before, end)
+            self.last_us = end
+        if self._rest_holds():
+            apad.pending = self.settle
+        else:  # what was handled or set since the last tick ended the rest: ticking again from the next
+            self._rearm()
+
+    def _rest_holds(self) -> bool:
+        host = self._host
+        apad, rest = host.apad, host.apad.rest
+        return (rest is not None and rest.key == rest_key(apad, host.current_mps)
+                and rest.dt_s == self.task.period_us / US_PER_S and not _busy(apad))
+
+    def stop(self) -> None:
+        """The vehicle closes: the ticks up to now taken, no more."""
+        self.settle()
+        self._host.apad.pending = None
+        self.parked = False
+        self.task.active = False
+
+    def _rearm(self) -> None:
+        assert self.last_us is not None
+        self.parked = False
+        self._host.apad.pending = None
+        self._scheduler.reschedule(self.task, next_us=self.last_us + self.task.period_us, active=True)
+
+
+def _busy(apad: ApadState) -> bool:
+    """A primitive under way: the failsafe may act on it at any tick (`Modes.check_failsafe`)."""
+    p = apad.primitive
+    return p.kind != Primitive.HOLD and p.progress == Progress.IN_PROGRESS

@@ -1,0 +1,100 @@
+"""A resting aPad's physics task parked off the scheduler (apad_sitl.parking) against ticking it.
+
+Two SITL aPads run the same script over real MAVLink bytes, one parking its physics at rest and one
+ticking at 10 Hz throughout: a GCS heartbeat that stops and comes back, Go Tos, a parameter set, a
+failsafe taken on a Go To sent while the link is lost, hours held full at the home charger. Every
+byte each sends, every read of its hull by tasks before and after it in an instant's order, its
+final state and energy counters are the same; the parked one ran a small part of the ticks.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from apad_sitl.endpoint import SitlVehicle
+from apad_sitl.params import ApadParams
+from apad_sitl.vehicle import VehicleState
+from mavlink_dialect import Codec, mavlink, memory_pair
+from missiontime import US_PER_S, Scheduler, VirtualClock
+from mussel_sim.geo import LocalFrame
+
+HOME = (43.94, 15.44)
+FRAME = LocalFrame(*HOME)
+END_S = 4_000.0
+
+
+def _go_to(gcs: Codec, x_m: float, y_m: float) -> bytes:
+    lat, lon = FRAME.to_geodetic(x_m, y_m)
+    return gcs.encode(mavlink.MAVLink_command_int_message(
+        1, 1, mavlink.MAV_FRAME_GLOBAL_INT, mavlink.MAV_CMD_DO_REPOSITION, 0, 0, -1.0,
+        mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE, 0.0, math.nan, round(float(lat) * 1e7), round(float(lon) * 1e7),
+        0.0))
+
+
+@dataclass
+class Run:
+    """What one aPad did: the bytes it sent, the hull as tasks read it, and how it ended."""
+
+    sent: list[bytes] = field(default_factory=list)
+    reads: list[tuple[str, int, bool, bool, float, float, float]] = field(default_factory=list)
+    end: tuple[object, ...] = ()
+    ticks: int = 0
+    parks: int = 0
+
+
+def _run(park: bool) -> Run:
+    apad_end, gcs_end = memory_pair()
+    clock = VirtualClock(Scheduler())
+    vehicle = SitlVehicle(apad_end, ApadParams(fs_gcs_enable=1, fs_gcs_timeout_s=5.0), *HOME, park_at_rest=park)
+    vehicle.state = VehicleState(x_m=10.0, y_m=10.0)
+    gcs = Codec(250, 190)
+    run = Run()
+
+    def script(now_us: int) -> None:  # the GCS, before the aPad in each instant's order
+        t = now_us / US_PER_S
+        if (t < 120 or t >= 200) and t == int(t):
+            gcs_end.send(gcs.encode(mavlink.MAVLink_heartbeat_message(
+                mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0, 3)))
+        if t == 60:
+            gcs_end.send(_go_to(gcs, 10.0, 30.0))
+        if t == 90:
+            gcs_end.send(gcs.encode(mavlink.MAVLink_param_set_message(
+                1, 1, b"FS_GCS_TIMEOUT", 4.0, mavlink.MAV_PARAM_TYPE_REAL32)))
+        if t == 130:  # the link is lost: the aPad sets off, and the failsafe holds it
+            gcs_end.send(_go_to(gcs, 10.0, 10.0))
+        if t == 250:
+            gcs_end.send(_go_to(gcs, 0.0, 0.0))  # to the home charger, to be held full there for hours
+        run.sent.extend(gcs_end.receive())
+
+    def reader(name: str) -> object:
+        def read(now_us: int) -> None:
+            failsafe, lost, s = vehicle.failsafe_active, vehicle.gcs_link_lost(), vehicle.state
+            run.reads.append((name, now_us, failsafe, lost, s.x_m, s.y_m, s.battery_v))
+        return read
+
+    clock.scheduler.every(0.5, script, "gcs")
+    clock.scheduler.every(0.7, reader("before"), "reader-before")
+    vehicle.attach(clock.scheduler)
+    clock.scheduler.every(0.3, reader("after"), "reader-after")
+    clock.sleep(END_S)
+    vehicle.close()
+    run.sent.extend(gcs_end.receive())
+    assert vehicle.physics is not None
+    run.ticks, run.parks = vehicle.physics.ticks, vehicle.physics.parks
+    run.end = (vehicle.state, vehicle.energy_counters, vehicle.now_us, vehicle.modes.failsafe_holds,
+               vehicle.failsafe_active, vehicle.params, dict(vehicle.dropped))
+    return run
+
+
+def test_a_parked_physics_task_gives_what_ticking_gives_to_the_byte() -> None:
+    ticking, parked = _run(park=False), _run(park=True)
+    assert ticking.parks == 0 and ticking.ticks == round(END_S * 10) + 1
+    assert len(ticking.sent) > 10_000 and len(ticking.reads) > 15_000
+    assert parked.sent == ticking.sent  # heartbeats, telemetry, acks, the failsafe's STATUSTEXT, every stamp
+    assert parked.reads == ticking.reads
+    assert parked.end == ticking.end
+    state, energy, _, failsafe_holds, _, params, _ = parked.end
+    assert failsafe_holds == 1 and params.fs_gcs_timeout_s == 4.0  # the script did what it says
+    assert energy.home_wh > 0.0 and math.hypot(state.x_m, state.y_m) < 2.0  # held full at home, topped up
+    assert parked.parks >= 3 and parked.ticks < ticking.ticks / 5  # parked at rest: most ticks never ran
