@@ -10,11 +10,17 @@ signing timestamps beside them (`signing_path`, see `mavlink_dialect.signing_sta
 from __future__ import annotations
 
 import json
+import time
 from pathlib import Path
 from typing import Any
 
 from mavlink_dialect.tlog import TlogWriter
 from missiontime import us_to_s
+
+# The physics flushes the .tlog each second of mission time; in lockstep those come hundreds of times a
+# wall second, and a write to the kernel each was a few per cent of a long run. At most this often
+# (wall time), then: what a killed process loses is the same quarter of a second in the field and here.
+FLUSH_EVERY_WALL_S = 0.25
 
 
 def tlog_path(log_dir: Path, system_id: int) -> Path:
@@ -44,6 +50,7 @@ class VehicleLog:
         self._tlog = TlogWriter(self.tlog_path, epoch_us, append)
         self._events = open(self.events_path, "a" if append else "w", encoding="utf-8")  # noqa: SIM115
         self.muted = False
+        self._flushed_at = time.monotonic()
 
     def message(self, time_us: int, frame: bytes | bytearray) -> None:
         self._tlog.write(time_us, bytes(frame))
@@ -67,7 +74,11 @@ class VehicleLog:
         return {self.tlog_path: self._tlog.size(), self.events_path: events}
 
     def flush(self) -> None:
-        self._tlog.flush()
+        """Into the kernel, unless that was done less than FLUSH_EVERY_WALL_S ago (wall time)."""
+        now = time.monotonic()
+        if now - self._flushed_at >= FLUSH_EVERY_WALL_S:
+            self._flushed_at = now
+            self._tlog.flush()
 
     def close(self) -> None:
         self._tlog.close()

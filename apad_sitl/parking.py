@@ -83,7 +83,7 @@ class PhysicsTicks:
     def _step(self, last_us: int, now_us: int) -> None:
         host = self._host
         if host.log is not None and now_us // US_PER_S != last_us // US_PER_S:
-            host.log.flush()  # once a second of mission time: a killed process loses little
+            host.log.flush()  # each second of mission time (at most every FLUSH_EVERY_WALL_S of wall time)
         apad = host.apad
         if apad.params.fs_gcs_enable:
             host.modes.check_failsafe()
