@@ -212,6 +212,10 @@ class VehicleRegistry:
         self.vehicles.clear()
         self.vehicles.update(saved.vehicles)
         self.mussels.load(saved.mussels)
+        for mine, theirs in ((self.mussel_heard_us, saved.mussel_heard_us), (self.released_us, saved.released_us)):
+            mine.clear()
+            mine.update(theirs)
+        self.fleet_heard_us = saved.fleet_heard_us
         self.version += 1
 
     def expect(self, system_id: int, kind: Primitive, a: int = 0, b: int = 0) -> None:

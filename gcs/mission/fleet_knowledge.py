@@ -278,9 +278,12 @@ class FleetKnowledge:
             if self.acoustic is not None and view.state in UNDERWATER:
                 return believed_battery(view, self.clock.now_us, self.drain_per_s(mussel_id),
                                         self.orders.changed.get(mussel_id))
+            # Docked (here or on another aPad's slot): charging on, unless a slot let it go since its report.
             released_us = None
             if view.state == MusselState.DOCKED and mussel_id not in self.docked().values():
-                released_us = max(self.api.link.registry.released_us.get(mussel_id, view.time_us), view.time_us)
+                let_go_us = self.api.link.registry.released_us.get(mussel_id)
+                if let_go_us is not None and let_go_us >= view.time_us:
+                    released_us = let_go_us
             return foreseen_battery(view, self.clock.now_us, self.drain_per_s(mussel_id), self.charge(mussel_id),
                                     self.settings.mission.theta, released_us)
         if self.real is not None and mussel_id in self.real.heard_us:

@@ -2,17 +2,23 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import pytest
 from testkit import read_jsonl
 
+from apad_sitl.vocabulary import Latch
 from gcs.api import Location
+from gcs.link.telemetry import SlotView
 from gcs.mission.headless import run_mission
 from gcs.mission.scenario import load_scenario
 from gcs.mission.swarm import FleetShares, SwarmWatch, route_conflicts
 from gcs.mission.world import LinkOptions, lockstep_world
+from missiontime import US_PER_S
+from mussel_sim.comms import FLEET_SYSTEM_ID
+from mussel_sim.vocabulary import MusselState
 
 pytestmark = pytest.mark.sitl
 
@@ -117,5 +123,33 @@ def test_each_apad_waits_for_its_shares_part_of_the_pool_not_the_whole_fleets() 
         assert world.mission_loop(apad_id=1, shares=shares).knows.pool_needed(4) == 1
         assert world.mission_loop(apad_id=2, shares=shares).knows.pool_needed(4) == 4  # ceil(4 x 11 / 12)
         assert world.mission_loop(apad_id=1).knows.pool_needed(4) == 4  # alone: the scenario's min_pool
+    finally:
+        world.close()
+
+
+def test_an_amussel_docked_on_another_apad_is_believed_charging_until_a_slot_lets_it_go() -> None:
+    """The GCS runs a docked aMussel's last report forward charging (`foresight`) until an aPad says a slot
+    let go of it: also when the slot is another aPad's (aPad 1 believed one on aPad 2's slot draining)."""
+    world = lockstep_world(load_scenario("pool12x2"))
+    try:
+        for sysid in (1, 2):
+            world.api.wait_apad(timeout_s=10.0, apad_id=sysid)
+        knows = world.mission_loop(apad_id=1).knows
+        registry, now = world.link.registry, world.clock.now_us
+        mussel = 7
+        assert mussel not in knows.docked().values()
+        # Its report of 30 s ago, docked (as the fleet sends it), at half charge.
+        registry.apply(FLEET_SYSTEM_ID, replace(world.api.mussels[mussel], state=MusselState.DOCKED,
+                                                battery_frac=0.5, time_us=now - 30 * US_PER_S), now)
+        charging = knows.battery(mussel)
+        assert charging > 0.5  # 30 steps of charging on aPad 2's slot
+        # aPad 2 says its slot 2 held it and, 20 s ago, let it go: charged 10 s, drained 20 s since.
+        registry.apply(2, SlotView(2, mussel, Latch.LATCHED), now - 25 * US_PER_S)
+        registry.apply(2, SlotView(2, 0, Latch.OPEN), now - 20 * US_PER_S)
+        released = knows.battery(mussel)
+        assert 0.5 < released < charging
+        # A release before its last report is an older docking's: charging again.
+        registry.apply(FLEET_SYSTEM_ID, replace(world.api.mussels[mussel], time_us=now - 10 * US_PER_S), now)
+        assert knows.battery(mussel) > released
     finally:
         world.close()
