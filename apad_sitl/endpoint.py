@@ -379,6 +379,7 @@ class SitlVehicle:
     # ------------------------------------------------------------------ what the parts share
 
     def send(self, msg: mavlink.MAVLink_message) -> None:
+        self.apad.settle()  # stamped (and signed) at the last tick's time, which a parked physics task skipped
         frame = self.codec.encode(msg)
         self.transport.send(frame)
         if self.log is not None:
@@ -389,4 +390,5 @@ class SitlVehicle:
 
     def event(self, event: str, /, **fields: Any) -> None:
         if self.log is not None:
+            self.apad.settle()
             self.log.event(self.now_us, event, **fields)

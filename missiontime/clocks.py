@@ -176,6 +176,8 @@ class Scheduler:
             while task is not None and task.next_us == instant:
                 task.next_us += task.period_us  # the head's entry replaced by its next: one sift, not two
                 heapq.heapreplace(queue, (task.next_us, task.order, task.generation, task))
+                # Left set if the callback raises: the tasks after it in this instant did not run, and
+                # what unwinds (a vehicle's close) settles as of that point.
                 self.running = task.order
                 task.callback(now_us)
                 task = self._head()
