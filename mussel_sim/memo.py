@@ -26,8 +26,12 @@ class LastMade(Generic[T]):
 
     def __call__(self, *keys: object) -> T:
         last = self._last
-        if last is not None and len(last[0]) == len(keys) and all(a is b for a, b in zip(last[0], keys, strict=True)):
-            return last[1]
+        if last is not None and len(last[0]) == len(keys):
+            for held, key in zip(last[0], keys, strict=True):  # a loop: a generator frame cost more than the look
+                if held is not key:
+                    break
+            else:
+                return last[1]
         value = self._make(*keys)
         self._last = (keys, value)
         return value
