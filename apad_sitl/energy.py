@@ -29,13 +29,13 @@ from collections.abc import Iterable
 from dataclasses import replace
 
 from apad_sitl.energy_counters import EnergyCounters
+from apad_sitl.home_charger import home_charge_wh, volts_after
 from apad_sitl.host import invalid_reason
 from apad_sitl.state import ApadState
-from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V
+from apad_sitl.vehicle import BATTERY_FULL_V
 from apad_sitl.vocabulary import Latch
 
 HOME_STILL_MPS = 0.05  # slower than this over ground: the hull can be plugged in
-VOLT_RANGE = BATTERY_FULL_V - BATTERY_EMPTY_V
 
 
 _ON_SLOT = (Latch.LATCHED, Latch.RELEASING)
@@ -89,7 +89,7 @@ class EnergyMeter:
                 drawn += gained_wh / p.charge_efficiency
         if drawn:
             self.apad.energy.drawn_wh += drawn
-            self._set_volts(self.apad.state.battery_v - drawn / p.batt_capacity_wh * VOLT_RANGE)
+            self._set_volts(volts_after(self.apad.state.battery_v, -drawn, p))
 
     def step(self, dt_s: float) -> float:
         """Home charging over the last `dt_s` seconds; returns the Wh it charged."""
@@ -100,16 +100,11 @@ class EnergyMeter:
             self.apad.energy.home_charges += 1
         self.apad.energy.charging = charging
         if charging:
-            wh = min(p.home_charge_w * dt_s / 3600.0, (BATTERY_FULL_V - state.battery_v) / VOLT_RANGE
-                     * p.batt_capacity_wh)
+            wh = home_charge_wh(state.battery_v, p, dt_s)
             self.apad.energy.home_wh += wh
-            self._set_volts(state.battery_v + wh / p.batt_capacity_wh * VOLT_RANGE)
+            self._set_volts(volts_after(state.battery_v, wh, p))
             return wh
         return 0.0
-
-    def refilled(self, wh: float) -> None:
-        """A step of a hull held full at home (`apad_sitl.rest`): the charger put back `wh`."""
-        self.apad.energy.home_wh += wh
 
     def could_charge(self) -> bool:
         """Whether the hull is where and as still as home charging needs (a rest there would charge)."""
@@ -123,4 +118,4 @@ class EnergyMeter:
         return {s.mussel_id for s in self.apad.primitive.slots if s.mussel_id and s.latch in _ON_SLOT}
 
     def _set_volts(self, volts: float) -> None:
-        self.apad.state = replace(self.apad.state, battery_v=min(BATTERY_FULL_V, max(BATTERY_EMPTY_V, volts)))
+        self.apad.state = replace(self.apad.state, battery_v=volts)

@@ -20,7 +20,7 @@ def step_hull(apad: ApadState, energy: EnergyMeter, mussels: MusselFixTable,
     p, primitive = apad.params, apad.primitive
     key = rest_key(apad, current_mps)
     if apad.rest is not None:
-        if rest_steps(apad, energy, key, dt_s, 1):
+        if rest_steps(apad, energy, key, dt_s, 1) == 1:
             return
         apad.state = apad.state  # something that moves the hull changed: the rest's state, stepped from here
     before = apad.state
@@ -38,6 +38,8 @@ def step_hull(apad: ApadState, energy: EnergyMeter, mussels: MusselFixTable,
             apad.rest = rest_mod.Rest(state, p, dt_s, key)
     elif apad.state.battery_v == before.battery_v:  # the charger put back exactly what the step drained
         apad.rest = rest_mod.Rest(apad.state, p, dt_s, key, refill_wh=home_wh)
+    elif energy.counters.charging:  # still at the charger, charging: the battery alone changes
+        apad.rest = rest_mod.ChargingRest(apad.state, p, dt_s, key)
 
 
 def rest_key(apad: ApadState, current_mps: tuple[float, float]) -> tuple[object, ...]:
@@ -45,14 +47,10 @@ def rest_key(apad: ApadState, current_mps: tuple[float, float]) -> tuple[object,
     return (apad.primitive, apad.params, apad.armed, current_mps)
 
 
-def rest_steps(apad: ApadState, energy: EnergyMeter, key: tuple[object, ...], dt_s: float, n: int) -> bool:
-    """`n` more steps of `dt_s` of the hull's rest in closed form, if it still holds for `key` (`rest_key`);
-    False, and nothing taken, if it does not."""
+def rest_steps(apad: ApadState, energy: EnergyMeter, key: tuple[object, ...], dt_s: float, n: int) -> int:
+    """Up to `n` more steps of `dt_s` of the hull's rest, if it still holds for `key` (`rest_key`): how
+    many it took (0: it does not hold; fewer than `n`: a charging rest's battery came to full)."""
     rest = apad.rest
     if rest is None or rest.key != key or rest.dt_s != dt_s:
-        return False
-    rest.steps += n
-    if rest.refill_wh is not None:  # held full at home: what the charger put back, step by step as stepping adds it
-        for _ in range(n):
-            energy.refilled(rest.refill_wh)
-    return True
+        return 0
+    return rest.take(n, energy.counters)

@@ -103,18 +103,19 @@ class PhysicsTicks:
         period = task.period_us
         n = (upto - last) // period
         if n > 0:
-            now_before, first, end = host.now_us, last + period, last + n * period
-            if rest_steps(apad, host.energy, rest_key(apad, host.current_mps), period / US_PER_S, n):
+            now_before, end = host.now_us, last + n * period
+            taken = rest_steps(apad, host.energy, rest_key(apad, host.current_mps), period / US_PER_S, n)
+            if taken:
                 if apad.params.fs_gcs_enable:
-                    for t in (first, end) if n > 1 else (first,):
+                    for t in (last + period, last + taken * period) if taken > 1 else (last + period,):
                         host.now_us = t
                         host.modes.check_failsafe()
-                if host.log is not None and last // US_PER_S != end // US_PER_S:
+                if host.log is not None and last // US_PER_S != (last + taken * period) // US_PER_S:
                     host.log.flush()
-            else:
-                for t in range(first, end + 1, period):
-                    host.now_us = t
-                    self._step(t - period, t)
+            # The rest's end (a charging battery come to full), or its key changed without a message: stepped.
+            for t in range(last + (taken + 1) * period, end + 1, period):
+                host.now_us = t
+                self._step(t - period, t)
             host.now_us = max(now_before, end)
             self.last_us = end
         if self._rest_holds():

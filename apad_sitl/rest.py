@@ -13,6 +13,10 @@ charger puts back exactly what the step drained (the battery ends each step wher
 rest then drains nothing (`refill_wh`: the home energy each step puts back, which the core still
 adds to the counters step by step, so they are what stepping makes to the last bit).
 
+At its home charger below full, the hull is still and only the battery changes: a `ChargingRest`
+takes each step as a few float operations (the drain of `vehicle.step` at rest, then the charger's
+step from `home_charger`), the same floats stepping makes, until the battery is full.
+
 Pure: no clock, no I/O; `dt_s` is the physics step the rest was found at.
 """
 
@@ -20,8 +24,10 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from apad_sitl.energy_counters import EnergyCounters
+from apad_sitl.home_charger import home_charge_wh, volts_after
 from apad_sitl.params import ApadParams
-from apad_sitl.vehicle import BATTERY_EMPTY_V, VehicleState, drain_v
+from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V, VehicleState, drain_v
 
 
 def at_rest(before: VehicleState, after: VehicleState) -> bool:
@@ -55,6 +61,15 @@ class Rest:
         self._drain_v = 0.0 if refill_wh is not None else drain_v(params, origin.thrust_mps2, dt_s)
         self._cache = (0, origin)
 
+    def take(self, n: int, counters: EnergyCounters) -> int:
+        """`n` more steps (the home charger's top-ups added to `counters` one by one, as stepping adds
+        them); all of them, always."""
+        self.steps += n
+        if self.refill_wh is not None:
+            for _ in range(n):
+                counters.home_wh += self.refill_wh
+        return n
+
     def state(self) -> VehicleState:
         """The hull after `steps` more steps: the battery drained `steps` times, clamped at empty."""
         steps, cached = self._cache
@@ -67,3 +82,45 @@ class Rest:
         state = replace(o, battery_v=battery_v, thrust_mps2=thrust)
         self._cache = (n, state)
         return state
+
+
+class ChargingRest:
+    """The hull still at its home charger, charging: each step changes the battery alone, drained as
+    `vehicle.step` drains it at rest and charged as `energy.EnergyMeter.step` charges it (the same
+    floats, step by step: `home_charger`), until it is full (then it is stepped, and rests held full,
+    `Rest`). Hours of charging cost a few float operations a step, not a physics step.
+    """
+
+    __slots__ = ("_cache", "_drain_v", "_params", "battery_v", "dt_s", "key", "origin", "steps")
+
+    def __init__(self, origin: VehicleState, params: ApadParams, dt_s: float, key: tuple[object, ...] = ()) -> None:
+        self.origin = origin
+        self.dt_s = dt_s
+        self.key = key
+        self.steps = 0
+        self.battery_v = origin.battery_v
+        self._params = params
+        self._drain_v = drain_v(params, origin.thrust_mps2, dt_s)
+        self._cache = (0, origin)
+
+    def take(self, n: int, counters: EnergyCounters) -> int:
+        """Up to `n` more steps; fewer (the number taken) if a step would not charge: full, or flat."""
+        v, p, dt_s, drain = self.battery_v, self._params, self.dt_s, self._drain_v
+        for taken in range(n):
+            drained = max(BATTERY_EMPTY_V, v - drain)
+            if not BATTERY_EMPTY_V < v < BATTERY_FULL_V or not drained < BATTERY_FULL_V:  # flat, or full: stepped
+                self.battery_v = v
+                return taken
+            wh = home_charge_wh(drained, p, dt_s)
+            counters.home_wh += wh
+            v = volts_after(drained, wh, p)
+            self.steps += 1
+        self.battery_v = v
+        return n
+
+    def state(self) -> VehicleState:
+        steps, cached = self._cache
+        if steps != self.steps:
+            cached = replace(self.origin, battery_v=self.battery_v)
+            self._cache = (self.steps, cached)
+        return cached

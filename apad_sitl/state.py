@@ -17,7 +17,7 @@ from collections.abc import Callable
 from apad_sitl.energy_counters import EnergyCounters
 from apad_sitl.params import ApadParams
 from apad_sitl.primitives import PrimitiveState
-from apad_sitl.rest import Rest
+from apad_sitl.rest import ChargingRest, Rest
 from apad_sitl.vehicle import VehicleState
 from apad_sitl.vocabulary import RoverMode
 
@@ -33,7 +33,7 @@ class ApadState:
         self.params = params  # frozen; PARAM_SET swaps in a new set
         self._state = VehicleState()  # the hull: position, velocity, heading, battery
         # Not None: the hull rests at a fixed point and `state` is advanced in closed form (apad_sitl.rest).
-        self.rest: Rest | None = None
+        self.rest: Rest | ChargingRest | None = None
         # Set while the physics task is parked at rest (`apad_sitl.parking`): takes the steps it skipped.
         self.pending: Callable[[], None] | None = None
         self.mode: int = RoverMode.HOLD

@@ -21,6 +21,7 @@ from apad_sitl.params import ApadParams
 
 BATTERY_FULL_V = 16.0
 BATTERY_EMPTY_V = 10.5
+VOLT_RANGE = BATTERY_FULL_V - BATTERY_EMPTY_V  # the battery's energy is linear in voltage over this
 # Below this water speed the bow keeps its heading instead of chasing a noisy direction.
 HEADING_MIN_SPEED_MPS = 0.05
 TWO_PI = 2.0 * math.pi

@@ -12,9 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from apad_sitl.params import ApadParams
-from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V
+from apad_sitl.vehicle import BATTERY_EMPTY_V, VOLT_RANGE
 
-VOLT_RANGE = BATTERY_FULL_V - BATTERY_EMPTY_V
 THRUST_MARGIN = 1.5  # cruise thrust only: accelerating, holding against drift and docking cost more
 
 

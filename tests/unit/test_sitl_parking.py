@@ -2,9 +2,9 @@
 
 Two SITL aPads run the same script over real MAVLink bytes, one parking its physics at rest and one
 ticking at 10 Hz throughout: a GCS heartbeat that stops and comes back, Go Tos, a parameter set, a
-failsafe taken on a Go To sent while the link is lost, hours held full at the home charger, and a
-part that sends from a poller of its own while the hull rests (as the aPad's modem answers its
-serial port). Every byte each sends, its .tlog and event log to the byte (each record's stamp),
+failsafe taken on a Go To sent while the link is lost, charging at the home charger and held full
+there for an hour, and a part that sends from a poller of its own while the hull rests (as the
+aPad's modem answers its serial port). Every byte each sends, its .tlog and event log to the byte (each record's stamp),
 every read of its hull by tasks before and after it in an instant's order, its final state and
 energy counters are the same; the parked one ran a small part of the ticks.
 """
@@ -17,7 +17,7 @@ from pathlib import Path
 
 from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.params import ApadParams
-from apad_sitl.vehicle import VehicleState
+from apad_sitl.vehicle import BATTERY_FULL_V, VehicleState
 from mavlink_dialect import Codec, mavlink, memory_pair
 from missiontime import US_PER_S, Scheduler, VirtualClock
 from mussel_sim.geo import LocalFrame
@@ -72,7 +72,7 @@ def _run(park: bool, log_dir: Path) -> Run:
     vehicle = SitlVehicle(apad_end, ApadParams(fs_gcs_enable=1, fs_gcs_timeout_s=5.0), *HOME, park_at_rest=park,
                           log_dir=log_dir)
     asker = _SaysWhenAsked(vehicle)
-    vehicle.state = VehicleState(x_m=10.0, y_m=10.0)
+    vehicle.state = VehicleState(x_m=10.0, y_m=10.0, battery_v=14.5)  # charged at home, then held full there
     gcs = Codec(250, 190)
     run = Run()
 
@@ -128,5 +128,6 @@ def test_a_parked_physics_task_gives_what_ticking_gives_to_the_byte(tmp_path: Pa
     assert sum(1 for m in parked.sent if b"asked" in m) == 3
     state, energy, _, failsafe_holds, _, params, _ = parked.end
     assert failsafe_holds == 1 and params.fs_gcs_timeout_s == 4.0  # the script did what it says
-    assert energy.home_wh > 0.0 and math.hypot(state.x_m, state.y_m) < 2.0  # held full at home, topped up
+    assert energy.home_wh > 50.0 and math.hypot(state.x_m, state.y_m) < 2.0  # charged at home, then held full
+    assert state.battery_v == BATTERY_FULL_V and energy.home_charges == 1
     assert parked.parks >= 3 and parked.ticks < ticking.ticks / 5  # parked at rest: most ticks never ran

@@ -181,9 +181,21 @@ def test_a_hull_held_full_at_home_rests_and_counts_what_stepping_counts(below_fu
         assert rested.rest is not None and rested.rest.refill_wh is not None, "held full at home: at rest"
 
 
-def test_a_hull_at_home_below_full_does_not_rest() -> None:
-    apad, meter = _at_home(BATTERY_FULL_V - 2.0, 150.0)
+@settings(max_examples=10, deadline=None)
+@given(below_full_v=st.floats(0.5, 2.0), charge_w=st.floats(100.0, 400.0))
+def test_a_hull_charging_at_home_rests_charging_and_makes_what_stepping_makes_until_full(below_full_v: float,
+                                                                                       charge_w: float) -> None:
+    """Below full at the charger the battery alone changes: a charging rest takes the steps (`ChargingRest`),
+    to the same floats as stepping, and once full the hull rests held full."""
+    rested, rested_meter = _at_home(BATTERY_FULL_V - below_full_v, charge_w)
+    stepped_, stepped_meter = _at_home(BATTERY_FULL_V - below_full_v, charge_w)
     fixes = MusselFixTable(LocalFrame(*HOME))
-    for _ in range(100):
-        step_hull(apad, meter, fixes, STILL, DT)
-    assert apad.rest is None and meter.counters.charging  # still charging: every step changes the battery
+    kinds = []
+    for _ in range(round(3600 / DT * 2.0 * below_full_v / (charge_w / 400.0 * 5.5 - 0.5)) + 50):  # to full, twice over
+        step_hull(rested, rested_meter, fixes, STILL, DT)
+        stepped_.state = step(stepped_.state, (0.0, 0.0), stepped_.params, STILL, DT)
+        stepped_meter.step(DT)
+        assert rested.state == stepped_.state and rested.energy == stepped_.energy
+        kinds.append(type(rested.rest).__name__)
+    assert "ChargingRest" in kinds and kinds[-1] == "Rest" and rested.rest is not None and rested.rest.refill_wh
+    assert rested.state.battery_v == BATTERY_FULL_V and rested.energy.home_charges == 1
