@@ -9,14 +9,17 @@ would have left them:
 
 - before the hull is read (`ApadState.state` calls `settle`: a stream, a checkpoint, the outcome)
   and before it is written (the state's setter settles first);
-- before a message is handled (`wake`: settle, then the task back on the scheduler at its next
-  tick, on the grid it never left), since only a message can change what the rest holds for;
+- before anything is sent or logged (stamps and signing read the vehicle's time), and before and
+  after the messages of a poll are handled: after, the task is back on the scheduler at its next
+  tick, on the grid it never left, if what was handled ended the rest (only a message changes
+  what a rest holds for, or a setter of the vehicle's, which settles first);
 - at `stop` (the vehicle closes: the ticks up to then ran, as they would have).
 
 Which ticks would have run by now is the scheduler's to say (`Scheduler.now_us` and `running`):
 every tick before this instant, and this instant's too unless the task now running comes before
 the physics task in the instant's order. The skipped ticks are taken in closed form
-(`hull_step.rest_steps`: the rest's step count, the home charger's top-ups added one by one); the
+(`hull_step.rest_steps`: the rest's step count, the home charger's top-ups added one by one, a
+charging rest's battery step by step until it is full; from there they are stepped); the
 failsafe is checked at the first and the last of them (only its `failsafe_active` reset can act,
 and whether the link is lost only changes once between two messages). Should the rest not hold
 for them after all (its key changed without a message: a test setting a parameter), they are
