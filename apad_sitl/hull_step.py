@@ -47,10 +47,16 @@ def rest_key(apad: ApadState, current_mps: tuple[float, float]) -> tuple[object,
     return (apad.primitive, apad.params, apad.armed, current_mps)
 
 
-def rest_steps(apad: ApadState, energy: EnergyMeter, key: tuple[object, ...], dt_s: float, n: int) -> int:
-    """Up to `n` more steps of `dt_s` of the hull's rest, if it still holds for `key` (`rest_key`): how
-    many it took (0: it does not hold; fewer than `n`: a charging rest's battery came to full)."""
+def rest_holds(apad: ApadState, key: tuple[object, ...], dt_s: float) -> bool:
+    """Whether the hull rests, for `key` (`rest_key`) and in steps of `dt_s`."""
     rest = apad.rest
-    if rest is None or rest.key != key or rest.dt_s != dt_s:
+    return rest is not None and rest.key == key and rest.dt_s == dt_s
+
+
+def rest_steps(apad: ApadState, energy: EnergyMeter, key: tuple[object, ...], dt_s: float, n: int) -> int:
+    """Up to `n` more steps of `dt_s` of the hull's rest, if it still holds (`rest_holds`): how many it
+    took (0: it does not hold; fewer than `n`: a charging rest's battery came to full)."""
+    rest = apad.rest
+    if rest is None or not rest_holds(apad, key, dt_s):
         return 0
     return rest.take(n, energy.counters)

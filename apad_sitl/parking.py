@@ -32,7 +32,7 @@ from typing import Protocol
 
 from apad_sitl.docking import MusselFixTable
 from apad_sitl.energy import EnergyMeter
-from apad_sitl.hull_step import rest_key, rest_steps, step_hull
+from apad_sitl.hull_step import rest_holds, rest_key, rest_steps, step_hull
 from apad_sitl.logs import VehicleLog
 from apad_sitl.modes import Modes
 from apad_sitl.state import ApadState
@@ -127,10 +127,8 @@ class PhysicsTicks:
             self._rearm()
 
     def _rest_holds(self) -> bool:
-        host = self._host
-        apad, rest = host.apad, host.apad.rest
-        return (rest is not None and rest.key == rest_key(apad, host.current_mps)
-                and rest.dt_s == self.task.period_us / US_PER_S and not _busy(apad))
+        apad, dt_s = self._host.apad, self.task.period_us / US_PER_S
+        return rest_holds(apad, rest_key(apad, self._host.current_mps), dt_s) and not _busy(apad)
 
     def stop(self) -> None:
         """The vehicle closes: the ticks up to now taken, no more."""

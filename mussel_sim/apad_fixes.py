@@ -8,6 +8,8 @@ the runner passes what it heard and the state.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -27,8 +29,9 @@ class ApadFixes:
         self._m: dict[int, tuple[float, float]] = {}
         self._rides = LastMade(_rides)  # a state's arrays are read-only: asked once each
 
-    def for_step(self, state: FleetState, commands_pending: bool) -> dict[int, tuple[float, float]]:
-        """The aPads' positions in metres for the next step of `state` (`commands_pending`: it takes some)."""
+    def for_step(self, state: FleetState, commands_pending: bool) -> Mapping[int, tuple[float, float]]:
+        """The aPads' positions in metres for the next step of `state` (`commands_pending`: it takes some);
+        read-only (the step's inputs are made from it)."""
         if not (commands_pending or self._rides(state.state, state.surface_held)):
             return self._m
         key = tuple(sorted(self.deg.items()))
@@ -40,7 +43,7 @@ class ApadFixes:
                 x, y = self.frame.to_local(lat, lon)
                 apads = {a: (float(x[k]), float(y[k])) for k, (a, _) in enumerate(key)}
             self._key, self._m = key, apads
-        return dict(self._m)
+        return self._m
 
 
 def _rides(state: NDArray[np.uint8], surface_held: NDArray[np.bool_]) -> bool:

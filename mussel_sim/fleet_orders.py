@@ -9,6 +9,8 @@ taken. Pure: no clock (the mission time is passed in), no I/O.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 from mavlink_dialect import mavlink
 from missiontime import US_PER_S
 from mussel_sim.fleet_state import FleetInputs
@@ -95,7 +97,7 @@ class PendingOrders:
             self._dock[held] = key
         return released
 
-    def take(self, apads: dict[int, tuple[float, float]]) -> FleetInputs:
+    def take(self, apads: Mapping[int, tuple[float, float]]) -> FleetInputs:
         """Everything queued, as the next step's inputs with the aPads' positions (metres); the queue
         is empty after."""
         inputs = FleetInputs.make(

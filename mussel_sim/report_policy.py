@@ -90,15 +90,13 @@ class ReportByException:
                 due &= talking
         self.spoke = talking
         self._seen = state
-        if due is None:
-            self.reported_state = state  # the fleet's state arrays are read-only: kept as they are
-            self._depleted = bool((state == MusselState.DEPLETED).any())
-            return None
-        if talking is None:  # every row is now as reported (due or unchanged): keep the state itself
+        if due is None or talking is None:  # every row is now as reported: keep the (read-only) state itself
             self.reported_state = state
         else:
             self.reported_state = np.where(due, state, self.reported_state)
         self._depleted = bool((self.reported_state == MusselState.DEPLETED).any())
+        if due is None:
+            return None
         rows = np.flatnonzero(due)
         self.held += (state.size if speaking is None else speaking.size) - rows.size
         return rows

@@ -241,9 +241,7 @@ class ApadActions:
             self.pace.hold()  # it holds in place until `done`: slow telemetry meanwhile
         poll_s = self.settings.poll_s
 
-        def look() -> _Looked | None:  # after each sleep, what `sleep` and the loop's head would do
-            if (self.control.paused and not self.control.stop) or self.control.before_wait is not None:
-                return _Looked.YOURS
+        def settled() -> _Looked | None:  # the loop's head: done, the deadline, the mission's end
             if done():
                 return _Looked.DONE
             if deadline is not None and self.clock.time() >= deadline:
@@ -252,18 +250,19 @@ class ApadActions:
                 self.check_end()
             return None
 
-        while not done():
-            if deadline is not None and self.clock.time() >= deadline:
-                return False
-            if interruptible:
-                self.check_end()
+        def look() -> _Looked | None:  # after each sleep: a pause or the console's hook is the script's own
+            if (self.control.paused and not self.control.stop) or self.control.before_wait is not None:
+                return _Looked.YOURS
+            return settled()
+
+        while (looked := settled()) is None:
             if self.control.before_wait is not None:  # the console's hook sees every sleep
                 self._wait(poll_s)
             elif (looked := self.clock.sleep_until(look, poll_s)) is not _Looked.YOURS:
-                return looked is _Looked.DONE
+                break
             while self.control.paused and not self.control.stop:
                 self._wait(poll_s)
-        return True
+        return looked is _Looked.DONE
 
     def _moving(self) -> None:
         """Fast telemetry again before a command that moves the aPad (after a holding wait in a phase)."""

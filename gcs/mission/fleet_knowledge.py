@@ -21,13 +21,12 @@ from gcs.api import ApadApi, Location
 from gcs.link.telemetry import SlotView
 from gcs.mission.control import LoopLog, LoopSettings
 from gcs.mission.duty import Duty, OrdersSent
-from gcs.mission.foresight import MODEL_STEP_US, foreseen_battery
+from gcs.mission.foresight import foreseen_battery, foreseen_deployed
 from gcs.mission.real_fleet import MAX_REPORT_AGE_S, RealFleet
 from gcs.mission.strategies import Outlook, traits
 from gcs.mission.swarm import FleetShares, orphans
 from missiontime import Clock
 from mussel_sim.battery import ChargeProfile, charge_profile, discharge_profile, sim_minutes
-from mussel_sim.comms import MODEL_STEP_S
 from mussel_sim.geo import pair_distance_m
 from mussel_sim.vocabulary import MusselState
 
@@ -119,12 +118,11 @@ class FleetKnowledge:
 
     def _active_below(self, threshold: float) -> list[int]:
         """Ids of ACTIVE aMussels whose battery (`battery`) is below `threshold`, lowest first: the
-        simulated ones' run forward from their reports in one go (as `foresight.foreseen_battery` runs
-        one, operation for operation), a real one by its estimate."""
+        simulated ones' run forward from their reports in one go (`foresight.foreseen_deployed`), a real
+        one by its estimate."""
         t = self.api.mussels
         active = t.state == MusselState.ACTIVE
-        steps = np.maximum(self.clock.now_us - t.time_us, 0) // MODEL_STEP_US
-        belief = np.maximum(t.battery_frac - steps * self._drain_rows() * MODEL_STEP_S, 0.0)
+        belief = foreseen_deployed(t.battery_frac, t.time_us, self.clock.now_us, self._drain_rows())
         ids = t.ids[active & t.simulated & (belief < threshold)].tolist()
         ids += [m for m in t.ids[active & ~t.simulated].tolist() if self.battery(m) < threshold]
         return sorted(ids)

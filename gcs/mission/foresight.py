@@ -15,12 +15,16 @@ from __future__ import annotations
 
 from bisect import bisect_left
 
+import numpy as np
+from numpy.typing import NDArray
+
 from gcs.link.telemetry import MusselView
+from missiontime import seconds_to_us
 from mussel_sim.battery import ChargeProfile, sim_minutes
 from mussel_sim.comms import MODEL_STEP_S
 from mussel_sim.vocabulary import MusselState
 
-MODEL_STEP_US = round(MODEL_STEP_S * 1_000_000)
+MODEL_STEP_US = seconds_to_us(MODEL_STEP_S)
 
 
 def steps_since(report_us: int, now_us: int) -> int:
@@ -55,3 +59,10 @@ def foreseen_battery(view: MusselView, now_us: int, drain_per_s: float, charge: 
         charging = steps if released_us is None else min(steps_since(view.time_us, released_us), steps)
         battery, drained = charged_forward(battery, charging, charge, theta), steps - charging
     return max(battery - drained * drain_per_s * MODEL_STEP_S, 0.0) if drained else battery
+
+
+def foreseen_deployed(battery_frac: NDArray[np.float64], report_us: NDArray[np.int64], now_us: int,
+                      drain_per_s: NDArray[np.float64]) -> NDArray[np.float64]:
+    """`foreseen_battery` of many deployed aMussels at once (a table's columns), operation for operation."""
+    steps = np.maximum(now_us - report_us, 0) // MODEL_STEP_US
+    return np.maximum(battery_frac - steps * drain_per_s * MODEL_STEP_S, 0.0)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from gcs.link.telemetry import MusselView
-from gcs.mission.foresight import MODEL_STEP_US, charged_forward, foreseen_battery, steps_since
+from gcs.mission.foresight import MODEL_STEP_US, charged_forward, foreseen_battery, foreseen_deployed, steps_since
 from mussel_sim.battery import DISCHARGE_ACTIVE_PER_MIN, charge_profile, discharge_profile, sim_minutes, step_battery
 from mussel_sim.vocabulary import MusselState
 
@@ -66,3 +66,17 @@ def test_a_released_one_charged_till_the_release_and_drains_after() -> None:
 
 def test_a_depleted_one_stays_as_reported() -> None:
     assert foreseen_battery(view(MusselState.DEPLETED, 0.0), 60 * MODEL_STEP_US, DRAIN_PER_S, CHARGE, THETA) == 0.0
+
+
+def test_a_tables_deployed_ones_at_once_are_each_one_foreseen_to_the_bit() -> None:
+    """`foreseen_deployed` (the pool's beliefs in one array operation) against `foreseen_battery` row by row."""
+    rng = np.random.default_rng(3)
+    battery = rng.uniform(0.0, 1.0, 200)
+    report_us = rng.integers(0, 40 * MODEL_STEP_US, 200)
+    drain = rng.uniform(0.0, 2 * DRAIN_PER_S, 200)
+    now_us = 30 * MODEL_STEP_US + 250_000  # some reports are from after now: as reported
+    at_once = foreseen_deployed(battery, report_us, now_us, drain)
+    one_by_one = [foreseen_battery(view(MusselState.ACTIVE, float(b), int(t)), now_us, float(d), CHARGE, THETA)
+                  for b, t, d in zip(battery, report_us, drain, strict=True)]
+    assert at_once.tolist() == one_by_one
+    assert (at_once < battery).any() and (at_once == battery).any()  # run down, and reports from after now
