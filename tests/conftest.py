@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import compileall
 import os
+import sys
 import tomllib
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -28,3 +30,18 @@ def pytest_configure(config: pytest.Config) -> None:
         return
     for package in PACKAGES:
         compileall.compile_dir(ROOT / package, quiet=2)
+
+
+@pytest.fixture(autouse=True)
+def _strategy_registry_as_shipped() -> Iterator[None]:
+    """A strategy a test loads (a plugin file, an entry point, a registered function) leaves the
+    registries as they were: a later test on the same worker sees the shipped strategies only."""
+    yield
+    base = sys.modules.get("gcs.mission.strategies.base")
+    plugins = sys.modules.get("gcs.mission.strategies.plugins")
+    if base is None or plugins is None:  # nothing imported, nothing registered
+        return
+    for name in set(plugins.SOURCES):
+        base.STRATEGIES.pop(name, None)
+        base.TRAITS.pop(name, None)
+    plugins.SOURCES.clear()
