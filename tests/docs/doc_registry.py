@@ -123,7 +123,7 @@ REGISTRY: dict[str, Entry] = {
     tls.MAKE_BENCH: Entry("tools", tls.run_make_bench, ci="make -n -o .venv/.installed bench",
                           full="make -o .venv/.installed bench",
                           why="every benchmark at full size takes minutes: the dry run shows what runs, and each "
-                              "of the seven below runs on its own; " + DEV_MAKE),
+                              "of the eight below runs on its own; " + DEV_MAKE),
     tls.THROUGHPUT: Entry("tools", tls.run_throughput, ci=tls.THROUGHPUT + " --count 2000",
                           why="50,000 messages per figure take 10 s; 2,000 print the same tables"),
     tls.FLEET_STEP: Entry("tools", tls.run_fleet_step),
@@ -138,6 +138,9 @@ REGISTRY: dict[str, Entry] = {
     tls.MISSION_COST: Entry("tools", tls.run_mission_cost, ci=tls.MISSION_COST + " --only pool12 --day-h 1",
                             why="three days of missions are twenty minutes of CPU: pool12's hour against its 40 "
                                 "minutes prints the same lines"),
+    tls.QUIET_FLOOR: Entry("tools", tls.run_quiet_floor, ci=tls.QUIET_FLOOR + " --hours 0.05 --repeat 1",
+                           why="six runs twice, five of them 2 h of bay120-sleep, are two minutes of CPU: 3 minutes "
+                               "each, once, print the same rows"),
     tls.STARTUP: Entry("tools", tls.run_startup, ci=tls.STARTUP + " --repeat 1",
                        why="best of 5 fresh processes each; one shows the same rows"),
     # README: A scenario of your own

@@ -22,6 +22,7 @@ SCENARIO_SPEED = ".venv/bin/python bench/scenario_speed.py"
 TUI_FRAME = ".venv/bin/python bench/tui_frame.py"
 LONG_MISSION = ".venv/bin/python bench/long_mission.py"
 MISSION_COST = ".venv/bin/python bench/mission_cost.py"
+QUIET_FLOOR = ".venv/bin/python bench/quiet_floor.py"
 STARTUP = ".venv/bin/python bench/startup.py"
 REPORT_LATEST = "vil report runs/latest"
 REPORT_AB = "vil report runs/A runs/B -o compare/"
@@ -71,13 +72,14 @@ def run_make_test(w: Work) -> None:
 
 
 def run_make_bench(w: Work) -> None:
-    """`make bench` runs every bench/*.py (the README's seven among them); full: they all succeed."""
+    """`make bench` runs every bench/*.py (the README's eight among them); full: they all succeed."""
     first_use(w, "bench")
     done = w.sh(w.line(MAKE_BENCH), timeout_s=3600)
     if not w.full:
         assert "for b in bench/*.py; do .venv/bin/python $b || exit 1; done" in done.stdout, done.stdout
     listed = {line.split()[-1]
-              for line in (THROUGHPUT, FLEET_STEP, SCENARIO_SPEED, TUI_FRAME, LONG_MISSION, MISSION_COST, STARTUP)}
+              for line in (THROUGHPUT, FLEET_STEP, SCENARIO_SPEED, TUI_FRAME, LONG_MISSION, MISSION_COST, QUIET_FLOOR,
+                          STARTUP)}
     assert listed <= {f"bench/{p.name}" for p in (ROOT / "bench").glob("*.py")}
 
 
@@ -133,6 +135,15 @@ def run_long_mission(w: Work) -> None:
     out = bench(w, LONG_MISSION)
     short, long = ("40", "240") if w.full else re.findall(r"--short (\d+) --long (\d+)", w.line(LONG_MISSION))[0]
     assert f"{short} min mission:" in out and f"{long} min mission:" in out, out
+
+
+def run_quiet_floor(w: Work) -> None:
+    """a quiet second of bay120-sleep, part by part (each row its own process), against the 12x bound."""
+    out = bench(w, QUIET_FLOOR, "ms of wall time per mission second", "The bound allows the sleeping day",
+                "A saving that both runs share must reach")
+    for label in ("bay120, as shipped (40 min)", "bay120-sleep, as shipped", "nobody collected (none)",
+                  "+ aPads: heartbeats only", "+ fleet: heartbeat only", "+ fleet: not stepped"):
+        assert re.search(rf"{re.escape(label)} \d+\.\d{{3}} \(\d+\.\d\dx the bound's\)", out), (label, out)
 
 
 def run_mission_cost(w: Work) -> None:
