@@ -34,8 +34,8 @@ def pytest_configure(config: pytest.Config) -> None:
 
 @pytest.fixture(autouse=True)
 def _strategy_registry_as_shipped() -> Iterator[None]:
-    """A strategy a test loads (a plugin file, an entry point, a registered function) leaves the
-    registries as they were: a later test on the same worker sees the shipped strategies only."""
+    """A strategy a test loads (a file or an entry point, through `plugins.load_strategy`) is dropped from
+    the registries when the test ends: a later test on the same worker sees the shipped strategies only."""
     yield
     base = sys.modules.get("gcs.mission.strategies.base")
     plugins = sys.modules.get("gcs.mission.strategies.plugins")
