@@ -110,7 +110,7 @@ class PhysicsTicks:
             taken = rest_steps(apad, host.energy, rest_key(apad, host.current_mps), period / US_PER_S, n)
             if taken:
                 if apad.params.fs_gcs_enable:
-                    for t in (last + period, last + taken * period) if taken > 1 else (last + period,):
+                    for t in sorted({last + period, last + taken * period}):  # the first and the last
                         host.now_us = t
                         host.modes.check_failsafe()
                 if host.log is not None and last // US_PER_S != (last + taken * period) // US_PER_S:

@@ -57,8 +57,7 @@ class ApadState:
     @state.setter
     def state(self, value: VehicleState) -> None:
         """A new hull state (a physics step, a battery draw, a restore) ends any rest."""
-        if self.pending is not None:
-            self.pending()  # the steps skipped so far were taken from the old state
+        self.settle()  # the steps skipped so far were taken from the old state
         self.rest = None
         self._state = value
 

@@ -34,7 +34,7 @@ import multiprocessing
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
-from enum import Enum
+from enum import Enum, auto
 
 SHORT_S = 40 * 60.0
 DAY_S = 24 * 3600.0
@@ -44,9 +44,9 @@ SLEEP_BOUND = 12.0  # issue 20: the sleeping day at most 12x bay120's 40 minutes
 class Span(Enum):
     """How much mission time a row runs."""
 
-    SHORT = "40 min"  # bay120's mission as shipped: what the bound is 12x of
-    DAY = "the day"  # --day-h: the sleeping day the bound is about (its hours differ: charge cycles come and go)
-    QUIET = "quiet"  # --hours: nobody collected, every hour alike while everyone is alive
+    SHORT = auto()  # 40 min, bay120's mission as shipped: what the bound is 12x of
+    DAY = auto()  # --day-h: the sleeping day the bound is about (its hours differ: charge cycles come and go)
+    QUIET = auto()  # --hours: nobody collected, every hour alike while everyone is alive
 
 
 @dataclass(frozen=True)

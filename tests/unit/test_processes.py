@@ -471,6 +471,7 @@ def test_sleep_until_looks_when_and_in_the_order_its_sleeps_would_and_hands_over
     assert hand_overs == 5 < plain_hand_overs
     assert threads == {"process-a", "process-b"}  # a look runs in whichever script's thread holds the baton
 
+
 def test_what_a_look_raises_is_raised_in_its_own_scripts_thread() -> None:
     clock = VirtualClock()
     caught: list[tuple[str, str]] = []
