@@ -37,7 +37,7 @@ from typing import Any
 
 from acoustic.nanomodem.ports import BytePort
 from apad_sitl import messages as msgs
-from apad_sitl.commands import CommandTable
+from apad_sitl.command_handler import CommandTable
 from apad_sitl.dege7 import DegE7
 from apad_sitl.docking import Docking, MusselFixTable
 from apad_sitl.energy import EnergyMeter

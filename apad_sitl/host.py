@@ -129,7 +129,7 @@ CommandHandler = Callable[[Command], Reply]
 
 
 class CommandRegistry(Protocol):
-    """Where a part registers the MAV_CMDs it answers (`apad_sitl.commands.CommandTable`)."""
+    """Where a part registers the MAV_CMDs it answers (`apad_sitl.command_handler.CommandTable`)."""
 
     def register(self, command: int, handler: CommandHandler, *, stateful: bool = False) -> None:
         """Route `command` to `handler`. `stateful`: a retransmission of it is re-ACKed, not re-run."""

@@ -6,7 +6,7 @@
     vil sitl --count 3                           # aPads 1, 2, 3 on udp ports 14550, 14551, 14552, 5 m apart
 
 Without --home the aPad starts at pool12's home (the scenario `vil gcs` opens by default) and says
-so. Durations take their unit: --duration 90s, 40min, 1h. `vil sitl --scenario` (gcs.mission.sitl_cli)
+so. Durations take their unit: --duration 90s, 40min, 1h. `vil sitl --scenario` (gcs.cli.sitl)
 serves a scenario's aPads through `serve`.
 
 This is the edge: it opens the transport, reads the wall clock and handles Ctrl-C; the vehicle

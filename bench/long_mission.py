@@ -15,9 +15,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from gcs.mission import checkpoint
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
-from gcs.records import checkpoint
+from gcs.scenario.reader import load_scenario
 
 
 def wall_s(name: str, minutes: float, repeat: int) -> tuple[float, list[float]]:

@@ -23,8 +23,8 @@ from rich.table import Table
 
 from gcs.link.faultproxy import LinkFaults
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
 from gcs.mission.world import LinkOptions
+from gcs.scenario.reader import load_scenario
 
 COUNTED = ("failsafe",)  # aPad events
 GCS_COUNTED = ("goto_resumed", "goto_unconfirmed", "goto_timeout", "command_failed", "gave_up", "link_lost")

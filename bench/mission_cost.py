@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
+from gcs.scenario.reader import load_scenario
 
 DAY_S = 24 * 3600.0
 SHORT_S = 40 * 60.0

@@ -77,7 +77,7 @@ WARM_UP_S = 10.0  # a first short mission in each process: imports and first cal
 def ms_per_mission_s(row: Row, mission_s: float) -> float:
     """One mission in this (fresh) process with `row`'s parts off, after a warm-up; wall ms per mission second."""
     if row.heartbeats_only:
-        from gcs.mission import telemetry_pace
+        from gcs.loop import telemetry_pace
 
         for rates in (telemetry_pace.MISSION_TELEMETRY_HZ, telemetry_pace.HOLDING_TELEMETRY_HZ,
                       telemetry_pace.MOVING_TELEMETRY_HZ):
@@ -95,7 +95,7 @@ def ms_per_mission_s(row: Row, mission_s: float) -> float:
         if row.fleet_still:
             FleetRunner.step_task = nothing  # type: ignore[method-assign]
     from gcs.mission.headless import run_mission
-    from gcs.mission.scenario import load_scenario
+    from gcs.scenario.reader import load_scenario
 
     scenario = load_scenario(row.scenario).with_overrides(strategy=row.strategy)
     run_mission(scenario.with_overrides(duration_s=WARM_UP_S))

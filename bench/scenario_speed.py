@@ -28,7 +28,7 @@ from rich.console import Console
 from rich.table import Table
 
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
+from gcs.scenario.reader import load_scenario
 
 # label -> (module, attribute) of the functions timed as that part: the one-message codec and the
 # bulk messages' batch path together, the fleet model, the planner, the aPad's physics task.
@@ -37,7 +37,7 @@ PARTS: dict[str, tuple[tuple[str, str], ...]] = {
     "MAVLink parse": (("mavlink_dialect.codec", "Codec.decode"), ("mavlink_dialect.hot_decode", "SharedDecode.decode"),
                       ("mavlink_dialect.hot_decode", "decode_datagrams")),
     "fleet step": (("mussel_sim.fleet", "step"),),
-    "planner": (("gcs.mission.strategies", "plan"),),
+    "planner": (("gcs.strategies", "plan"),),
     "SITL physics": (("apad_sitl.parking", "PhysicsTicks.tick"), ("apad_sitl.parking", "PhysicsTicks.settle")),
 }
 

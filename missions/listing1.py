@@ -16,7 +16,7 @@ import sys
 import numpy as np
 
 from apad_sitl.vocabulary import Progress
-from gcs.api import ApadApi, CommandError
+from gcs.link.apad_api import ApadApi, CommandError
 from gcs.link.router import Link
 from mavlink_dialect import AddressError, Codec, open_transport
 from missiontime import WallClock

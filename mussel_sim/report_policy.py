@@ -16,7 +16,7 @@ mission's time. So, with a keep-alive period, an aMussel reports:
 - for an aPad's charger, at the next publish after its slot latched (`ChargerReports`; the fleet also
   reports one at once as its slot lets go).
 
-Between reports the GCS runs the battery forward in the model's steps (`gcs.mission.foresight`), so it
+Between reports the GCS runs the battery forward in the model's steps (`gcs.belief.foresight`), so it
 plans on what a report every step would have said, to float rounding. Keep-alive 0: every speaking
 aMussel at every publish, as before. Pure bookkeeping: the caller passes the state and the time.
 """

@@ -37,8 +37,8 @@ def _strategy_registry_as_shipped() -> Iterator[None]:
     """A strategy a test loads (a file or an entry point, through `plugins.load_strategy`) is dropped from
     the registries when the test ends: a later test on the same worker sees the shipped strategies only."""
     yield
-    base = sys.modules.get("gcs.mission.strategies.base")
-    plugins = sys.modules.get("gcs.mission.strategies.plugins")
+    base = sys.modules.get("gcs.strategies.base")
+    plugins = sys.modules.get("gcs.strategies.plugins")
     if base is None or plugins is None:  # nothing imported, nothing registered
         return
     for name in set(plugins.SOURCES):

@@ -234,9 +234,9 @@ def restored_session(scenario: Any, folder: Path, saved: Any = None) -> Any:
     """The console's way back, in process: the checkpoint in `folder` (or `saved`, one read from it and
     altered), the logs cut back to it, a fresh lockstep world whose clock starts at its time, and the
     session that restores it (not started). The caller closes the session and then its world."""
+    from gcs.mission import checkpoint
     from gcs.mission.session import MissionSession
     from gcs.mission.world import LinkOptions, build_world
-    from gcs.records import checkpoint
     from gcs.records.run_folder import RunFolder
     from missiontime import VirtualClock
 

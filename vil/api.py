@@ -11,7 +11,9 @@ import pandas as pd
 from rich.console import Console
 
 from gcs.mission.headless import run_mission, run_stem
-from gcs.mission.scenario import (
+from gcs.records.run_folder import RunFolder
+from gcs.scenario.model_params import check_inputs
+from gcs.scenario.reader import (
     Scenario,
     ScenarioError,
     load_scenario,
@@ -19,9 +21,7 @@ from gcs.mission.scenario import (
     resolve_scenario,
     scenario_from_data,
 )
-from gcs.mission.scenario_models import check_inputs
-from gcs.mission.strategies import StrategyError, load_strategy
-from gcs.records.run_folder import RunFolder
+from gcs.strategies import StrategyError, load_strategy
 from gcs.sweep.cells import make_cells, patched
 from gcs.sweep.cluster import ClusterError
 from gcs.sweep.runner import sweep as run_sweep

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gcs.mission.results import RunResult
 from gcs.records.run_folder import RunFolder
+from gcs.results.run_result import RunResult
 from missiontime import US_PER_S
 
 

@@ -6,7 +6,7 @@ its traits, and the geodesic distance the shipped strategies use.
     def slack_first(inp: PlanInput, weights: CostWeights) -> Plan: ...
 """
 
-from gcs.mission.strategies import CostWeights, Outlook, Plan, PlanInput, Traits
+from gcs.strategies import CostWeights, Outlook, Plan, PlanInput, Traits
 from mussel_sim.geo import distance_m
 
 __all__ = ["CostWeights", "Outlook", "Plan", "PlanInput", "Traits", "distance_m"]

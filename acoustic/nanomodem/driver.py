@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from enum import Enum
 
 from acoustic.airtime import PING_TIMEOUT_S
-from acoustic.nanomodem.commands import Command, Kind
+from acoustic.nanomodem.host_commands import Command, Kind
 from acoustic.nanomodem.ports import BytePort, PortClosed
 from acoustic.nanomodem.replies import (
     Ack,

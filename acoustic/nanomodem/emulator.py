@@ -29,8 +29,8 @@ import numpy as np
 
 from acoustic.airtime import PING_TIMEOUT_S, RANGE_TICK_S, airtime_s
 from acoustic.channel import Medium, Outcome, Reception, Transmission
-from acoustic.nanomodem.commands import GAP_S, MAX_ADDRESS, Command, CommandParser, Kind
 from acoustic.nanomodem.grammar import STRAY, Rejected
+from acoustic.nanomodem.host_commands import GAP_S, MAX_ADDRESS, Command, CommandParser, Kind
 from acoustic.nanomodem.replies import (
     MAX_TICKS,
     VOLTS_PER_TICK,

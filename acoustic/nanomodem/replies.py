@@ -15,8 +15,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from acoustic.airtime import CORRECTABLE_BYTES, MAX_PAYLOAD, MIN_PAYLOAD, RANGE_TICK_S
-from acoustic.nanomodem.commands import MAX_ADDRESS, Kind
 from acoustic.nanomodem.grammar import Data, Lit, Matcher, Num, Rejected, Template
+from acoustic.nanomodem.host_commands import MAX_ADDRESS, Kind
 
 CRLF = b"\r\n"
 VOLTS_PER_TICK = 15.0 / 65536.0

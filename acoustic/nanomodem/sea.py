@@ -30,8 +30,8 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from acoustic.nanomodem.commands import MAX_ADDRESS
 from acoustic.nanomodem.emulator import FrameKind
+from acoustic.nanomodem.host_commands import MAX_ADDRESS
 
 MAX_DATAGRAM = 8192
 MAX_POSITION_M = 1e6

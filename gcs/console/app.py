@@ -26,8 +26,8 @@ from gcs.console.help import HelpScreen
 from gcs.console.linkbar import LinkBar
 from gcs.console.runner import ConsoleRunner, DockMussel, GoToMussel, Hold, UndockMussel
 from gcs.console.widgets import LEGEND, Chart, ConsoleFooter, EventPanel, FleetTable, MapView, StatusPanel
-from gcs.mission.strategies import strategy_names
 from gcs.records.replay import Replay
+from gcs.strategies import strategy_names
 from gcs.view.snapshot import Snapshot
 from mussel_sim.vocabulary import MusselState
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from gcs.mission.scenario import Scenario
+from gcs.mission.checkpoint import Checkpoint, CheckpointFiles
 from gcs.mission.world import LinkOptions, World, build_world
-from gcs.records.checkpoint import Checkpoint, CheckpointFiles
+from gcs.scenario.reader import Scenario
 from missiontime import Clock, PacedClock, WallClock, unix_time_us
 
 

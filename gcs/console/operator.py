@@ -17,11 +17,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from apad_sitl.vocabulary import Latch, Primitive, Progress
-from gcs.api import ApadApi, CommandError
 from gcs.console.link_health import LOST_S
-from gcs.link.commands import command_words
-from gcs.mission.accounting import account
+from gcs.link.apad_api import ApadApi, CommandError
+from gcs.link.command_protocol import command_words
 from gcs.mission.world import World
+from gcs.results.accounting import account
 from missiontime import seconds_to_us, us_to_s
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
@@ -71,7 +71,7 @@ def action_of(command: OperatorCommand) -> tuple[str, dict[str, int]]:
 
 
 def words_of(exc: Exception) -> str:
-    """Why a command did not happen, in the operator's words (`gcs.link.commands.refusal_words`)."""
+    """Why a command did not happen, in the operator's words (`gcs.link.command_protocol.refusal_words`)."""
     if isinstance(exc, CommandError | Refused):
         return exc.words
     return str(exc).strip("'\"")  # a LookupError: "no status heard from aMussel 3", "aPad 2 has not been heard"

@@ -35,7 +35,6 @@ import time
 
 import numpy as np
 
-from gcs.api import ApadApi
 from gcs.console.config import ConsoleConfig, ResumePoint, open_world
 from gcs.console.link_health import Level, LinkHealth, LossWindow, link_health
 from gcs.console.operator import (
@@ -49,11 +48,12 @@ from gcs.console.operator import (
     leave_holding,
     log_whereabouts,
 )
-from gcs.mission.loop import EnergySharingLoop, LoopControl
+from gcs.link.apad_api import ApadApi
+from gcs.loop.energy_sharing import EnergySharingLoop, LoopControl
+from gcs.mission.checkpoint import Checkpoint, CheckpointError, CheckpointFiles, setup_digest
 from gcs.mission.outcome import write_outputs
 from gcs.mission.session import MissionSession
 from gcs.mission.world import World
-from gcs.records.checkpoint import Checkpoint, CheckpointError, CheckpointFiles, setup_digest
 from gcs.records.events import Event
 from gcs.records.run_folder import RunFolder
 from gcs.view.model import END_WORDS, MissionView, area_outline

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from gcs.link.commands import AUTOPILOT, POLL_S, Send
+from gcs.link.command_protocol import AUTOPILOT, POLL_S, Send
 from gcs.link.registry import VehicleRegistry
 from mavlink_dialect import mavlink
 from missiontime import Clock, seconds_to_us

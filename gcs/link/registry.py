@@ -163,7 +163,7 @@ class VehicleRegistry:
                 held = view.slots.get(record.slot)
                 if held is not None and held.latch == Latch.LATCHED and held.mussel_id and (
                         record.latch != Latch.LATCHED or record.mussel_id != held.mussel_id):
-                    self.released_us[held.mussel_id] = now_us  # it charged until now (`gcs.mission.foresight`)
+                    self.released_us[held.mussel_id] = now_us  # it charged until now (`gcs.belief.foresight`)
                 view.slots[record.slot] = record
             case Battery():
                 if record.voltage_v is not None:

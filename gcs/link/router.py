@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from gcs.link.commands import CommandClient, CommandError
+from gcs.link.command_protocol import CommandClient, CommandError
 from gcs.link.fleet_table import MusselBatch
 from gcs.link.params import ParamClient
 from gcs.link.registry import VehicleRegistry, VehicleView

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from gcs.results.days import ENERGY_KEYS
 from missiontime import US_PER_S
 
 if TYPE_CHECKING:
@@ -26,7 +27,6 @@ if TYPE_CHECKING:
 
 TRACK_PERIOD_S = 1.0  # as a replay samples a log
 DEFAULT_MAX_TRACK_ROWS = 8192
-ENERGY_KEYS = ("passed_wh", "drawn_wh", "home_wh")
 
 
 class ThinnedSeries:

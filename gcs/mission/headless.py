@@ -11,13 +11,13 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from gcs.mission import checkpoint
 from gcs.mission.outcome import write_endpoints, write_outputs
-from gcs.mission.results import RunResult
-from gcs.mission.scenario import Scenario
 from gcs.mission.session import MissionSession
 from gcs.mission.world import LinkOptions, World, lockstep_world
-from gcs.records import checkpoint
 from gcs.records.run_folder import RunFolder
+from gcs.results.run_result import RunResult
+from gcs.scenario.reader import Scenario
 from missiontime import us_to_s
 
 ProgressFn = Callable[[float], None]  # receives mission time done, seconds

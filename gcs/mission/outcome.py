@@ -11,16 +11,16 @@ from typing import Any
 import numpy as np
 
 from apad_sitl.energy_counters import EnergyCounters
-from gcs.mission.accounting import account
+from gcs.loop.control import Phase
+from gcs.loop.energy_sharing import EnergySharingLoop
 from gcs.mission.apad_record import ApadRecord, energy_now
-from gcs.mission.control import Phase
-from gcs.mission.days import day_rows
-from gcs.mission.loop import EnergySharingLoop
-from gcs.mission.results import MusselResult, RunResult
-from gcs.mission.swarm import FleetShares
 from gcs.mission.time_accounting import ApadTimes, apad_shares, mussel_times, trace_arrays
 from gcs.mission.world import World
 from gcs.records.run_folder import RunFolder
+from gcs.results.accounting import account
+from gcs.results.days import day_rows
+from gcs.results.run_result import MusselResult, RunResult
+from gcs.swarm.shares import FleetShares
 from mavlink_dialect.transport import UdpTransport
 
 TRACES_FORMAT = 2  # traces.npz with state traces, aPad tracks and positions (1: none of them, no field)
@@ -122,7 +122,7 @@ def collect_result(world: World, outcome: Outcome, wall_s: float) -> RunResult:
 
 
 def per_day(world: World, outcome: Outcome) -> dict[str, Any]:
-    """result.json's sim_day_s and days (`gcs.mission.days`); nothing without the recorder's ledger."""
+    """result.json's sim_day_s and days (`gcs.results.days`); nothing without the recorder's ledger."""
     days = world.fleet.recorder.days
     if days is None:
         return {}
@@ -217,7 +217,7 @@ def write_outputs(world: World, result: RunResult, folder: RunFolder, apad_times
     """traces.npz and result.json. traces.npz (format TRACES_FORMAT) holds what a report draws, at a
     bounded number of points: the recorder's traces (battery and state), the active count per step,
     each aPad's track (`record`), each aMussel's start and end position; a report reads it instead of
-    replaying the GCS's log (`gcs.records.report_traces`)."""
+    replaying the GCS's log (`gcs.report.traces`)."""
     rec = world.fleet.recorder
     steps, battery = rec.battery_trace()
     _, state = rec.state_trace()

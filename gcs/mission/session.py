@@ -10,7 +10,7 @@
                                 several as processes of one clock (`missiontime.processes`)
     outcome() / result(wall_s)  the loops, shares and times; the run's figures (result.json)
 
-Resuming after a crash (`gcs.records.checkpoint`): in lockstep the mission is deterministic, so the
+Resuming after a crash (`gcs.mission.checkpoint`): in lockstep the mission is deterministic, so the
 session replays it from the start with the logs muted (they hold that stretch already), checks at the
 checkpoint's instant that it arrived at the same state (its fingerprint), unmutes the logs, logs
 `mission_resume` and goes on: results as if never interrupted, each event written once. On the
@@ -26,16 +26,15 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable, Mapping
 
-from gcs.mission import apad_record
-from gcs.mission.control import EndReason, LoopControl, LoopStatus
-from gcs.mission.loop import EnergySharingLoop
+from gcs.loop.control import EndReason, LoopControl, LoopStatus
+from gcs.loop.energy_sharing import EnergySharingLoop
+from gcs.mission import apad_record, checkpoint
+from gcs.mission.checkpoint import CHECKPOINT_PERIOD_S, Checkpoint, CheckpointError, CheckpointFiles
 from gcs.mission.outcome import Outcome, collect_result
-from gcs.mission.results import RunResult
-from gcs.mission.swarm import FleetShares, SwarmWatch
 from gcs.mission.time_accounting import ApadTimes, track
 from gcs.mission.world import World
-from gcs.records import checkpoint
-from gcs.records.checkpoint import CHECKPOINT_PERIOD_S, Checkpoint, CheckpointError, CheckpointFiles
+from gcs.results.run_result import RunResult
+from gcs.swarm.shares import FleetShares, SwarmWatch
 from missiontime import Clock, Task, seconds_to_us
 from missiontime.processes import Processes
 

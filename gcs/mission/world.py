@@ -17,18 +17,19 @@ import numpy as np
 from acoustic.nanomodem.ports import BytePort, SerialPort
 from acoustic.nanomodem.sea import Sea, SeaClient, SilentSea, parse_udp
 from apad_sitl.endpoint import SitlVehicle
-from gcs.acoustic.network import AcousticNetwork
-from gcs.api import ApadApi, Location
+from gcs.acoustic_net.network import AcousticNetwork
+from gcs.belief.duty import scenario_duties
+from gcs.belief.energy_budget import EnergyBudget
+from gcs.belief.real_fleet import RealFleet
+from gcs.link.apad_api import ApadApi, Location
 from gcs.link.faultproxy import FaultProxy, LinkFaults
 from gcs.link.router import Link
-from gcs.mission.acoustic_frame import area_range_m
-from gcs.mission.control import LoopControl, LoopSettings, LoopStatus
-from gcs.mission.duty import scenario_duties
-from gcs.mission.energy_budget import EnergyBudget
-from gcs.mission.loop import EnergySharingLoop
-from gcs.mission.real_fleet import RealFleet
-from gcs.mission.scenario import ApadConfig, Scenario
-from gcs.mission.scenario_models import (
+from gcs.loop.control import LoopControl, LoopSettings, LoopStatus
+from gcs.loop.energy_sharing import EnergySharingLoop
+from gcs.loop.telemetry_pace import MISSION_TELEMETRY_HZ
+from gcs.records.events import EventLog
+from gcs.records.run_folder import RunFolder
+from gcs.scenario.model_params import (
     apad_params,
     call_up_wait_s,
     fleet_params,
@@ -37,10 +38,9 @@ from gcs.mission.scenario_models import (
     sensor_field,
     start_config,
 )
-from gcs.mission.swarm import FleetShares
-from gcs.mission.telemetry_pace import MISSION_TELEMETRY_HZ
-from gcs.records.events import EventLog
-from gcs.records.run_folder import RunFolder
+from gcs.scenario.reader import ApadConfig, Scenario
+from gcs.scenario.tdma_frame import area_range_m
+from gcs.swarm.shares import FleetShares
 from mavlink_dialect import Codec, Transport, mavlink, memory_pair, open_transport, signing
 from mavlink_dialect.transport import UdpTransport
 from missiontime import Clock, VirtualClock, seconds_to_us

@@ -1,1 +1,1 @@
-"""What a run leaves behind and reads back: events, checkpoints, replay and reports."""
+"""What a run leaves behind and reads back: its folder, events, checkpoints and the replay of a recorded run."""

@@ -25,9 +25,9 @@ import numpy as np
 from gcs.link import telemetry
 from gcs.link.registry import VehicleRegistry
 from gcs.link.router import GCS_SYSTEM_ID
-from gcs.mission.scenario import MISSIONS_DIR, Scenario, ScenarioError, load_scenario
 from gcs.records.events import Event
 from gcs.records.run_folder import RunFolder
+from gcs.scenario.reader import MISSIONS_DIR, Scenario, ScenarioError, load_scenario
 from gcs.view.model import MissionView, area_outline
 from gcs.view.snapshot import Snapshot
 from mavlink_dialect import Codec, mavlink, tlog

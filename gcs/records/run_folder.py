@@ -4,7 +4,7 @@
     events.jsonl         the mission's event log
     apadN.tlog           aPad N's own MAVLink log and event log (named by the aPad: `apad_sitl.logs`)
     apadN.events.jsonl
-    result.json          the run's figures (`gcs.mission.results`)
+    result.json          the run's figures (`gcs.results.run_result`)
     traces.npz           active count and battery traces per step, where the time went
     endpoints.json       the UDP ports a run over real sockets opened
     console.json         a console run's scenario and the Unix time of its mission time 0

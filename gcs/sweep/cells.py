@@ -21,9 +21,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gcs.mission.headless import run_mission, run_stem
-from gcs.mission.scenario import Scenario, ScenarioError, load_scenario, scenario_from_data
-from gcs.mission.scenario_models import check_inputs
-from gcs.mission.strategies import (
+from gcs.mission.world import World
+from gcs.scenario.model_params import check_inputs
+from gcs.scenario.reader import Scenario, ScenarioError, load_scenario, scenario_from_data
+from gcs.strategies import (
     StrategyError,
     fingerprint,
     is_plugin,
@@ -31,7 +32,6 @@ from gcs.mission.strategies import (
     shipped_names,
     source_of,
 )
-from gcs.mission.world import World
 from gcs.sweep.spec import SweepSpec, Value
 from missiontime import US_PER_S
 

@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from gcs.mission.scenario import SEED_MAX, read_toml
+from gcs.scenario.reader import SEED_MAX, read_toml
 
 MAX_CELLS = 100_000  # more is a typo in a range, not a sweep this machine should start
 MAX_SAMPLE = 10_000

@@ -27,7 +27,7 @@ from missiontime import mm_ss
 from mussel_sim.vocabulary import MusselState
 
 TRACE_SAMPLES = 300  # the aPad's recent trace: this many 1 Hz samples
-# Why a mission ended (`gcs.mission.control.EndReason`), as the console says it.
+# Why a mission ended (`gcs.loop.control.EndReason`), as the console says it.
 END_WORDS = {"mission time": "its time is up", "aPad battery": "the aPad's battery reached its end threshold",
              "operator stop": "the operator stopped it"}
 

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from acoustic.nanomodem.commands import Command, CommandParser, Kind
 from acoustic.nanomodem.emulator import ModemEmulator, RemoteUnit
+from acoustic.nanomodem.host_commands import Command, CommandParser, Kind
 from acoustic.nanomodem.replies import (
     Ack,
     AddressSet,

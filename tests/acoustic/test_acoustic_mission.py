@@ -22,16 +22,16 @@ from testkit import restored_session, scenario_variant
 
 from acoustic.channel import Medium, Transmission
 from acoustic.nanomodem.emulator import LOCAL, Frame, FrameKind
+from gcs.cli.report import write_report
 from gcs.link.faultproxy import LinkFaults
-from gcs.mission.acoustic_frame import scenario_frame
+from gcs.mission import checkpoint
 from gcs.mission.headless import run_mission
-from gcs.mission.results import RunResult
-from gcs.mission.scenario import Scenario, load_scenario
 from gcs.mission.world import LinkOptions
-from gcs.records import checkpoint
 from gcs.records.replay import read_events, read_tlog
-from gcs.records.report import write_report
 from gcs.records.run_folder import RunFolder
+from gcs.results.run_result import RunResult
+from gcs.scenario.reader import Scenario, load_scenario
+from gcs.scenario.tdma_frame import scenario_frame
 from mavlink_dialect import mavlink
 from mussel_sim.comms import SURFACE_DEPTH_M
 

@@ -9,9 +9,9 @@ from typing import Any
 import numpy as np
 import pytest
 
-from acoustic.nanomodem.commands import Command, Kind
 from acoustic.nanomodem.driver import ModemDriver, Outcome
 from acoustic.nanomodem.emulator import FrameKind, ModemEmulator, RemoteUnit
+from acoustic.nanomodem.host_commands import Command, Kind
 from acoustic.nanomodem.lockstep import attach
 from acoustic.nanomodem.ports import pipe
 from acoustic.nanomodem.replies import Range, Status
@@ -19,7 +19,7 @@ from acoustic.params import AcousticParams
 from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.modem_serial import CHUNKS_PER_ANSWER, MAX_HOLD_MS
 from apad_sitl.params import ApadParams
-from gcs.acoustic.apad_modem_port import HOLD_MS, LATE_S, MAX_INBOX, ApadModemPort
+from gcs.acoustic_net.apad_modem_port import HOLD_MS, LATE_S, MAX_INBOX, ApadModemPort
 from gcs.link.router import Link
 from mavlink_dialect import Codec, mavlink, memory_pair
 from missiontime import VirtualClock

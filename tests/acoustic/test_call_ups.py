@@ -20,7 +20,7 @@ from acoustic.nanomodem.ports import pipe
 from acoustic.orders import CALL_UP_TRIES
 from acoustic.params import AcousticParams
 from acoustic.tdma import Owner, tdma_frame
-from gcs.acoustic.call_ups import CallUp, CallUps
+from gcs.acoustic_net.call_ups import CallUp, CallUps
 from gcs.records.events import EventLog
 from missiontime import Clock
 from missiontime.clocks import VirtualClock

@@ -16,9 +16,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from acoustic.nanomodem.commands import CommandParser
 from acoustic.nanomodem.driver import ModemDriver, Outcome
 from acoustic.nanomodem.emulator import ModemEmulator, RemoteUnit
+from acoustic.nanomodem.host_commands import CommandParser
 from acoustic.nanomodem.lockstep import attach
 from acoustic.nanomodem.ports import SerialPort, pipe
 from acoustic.nanomodem.replies import Range, Received, ReplyParser, Status, Timeout

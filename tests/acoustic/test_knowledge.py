@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from gcs.acoustic.knowledge import believed_battery
+from gcs.acoustic_net.knowledge import believed_battery
 from gcs.link.telemetry import MusselView
 from mussel_sim.vocabulary import MusselState
 

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from acoustic.params import AcousticParams
-from gcs.cli import main
-from gcs.mission.scenario import MISSIONS_DIR, ScenarioError, load_scenario
-from gcs.modem_cli import parse_nodes, scenario_units
+from gcs.cli.main import main
+from gcs.cli.modem import parse_nodes, scenario_units
+from gcs.scenario.reader import MISSIONS_DIR, ScenarioError, load_scenario
 
 
 def test_help_explains_the_protocol_and_every_flag(capsys: pytest.CaptureFixture[str]) -> None:

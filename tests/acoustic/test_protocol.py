@@ -6,8 +6,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from acoustic.nanomodem.commands import Command, CommandParser, Kind
 from acoustic.nanomodem.grammar import Rejected
+from acoustic.nanomodem.host_commands import Command, CommandParser, Kind
 from acoustic.nanomodem.replies import Ack, AddressSet, Error, Quality, Range, Received, ReplyParser, Status, Timeout
 
 # The unit's bytes as its guide writes them (NOTES.md "Its serial protocol").

@@ -15,7 +15,7 @@ from acoustic.nanomodem.ports import pipe
 from acoustic.params import AcousticParams
 from acoustic.status_packet import LAYOUT, VERSION, StatusReport, pack
 from acoustic.tdma import tdma_frame
-from gcs.acoustic.uplink import AcousticUplink
+from gcs.acoustic_net.uplink import AcousticUplink
 from gcs.link.registry import VehicleRegistry
 from missiontime.clocks import VirtualClock
 

@@ -8,9 +8,9 @@ from typing import TYPE_CHECKING
 
 import pytest
 
+from gcs.cli.report import write_report
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
-from gcs.records.report import write_report
+from gcs.scenario.reader import load_scenario
 
 if TYPE_CHECKING:
     from conftest import BrowserPage  # this folder's conftest: the page and what it recorded

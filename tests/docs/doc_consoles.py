@@ -153,7 +153,7 @@ def run_gcs_resume(w: Work) -> None:
     """a console mission killed (SIGKILL) while aMussels charge on the aPad, then `--resume`: the same
     folder goes on from the checkpoint, at the pace it had, and the aMussels docked at the crash are
     released before any of them is called up again; q quits."""
-    from gcs.records.checkpoint import load as load_checkpoint
+    from gcs.mission.checkpoint import load as load_checkpoint
     from gcs.records.run_folder import CHECKPOINT
     from mussel_sim.vocabulary import MusselState
 
@@ -189,8 +189,8 @@ def run_gcs_resume(w: Work) -> None:
 
 
 def _charging(path: Path) -> bool:
-    from gcs.mission.control import Phase
-    from gcs.records.checkpoint import load as load_checkpoint
+    from gcs.loop.control import Phase
+    from gcs.mission.checkpoint import load as load_checkpoint
 
     if not path.exists():
         return False

@@ -39,7 +39,7 @@ def run_sitl_listing1(w: Work) -> None:
 def run_sitl_x2_and_gcs(w: Work) -> None:
     """pool12x2's SITL: aPad 1 on udp 14550 and aPad 2 on 14551, each heard at its scenario home; then
     one console connected to both shows both aPads, and quits with q."""
-    from gcs.mission.scenario import load_scenario
+    from gcs.scenario.reader import load_scenario
 
     scenario = load_scenario(w.path / "missions" / "pool12x2.toml")
     with ports_held(14550, 14551):

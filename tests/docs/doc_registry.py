@@ -197,7 +197,7 @@ REGISTRY: dict[str, Entry] = {
                                        "folder); the figure written beside it", long_only=CAPACITY_LONG),
     # docs/acoustic.md
     run.ACOUSTIC_FIGURES: Entry("runs", run.run_acoustic_figures, full=False,
-                                ci="python -m gcs.mission.acoustic_figures --figure acoustic-delivery.png",
+                                ci="python docs/acoustic_figures.py --figure acoustic-delivery.png",
                                 why="the figure written beside the run, not over the doc's (the command as written "
                                     "made docs/acoustic-delivery.png)"),
     run.VIL_MODEM: Entry("runs", run.run_vil_modem, ci=run.VIL_MODEM + " --ping-timeout 1s",

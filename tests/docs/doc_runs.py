@@ -169,7 +169,7 @@ def run_resume(w: Work) -> None:
 
 
 def _kill_then_resume(w: Work, start: str, resume: str, scenario: str) -> None:
-    from gcs.records.checkpoint import load as load_checkpoint
+    from gcs.mission.checkpoint import load as load_checkpoint
     from gcs.records.run_folder import CHECKPOINT
 
     folder = w.path / "runs" / f"{scenario}-cautious-seed1-run1"
@@ -306,7 +306,7 @@ def run_bay24_name(w: Work) -> None:
 
 
 # docs/acoustic.md
-ACOUSTIC_FIGURES = "python -m gcs.mission.acoustic_figures --figure docs/acoustic-delivery.png"
+ACOUSTIC_FIGURES = "python docs/acoustic_figures.py --figure docs/acoustic-delivery.png"
 VIL_MODEM = "vil modem --nodes 5@300,0,5 9@2400,0,5"
 FUZZ_MODEM = ".venv/bin/python bench/fuzz_modem.py"
 

@@ -31,7 +31,7 @@ def write_one_spec(w: Work) -> None:
 def check_shipped_spec(root: Path) -> int:
     """missions/sweeps/strategies.toml is what both docs say: every registered strategy x pool12, bay24 x
     seeds 1-20, as many missions as the README's claim; the number of missions."""
-    from gcs.mission.strategies import shipped_names
+    from gcs.strategies import shipped_names
     from gcs.sweep.cells import make_cells
     from gcs.sweep.spec import load_spec
 

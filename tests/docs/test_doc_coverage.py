@@ -52,7 +52,7 @@ def test_a_long_only_example_still_names_what_there_is(command: str, tmp_path: P
         if re.match(r"^(missions|docs|bench)/\S+\.(toml|py|geojson)$", word):
             assert (ROOT / word).is_file(), word
     if program(line) == "vil":
-        from gcs.cli import build_parser
+        from gcs.cli.main import build_parser
 
         monkeypatch.chdir(tmp_path)
         try:

@@ -207,8 +207,8 @@ class FuzzWorld:
 
     def __init__(self, seed: int, scenario: str = "pool12", senders_ids: Sequence[tuple[int, int]] = GCS_SENDERS,
                  hostile_share: float = 0.5, classes: Sequence[type[Any]] = MESSAGE_CLASSES) -> None:
-        from gcs.mission.scenario import load_scenario
         from gcs.mission.world import lockstep_world
+        from gcs.scenario.reader import load_scenario
 
         self.world = lockstep_world(load_scenario(scenario))
         self.world.clock.sleep(1.0)  # heartbeats exchanged: the aPad is a known vehicle

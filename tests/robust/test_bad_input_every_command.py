@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
+from gcs.scenario.reader import load_scenario
 
 MISSIONS = Path(__file__).resolve().parents[2] / "missions"
 

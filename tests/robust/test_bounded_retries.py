@@ -18,8 +18,8 @@ from testkit import read_jsonl, scenario_variant
 
 from gcs.link.faultproxy import LinkFaults
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
 from gcs.mission.world import LinkOptions, lockstep_world
+from gcs.scenario.reader import load_scenario
 from mavlink_dialect import mavlink
 
 pytestmark = pytest.mark.sitl

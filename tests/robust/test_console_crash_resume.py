@@ -24,9 +24,9 @@ from pathlib import Path
 import pytest
 from testkit import PtyConsole, read_jsonl, scenario_variant
 
-from gcs.mission.control import Phase
-from gcs.records import checkpoint
-from gcs.records.checkpoint import load
+from gcs.loop.control import Phase
+from gcs.mission import checkpoint
+from gcs.mission.checkpoint import load
 from gcs.records.run_folder import CHECKPOINT
 from mavlink_dialect import tlog
 from mussel_sim.vocabulary import MusselState
@@ -161,7 +161,7 @@ def _refused(done: subprocess.CompletedProcess[str], *words: str) -> None:
 def _left_checkpoint(folder: Path, strategy: str, monkeypatch: pytest.MonkeyPatch) -> None:
     """A short headless run that leaves its last checkpoint behind, as a crash would."""
     from gcs.mission.headless import run_mission
-    from gcs.mission.scenario import load_scenario
+    from gcs.scenario.reader import load_scenario
 
     monkeypatch.setattr(checkpoint.CheckpointFiles, "remove", checkpoint.CheckpointFiles.close)
     run_mission(load_scenario("pool12").with_overrides(strategy=strategy, duration_s=60.0), folder)

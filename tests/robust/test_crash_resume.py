@@ -22,11 +22,11 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from gcs.mission import checkpoint
+from gcs.mission.checkpoint import load
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
-from gcs.records import checkpoint
-from gcs.records.checkpoint import load
 from gcs.records.run_folder import CHECKPOINT, RunFolder
+from gcs.scenario.reader import load_scenario
 from mavlink_dialect import tlog
 
 pytestmark = [pytest.mark.sitl, pytest.mark.slow]

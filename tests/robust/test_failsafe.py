@@ -12,8 +12,8 @@ from apad_sitl.params import ApadParams
 from apad_sitl.vocabulary import Latch, Primitive, RoverMode
 from gcs.link.faultproxy import LinkFaults
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
 from gcs.mission.world import LinkOptions
+from gcs.scenario.reader import load_scenario
 from mavlink_dialect import MAV_CMD_APAD_DOCK, mavlink
 
 pytestmark = pytest.mark.sitl

@@ -19,9 +19,9 @@ import pytest
 from hostile_packets import GCS_ORDERS, MESSAGE_CLASSES, STRANGERS, FuzzWorld, HostileFrames, senders
 
 from apad_sitl.modem_serial import OWNER_SILENT_S
-from gcs.mission.accounting import account
-from gcs.mission.scenario import Scenario
 from gcs.mission.world import MISSION_TELEMETRY_HZ
+from gcs.results.accounting import account
+from gcs.scenario.reader import Scenario
 from mavlink_dialect import mavlink
 
 EXAMPLES = int(os.environ.get("VIL_FUZZ_EXAMPLES", "4000"))

@@ -12,9 +12,9 @@ from pathlib import Path
 import pytest
 from testkit import free_udp_port
 
-from gcs.console.cli import add_gcs_arguments, run_gcs
+from gcs.cli.console import add_gcs_arguments, run_gcs
 from gcs.console.runner import ConsoleConfig, open_world
-from gcs.mission.scenario import load_scenario
+from gcs.scenario.reader import load_scenario
 from mavlink_dialect import signing
 
 pytestmark = [pytest.mark.sitl, pytest.mark.slow]

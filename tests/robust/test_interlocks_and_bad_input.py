@@ -13,10 +13,10 @@ import pytest
 from robust_helpers import FRAME, SYSID, latlon_e7, sitl_pair
 
 from apad_sitl.vocabulary import Latch
-from gcs.api import GeofenceError
+from gcs.link.apad_api import GeofenceError
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
 from gcs.mission.world import lockstep_world
+from gcs.scenario.reader import load_scenario
 from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
 from mussel_sim.fleet import step
 from mussel_sim.fleet_state import FleetInputs

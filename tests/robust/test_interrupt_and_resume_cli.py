@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 from testkit import sigint_as_in_a_terminal
 
-from gcs.records.checkpoint import CheckpointError, load
+from gcs.mission.checkpoint import CheckpointError, load
 from gcs.records.run_folder import RunFolder
 
 pytestmark = [pytest.mark.sitl, pytest.mark.slow]

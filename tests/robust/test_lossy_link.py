@@ -11,8 +11,8 @@ import pytest
 from apad_sitl.primitives import Refusal
 from gcs.link.faultproxy import FaultProxy, LinkFaults
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
 from gcs.mission.world import LinkOptions
+from gcs.scenario.reader import load_scenario
 from mavlink_dialect import MAV_CMD_APAD_UNDOCK
 from missiontime import VirtualClock
 

@@ -11,8 +11,8 @@ from robust_helpers import SYSID, latlon_e7, sitl_pair
 from apad_sitl.vocabulary import Latch
 from gcs.link.faultproxy import LinkFaults
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
 from gcs.mission.world import LinkOptions
+from gcs.scenario.reader import load_scenario
 from mavlink_dialect import MAV_CMD_APAD_DOCK, Codec, hot, mavlink, signing
 from mavlink_dialect.signing import SigningKeyError, key_from_passphrase, load_key
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID

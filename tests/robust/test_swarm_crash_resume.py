@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gcs.records.checkpoint import CheckpointError, load
+from gcs.mission.checkpoint import CheckpointError, load
 from gcs.records.run_folder import RunFolder
 
 pytestmark = [pytest.mark.sitl, pytest.mark.slow]

@@ -15,8 +15,8 @@ import pytest
 from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.params import ApadParams
 from apad_sitl.vocabulary import Latch, Progress
-from gcs.api import ApadApi, Location
-from gcs.link.commands import BACKOFF
+from gcs.link.apad_api import ApadApi, Location
+from gcs.link.command_protocol import BACKOFF
 from gcs.link.router import CommandError, Link
 from mavlink_dialect import Codec, mavlink, memory_pair, open_transport
 from mavlink_dialect.transport import MemoryTransport, Transport

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import MISSIONS_DIR, scenario_from_data
+from gcs.scenario.reader import MISSIONS_DIR, scenario_from_data
 
 pytestmark = [pytest.mark.sitl]
 

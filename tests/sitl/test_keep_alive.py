@@ -12,7 +12,7 @@ import pytest
 from testkit import read_jsonl, scenario_variant
 
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
+from gcs.scenario.reader import load_scenario
 from mavlink_dialect import subcultron as mavlink
 from mavlink_dialect.tlog import frames
 

@@ -14,12 +14,13 @@ import pytest
 from rich.console import Console
 
 import vil
+from gcs.cli.tables import time_table
 from gcs.mission.headless import run_mission
-from gcs.mission.results import RunResult, time_table
-from gcs.mission.scenario import load_scenario
 from gcs.records import replay
-from gcs.records.report_data import load_replayed_run
-from gcs.records.report_load import load_run
+from gcs.report.load import load_run
+from gcs.report.run_data import load_replayed_run
+from gcs.results.run_result import RunResult
+from gcs.scenario.reader import load_scenario
 from mussel_sim.report_policy import STATUS_KEEPALIVE_S
 from mussel_sim.vocabulary import MusselState
 

@@ -10,7 +10,7 @@ import pytest
 from testkit import read_jsonl, scenario_variant
 
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
+from gcs.scenario.reader import load_scenario
 
 pytestmark = pytest.mark.sitl
 

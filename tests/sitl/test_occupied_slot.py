@@ -8,7 +8,7 @@ from test_gcs_api import lockstep, offset
 
 from apad_sitl.primitives import Refusal
 from apad_sitl.vocabulary import Latch, Primitive, Progress
-from gcs.api import CommandError
+from gcs.link.apad_api import CommandError
 from mavlink_dialect import mavlink
 
 pytestmark = pytest.mark.sitl

@@ -10,11 +10,11 @@ from pathlib import Path
 import pytest
 from testkit import free_udp_port, scenario_variant
 
-from gcs.cli import main
-from gcs.mission.control import LoopControl
-from gcs.mission.duty import Duty
-from gcs.mission.scenario import load_scenario
+from gcs.belief.duty import Duty
+from gcs.cli.main import main
+from gcs.loop.control import LoopControl
 from gcs.mission.world import LinkOptions, build_world
+from gcs.scenario.reader import load_scenario
 from missiontime import PacedClock
 from mussel_sim.battery import discharge_profile
 from mussel_sim.vocabulary import MusselState

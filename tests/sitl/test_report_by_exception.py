@@ -9,8 +9,8 @@ from dataclasses import replace
 import pytest
 
 from gcs.mission.headless import run_mission
-from gcs.mission.results import RunResult
-from gcs.mission.scenario import load_scenario
+from gcs.results.run_result import RunResult
+from gcs.scenario.reader import load_scenario
 
 pytestmark = pytest.mark.sitl
 

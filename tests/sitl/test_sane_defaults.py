@@ -12,12 +12,12 @@ from pathlib import Path
 import pytest
 from testkit import free_udp_port, scenario_variant
 
-from gcs.api import Location
-from gcs.cli import build_parser, main
-from gcs.link.commands import CommandError
-from gcs.mission.scenario import MISSIONS_DIR, load_scenario
-from gcs.mission.sitl_cli import scenario_apads
+from gcs.cli.main import build_parser, main
+from gcs.cli.sitl import scenario_apads
+from gcs.link.apad_api import Location
+from gcs.link.command_protocol import CommandError
 from gcs.mission.world import LinkOptions, build_world
+from gcs.scenario.reader import MISSIONS_DIR, load_scenario
 from missiontime import Scheduler, WallClock
 from mussel_sim.geo import distance_m
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from gcs.mission.scenario import load_scenario
+from gcs.scenario.reader import load_scenario
 
 pytestmark = [pytest.mark.sitl]
 

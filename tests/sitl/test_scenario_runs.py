@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from gcs.mission.headless import run_mission
-from gcs.mission.results import RunResult
-from gcs.mission.scenario import load_scenario
+from gcs.results.run_result import RunResult
+from gcs.scenario.reader import load_scenario
 from mussel_sim.battery import DISCHARGE_ACTIVE_PER_MIN
 
 pytestmark = pytest.mark.sitl
@@ -176,7 +176,7 @@ def test_table_ii_seed_1_is_what_it_was_before_the_redesign(run: str, request: p
     cost and travel by 0.03-0.09 m (pool12 cautious 277.837 -> 277.921 m), as the aPad heads for
     positions heard up to 5 s before and the aMussels drift millimetres since; every uptime, the
     active means and the cycles are identical (between reports the GCS runs the battery forward in
-    the model's steps, `gcs.mission.foresight`, so it decides when it decided before).
+    the model's steps, `gcs.belief.foresight`, so it decides when it decided before).
     """
     scenario, strategy = run.split("-")
     r: RunResult = request.getfixturevalue(scenario)[strategy]

@@ -12,11 +12,11 @@ import pytest
 from testkit import restored_session
 
 from gcs.console.runner import ConsoleConfig, ConsoleRunner
-from gcs.mission.control import EndReason
+from gcs.loop.control import EndReason
+from gcs.mission import checkpoint
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
-from gcs.records import checkpoint
 from gcs.records.run_folder import RunFolder
+from gcs.scenario.reader import load_scenario
 
 pytestmark = pytest.mark.sitl
 

@@ -11,8 +11,8 @@ import pytest
 from testkit import read_jsonl, scenario_variant
 
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
 from gcs.mission.world import lockstep_world
+from gcs.scenario.reader import load_scenario
 from mussel_sim.battery import DISCHARGE_ACTIVE_PER_MIN
 from mussel_sim.behaviour import duty_cycle_rate_per_min
 from mussel_sim.report_policy import STATUS_KEEPALIVE_S

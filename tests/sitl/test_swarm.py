@@ -10,12 +10,12 @@ import pytest
 from testkit import read_jsonl
 
 from apad_sitl.vocabulary import Latch
-from gcs.api import Location
+from gcs.link.apad_api import Location
 from gcs.link.telemetry import SlotView
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
-from gcs.mission.swarm import FleetShares, SwarmWatch, route_conflicts
 from gcs.mission.world import LinkOptions, lockstep_world
+from gcs.scenario.reader import load_scenario
+from gcs.swarm.shares import FleetShares, SwarmWatch, route_conflicts
 from missiontime import US_PER_S
 from mussel_sim.comms import FLEET_SYSTEM_ID
 from mussel_sim.vocabulary import MusselState

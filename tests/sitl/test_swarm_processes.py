@@ -13,13 +13,13 @@ import pytest
 from testkit import free_udp_port
 
 from apad_sitl.vocabulary import Progress
-from gcs.api import Location
-from gcs.mission.control import EndReason
+from gcs.link.apad_api import Location
+from gcs.loop.control import EndReason
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
 from gcs.mission.session import MissionSession
-from gcs.mission.strategies import STRATEGIES, CostWeights, Plan, PlanInput
 from gcs.mission.world import LinkOptions, build_world
+from gcs.scenario.reader import load_scenario
+from gcs.strategies import STRATEGIES, CostWeights, Plan, PlanInput
 from missiontime import Clock, Scheduler, WallClock
 from missiontime.processes import Processes
 from mussel_sim.geo import LocalFrame, distance_m

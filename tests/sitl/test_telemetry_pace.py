@@ -15,12 +15,12 @@ import pytest
 from testkit import scenario_variant
 
 from gcs.link.telemetry import GCS_SYSTEM_ID
-from gcs.mission.control import Phase
+from gcs.loop.control import Phase
+from gcs.loop.telemetry_pace import HOLDING_PHASES, HOLDING_TELEMETRY_HZ, MOVING_TELEMETRY_HZ, PLANNING_PHASES
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
-from gcs.mission.telemetry_pace import HOLDING_PHASES, HOLDING_TELEMETRY_HZ, MOVING_TELEMETRY_HZ, PLANNING_PHASES
 from gcs.mission.world import LOCKSTEP_EPOCH_US
 from gcs.records.run_folder import RunFolder
+from gcs.scenario.reader import load_scenario
 from mavlink_dialect import Codec, mavlink, tlog
 
 pytestmark = pytest.mark.sitl

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 from testkit import MISSIONS, read_jsonl, scenario_variant
 
-from gcs.mission.accounting import account
 from gcs.mission.headless import run_mission
-from gcs.mission.results import RunResult
-from gcs.mission.scenario import load_scenario
+from gcs.results.accounting import account
+from gcs.results.run_result import RunResult
+from gcs.scenario.reader import load_scenario
 from mussel_sim.battery import DISCHARGE_ACTIVE_PER_MIN
 from mussel_sim.fleet import step
 from mussel_sim.fleet_state import ACTIVE, FLOATING, FleetInputs, FleetParams, state_from_arrays

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from gcs.mission.strategies import shipped_names
+from gcs.strategies import shipped_names
 from gcs.sweep.cells import make_cells
 from gcs.sweep.spec import SpecError, load_spec
 

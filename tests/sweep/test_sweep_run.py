@@ -10,7 +10,7 @@ import pytest
 from distributed import LocalCluster
 from rich.console import Console
 
-from gcs.cli import main
+from gcs.cli.main import main
 from gcs.mission.headless import run_mission
 from gcs.sweep.cells import make_cells
 from gcs.sweep.runner import sweep

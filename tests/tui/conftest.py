@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from gcs.mission.loop import LoopControl
-from gcs.mission.scenario import load_scenario
+from gcs.loop.energy_sharing import LoopControl
 from gcs.mission.world import MISSION_TELEMETRY_HZ, lockstep_world
+from gcs.scenario.reader import load_scenario
 
 MISSIONS = Path(__file__).resolve().parents[2] / "missions"
 STOP_AT_S = 240.0

@@ -16,7 +16,7 @@ from tui_helpers import screen_text, wait_for
 
 from gcs.console.app import LiveConsole
 from gcs.console.runner import ConsoleConfig, ConsoleRunner
-from gcs.mission.scenario import load_scenario
+from gcs.scenario.reader import load_scenario
 from gcs.view.snapshot import STALE_S, age_text
 from mussel_sim.vocabulary import MusselState
 

@@ -17,8 +17,8 @@ from tui_helpers import screen_text, wait_for
 
 from gcs.console.app import ConsoleApp, LiveConsole, ReplayConsole
 from gcs.console.runner import ConsoleConfig, ConsoleRunner
-from gcs.mission.scenario import load_scenario
 from gcs.records.replay import load_replay
+from gcs.scenario.reader import load_scenario
 
 pytestmark = pytest.mark.tui
 

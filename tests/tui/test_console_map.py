@@ -22,7 +22,7 @@ from apad_sitl.vocabulary import Latch
 from gcs.console.app import ConsoleApp
 from gcs.link.registry import VehicleRegistry
 from gcs.link.telemetry import DEG_E7, Heartbeat, MusselView, Position, SlotView
-from gcs.mission.scenario import load_scenario
+from gcs.scenario.reader import load_scenario
 from gcs.view.model import MissionView, area_outline
 from gcs.view.snapshot import Snapshot
 from mussel_sim.geo import LocalFrame

@@ -14,12 +14,12 @@ from tui_helpers import screen_text, wait_for
 
 from gcs.console.app import LiveConsole
 from gcs.console.runner import ConsoleConfig, ConsoleRunner, ResumePoint
+from gcs.mission import checkpoint
+from gcs.mission.checkpoint import CheckpointFiles
 from gcs.mission.headless import run_mission
-from gcs.mission.scenario import load_scenario
 from gcs.mission.world import LOCKSTEP_EPOCH_US
-from gcs.records import checkpoint
-from gcs.records.checkpoint import CheckpointFiles
 from gcs.records.run_folder import CHECKPOINT, RunFolder
+from gcs.scenario.reader import load_scenario
 from missiontime import mm_ss
 from mussel_sim.vocabulary import MusselState
 

@@ -21,7 +21,7 @@ from gcs.console.app import LiveConsole
 from gcs.console.confirm import ConfirmQuit
 from gcs.console.link_health import LOST_S, Level
 from gcs.console.runner import ConsoleConfig, ConsoleRunner
-from gcs.mission.scenario import load_scenario
+from gcs.scenario.reader import load_scenario
 from mussel_sim.vocabulary import MusselState
 
 pytestmark = [pytest.mark.tui, pytest.mark.sitl]

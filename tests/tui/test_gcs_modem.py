@@ -18,10 +18,10 @@ import pytest
 from testkit import free_udp_port, start_vil_modem
 from tui_helpers import wait_for
 
-from gcs.cli import main
+from gcs.cli.main import main
 from gcs.console.app import QUIT_BOUND_S, LiveConsole
 from gcs.console.runner import ConsoleConfig, ConsoleRunner
-from gcs.mission.scenario import load_scenario
+from gcs.scenario.reader import load_scenario
 from mussel_sim.vocabulary import MusselState
 
 pytestmark = [pytest.mark.sitl, pytest.mark.tui]

@@ -15,8 +15,8 @@ from tui_helpers import screen_text, wait_for
 from apad_sitl.vocabulary import Primitive
 from gcs.console.app import LiveConsole
 from gcs.console.runner import ConsoleConfig, ConsoleRunner
-from gcs.mission.scenario import load_scenario
-from gcs.mission.strategies import COLLECT
+from gcs.scenario.reader import load_scenario
+from gcs.strategies import COLLECT
 from mussel_sim.vocabulary import MusselState
 
 pytestmark = [pytest.mark.tui, pytest.mark.sitl]

@@ -25,7 +25,7 @@ from tui_helpers import screen_text, wait_for
 from gcs.console.app import QUIT_BOUND_S, LiveConsole
 from gcs.console.confirm import ConfirmQuit
 from gcs.console.runner import ConsoleConfig, ConsoleRunner
-from gcs.mission.scenario import load_scenario
+from gcs.scenario.reader import load_scenario
 
 pytestmark = [pytest.mark.tui, pytest.mark.sitl, pytest.mark.slow]
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from tui_helpers import screen_text, wait_for
 
-from gcs.cli import main
+from gcs.cli.main import main
 from gcs.console.app import ReplayConsole
 from gcs.records.replay import ReplayError, load_replay, read_tlog
 from mussel_sim.vocabulary import MusselState
@@ -90,7 +90,7 @@ def test_replay_keys_play_pause_speed_seek(recorded_run: Path) -> None:
 
 def test_a_swarm_run_replays_with_every_apad_and_its_share(tmp_path: Path) -> None:
     from gcs.mission.headless import run_mission
-    from gcs.mission.scenario import load_scenario
+    from gcs.scenario.reader import load_scenario
 
     run = tmp_path / "run"
     result = run_mission(load_scenario("pool12x2").with_overrides(duration_s=360.0), run)

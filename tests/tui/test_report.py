@@ -17,12 +17,12 @@ from urllib.parse import urlsplit
 import pytest
 from shapely.geometry import LinearRing
 
-from gcs.cli import main
+from gcs.cli.main import main
+from gcs.loop.energy_sharing import LoopControl
 from gcs.mission.headless import run_mission
-from gcs.mission.loop import LoopControl
-from gcs.mission.scenario import load_scenario
 from gcs.mission.world import MISSION_TELEMETRY_HZ, LinkOptions, lockstep_world
-from gcs.records.report_load import load_run
+from gcs.report.load import load_run
+from gcs.scenario.reader import load_scenario
 
 pytestmark = pytest.mark.tui
 

@@ -18,7 +18,7 @@ from gcs.console.app import LiveConsole
 from gcs.console.fleetview import FleetTable
 from gcs.console.runner import ConsoleConfig, ConsoleRunner
 from gcs.console.widgets import APAD_COLOURS
-from gcs.mission.scenario import load_scenario
+from gcs.scenario.reader import load_scenario
 
 pytestmark = [pytest.mark.tui, pytest.mark.sitl]
 

@@ -13,7 +13,7 @@ from apad_sitl.primitives import PrimitiveState, SlotState
 from apad_sitl.state import ApadState
 from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V
 from apad_sitl.vocabulary import Latch
-from gcs.mission.energy_budget import EnergyBudget
+from gcs.belief.energy_budget import EnergyBudget
 
 RANGE_V = BATTERY_FULL_V - BATTERY_EMPTY_V
 

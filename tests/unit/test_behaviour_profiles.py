@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from testkit import MISSIONS
 
-from gcs.mission.scenario import ScenarioError, scenario_from_data
-from gcs.mission.scenario_models import call_up_wait_s, check_inputs, fleet_params
+from gcs.scenario.model_params import call_up_wait_s, check_inputs, fleet_params
+from gcs.scenario.reader import ScenarioError, scenario_from_data
 from mussel_sim.battery import (
     DISCHARGE_ACTIVE_PER_MIN,
     TABLE1_CHARGE_PRIMARY_IDLE_MIN,

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gcs.mission.strategies import COLLECT, PlanInput, StrategyError, check_plan, plan
+from gcs.strategies import COLLECT, PlanInput, StrategyError, check_plan, plan
 
 INP = PlanInput(apads={1: (43.94, 15.44), 2: (43.9401, 15.4401)}, capacity={1: 2, 2: 1},
                 mussel_ids=np.array([3, 5, 8], np.int64), lat_deg=np.array([43.94, 43.9402, 43.9403]),

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from gcs.console.cli import saved_speed
+from gcs.cli.console import saved_speed
 from gcs.records.run_folder import RunFolder
 
 

@@ -15,8 +15,8 @@ from gcs.console.canvas import BrailleCanvas
 from gcs.console.runner import ConsoleConfig, ConsoleRunner, Hold, PacedClock, UndockMussel
 from gcs.link import telemetry
 from gcs.link.registry import VehicleRegistry
-from gcs.mission.scenario import load_scenario
 from gcs.records.events import Event
+from gcs.scenario.reader import load_scenario
 from gcs.view.model import MissionView
 from gcs.view.snapshot import MarkerColour
 from mavlink_dialect import Codec, mavlink
@@ -182,7 +182,7 @@ def test_a_real_aMussel_with_a_simulated_ones_id_is_refused_and_overwrites_nothi
 
 def test_a_vehicle_that_answers_in_progress_forever_fails_the_command_at_the_bound() -> None:
     """A real link over real bytes: the far end says IN_PROGRESS every half second, and nothing more."""
-    from gcs.link.commands import IN_PROGRESS_MAX_S, CommandError
+    from gcs.link.command_protocol import IN_PROGRESS_MAX_S, CommandError
     from gcs.link.router import Link
     from mavlink_dialect import memory_pair
     from missiontime import VirtualClock

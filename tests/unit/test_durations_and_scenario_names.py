@@ -13,9 +13,9 @@ from pathlib import Path
 import pytest
 from testkit import scenario_variant
 
-from gcs.mission import flags
-from gcs.mission.run_cli import seed_notice
-from gcs.mission.scenario import MISSIONS_DIR, ScenarioError, load_scenario, resolve_scenario
+from gcs.cli import flags
+from gcs.cli.run import seed_notice
+from gcs.scenario.reader import MISSIONS_DIR, ScenarioError, load_scenario, resolve_scenario
 from missiontime.durations import parse_duration_s
 
 

@@ -1,4 +1,4 @@
-"""The GCS's foresight of a simulated aMussel between its reports (`gcs.mission.foresight`), against the
+"""The GCS's foresight of a simulated aMussel between its reports (`gcs.belief.foresight`), against the
 fleet's own model stepped the same seconds: what a report every step would have said."""
 
 from __future__ import annotations
@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from gcs.belief.foresight import MODEL_STEP_US, charged_forward, foreseen_battery, foreseen_deployed, steps_since
 from gcs.link.telemetry import MusselView
-from gcs.mission.foresight import MODEL_STEP_US, charged_forward, foreseen_battery, foreseen_deployed, steps_since
 from mussel_sim.battery import DISCHARGE_ACTIVE_PER_MIN, charge_profile, discharge_profile, sim_minutes, step_battery
 from mussel_sim.vocabulary import MusselState
 

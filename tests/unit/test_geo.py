@@ -7,7 +7,7 @@ import pytest
 from pyproj import Transformer
 
 from apad_sitl.geofence import KNOWN_FIXES, Geofence
-from gcs.mission.strategies.routing import metres_matrix
+from gcs.strategies.routing import metres_matrix
 from mussel_sim.geo import LocalFrame, distance_m, pair_distance_m
 
 

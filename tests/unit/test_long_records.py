@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gcs.mission.apad_record import ApadRecord, ThinnedSeries
-from gcs.mission.days import groups
+from gcs.results.days import groups
 from mussel_sim.day_ledger import DayLedger, day_us
 from mussel_sim.fleet_state import (
     ACTIVE,

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gcs.mission.partition import partition
+from gcs.swarm.partition import partition
 
 
 def _blobs(rng: np.random.Generator, centres: list[tuple[float, float]], per: int, spread: float) -> np.ndarray:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gcs.mission.strategies import STRATEGIES, CostWeights, PlanInput, plan, route_length_m, strategy
+from gcs.strategies import STRATEGIES, CostWeights, PlanInput, plan, route_length_m, strategy
 from mussel_sim.geo import LocalFrame
 
 FRAME = LocalFrame(43.94, 15.44)

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gcs.records.checkpoint import Checkpoint, CheckpointError, CheckpointFiles, load, save
+from gcs.mission.checkpoint import Checkpoint, CheckpointError, CheckpointFiles, load, save
 from mussel_sim.fleet_state import ACTIVE, SURFACING, FleetParams, FleetState, state_from_arrays
 from mussel_sim.recorder import Recorder, RecorderRows
 

@@ -4,7 +4,7 @@ were first heard folded in, at its own time, and older or damaged events left ou
 from __future__ import annotations
 
 from gcs.records.events import Event
-from gcs.records.report_maps import reshares
+from gcs.report.maps import reshares
 
 
 def test_joins_fold_into_the_sharing_before_them_which_keeps_its_own_time() -> None:

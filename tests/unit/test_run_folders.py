@@ -61,7 +61,7 @@ def test_latest_points_at_the_last_run_as_a_symlink_or_else_a_text_file(tmp_path
 def test_a_run_leaves_only_files_its_run_folder_names(tmp_path: Path) -> None:
     """Every file a real two-aPad mission writes is one `RunFolder` names (no room invents a name)."""
     from gcs.mission.headless import run_mission
-    from gcs.mission.scenario import load_scenario
+    from gcs.scenario.reader import load_scenario
 
     run_mission(load_scenario("pool12x2").with_overrides(duration_s=60.0), tmp_path)
     folder = RunFolder(tmp_path)

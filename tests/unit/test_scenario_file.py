@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from gcs.mission.scenario import ScenarioError, load_scenario, parse_duration_s
+from gcs.scenario.reader import ScenarioError, load_scenario, parse_duration_s
 
 MISSIONS = Path(__file__).resolve().parents[2] / "missions"
 

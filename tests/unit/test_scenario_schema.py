@@ -13,9 +13,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gcs.cli import main
-from gcs.mission.scenario import ScenarioError, load_scenario, scenario_from_data
-from gcs.mission.scenario_schema import SCHEMA_PATH, schema_problems, schema_text
+from gcs.cli.main import main
+from gcs.scenario.reader import ScenarioError, load_scenario, scenario_from_data
+from gcs.scenario.schema import SCHEMA_PATH, schema_problems, schema_text
 
 ROOT = Path(__file__).resolve().parents[2]
 MISSIONS = ROOT / "missions"
@@ -30,7 +30,7 @@ READER_ONLY = {"fleet.area", "fleet.start_config", "mission.duration", "fleet.st
 
 def test_the_shipped_schema_is_what_the_reader_makes_today() -> None:
     assert SCHEMA_PATH.read_text() == schema_text(), (
-        "the scenario reader changed: regenerate with python -m gcs.mission.scenario_schema --write")
+        "the scenario reader changed: regenerate with python -m gcs.scenario.schema --write")
 
 
 @pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.stem)

@@ -13,7 +13,7 @@ import pytest
 from test_sitl_part_host import GCS, SYSID, RecordingHost
 
 from apad_sitl import primitives as prim
-from apad_sitl.commands import CommandTable
+from apad_sitl.command_handler import CommandTable
 from apad_sitl.host import ACCEPT, ACCEPTED, DENIED, UNSUPPORTED, Command, Reply, invalid, whole
 from apad_sitl.params import ApadParams
 from apad_sitl.state import ApadState

@@ -131,7 +131,7 @@ def test_the_host_delivers_real_frames_and_reads_back_what_was_sent() -> None:
     assert (text.get_type(), text.get_srcSystem(), text.text) == ("STATUSTEXT", SYSID, "x" * 50)
 
 
-PARTS = ("commands", "streams", "modes", "navigation", "docking", "param_server", "mission_protocol")
+PARTS = ("command_handler", "streams", "modes", "navigation", "docking", "param_server", "mission_protocol")
 
 
 @pytest.mark.parametrize("part", PARTS)

@@ -8,11 +8,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from gcs.mission.duty import Duty
-from gcs.mission.strategies import Outlook, PlanInput, ScheduleInput, plan
-from gcs.mission.strategies.keep_alive import keep_alive_schedule, leg_s
-from gcs.mission.strategies.lookahead import dock_times_s
-from gcs.mission.strategies.urgency import slack_s, time_to_depletion_s
+from gcs.belief.duty import Duty
+from gcs.strategies import Outlook, PlanInput, ScheduleInput, plan
+from gcs.strategies.keep_alive import keep_alive_schedule, leg_s
+from gcs.strategies.lookahead import dock_times_s
+from gcs.strategies.urgency import slack_s, time_to_depletion_s
 from mussel_sim.behaviour import duty_cycle_rate_per_min
 from mussel_sim.geo import LocalFrame
 from mussel_sim.wake import next_wake_s

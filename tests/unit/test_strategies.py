@@ -8,8 +8,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from gcs.mission.strategies import COLLECT, STRATEGIES, CostWeights, Outlook, PlanInput, plan, route_length_m, traits
-from gcs.mission.strategies.routing import best_route, metres_matrix
+from gcs.strategies import COLLECT, STRATEGIES, CostWeights, Outlook, PlanInput, plan, route_length_m, traits
+from gcs.strategies.routing import best_route, metres_matrix
 from mussel_sim.battery import charge_profile, discharge_profile, step_battery
 from mussel_sim.geo import LocalFrame
 
@@ -119,7 +119,7 @@ def test_lookahead_does_not_hold_a_nearly_full_one_for_an_empty_one() -> None:
 
 
 def test_weighted_differs_from_greedy_and_cautious_with_the_shipped_scales() -> None:
-    from gcs.mission.scenario import load_scenario
+    from gcs.scenario.reader import load_scenario
 
     mission = load_scenario("pool12").mission
     weights = CostWeights(mission.distance_scale, mission.energy_scale)

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from gcs.mission.partition import Partition
-from gcs.mission.swarm import CLAIM_GRACE_S, FleetShares
+from gcs.swarm.partition import Partition
+from gcs.swarm.shares import CLAIM_GRACE_S, FleetShares
 from missiontime import seconds_to_us
 
 A, B = 1, 2

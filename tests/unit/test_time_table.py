@@ -7,7 +7,8 @@ import io
 
 from rich.console import Console
 
-from gcs.mission.results import MusselResult, RunResult, time_table
+from gcs.cli.tables import time_table
+from gcs.results.run_result import MusselResult, RunResult
 
 
 def _row(text: str) -> list[str]:

@@ -50,7 +50,7 @@ def test_the_start_line_says_what_to_open_and_who_can_reach_it() -> None:
 
 
 def test_a_port_in_use_is_one_line_before_anything_says_it_serves(capsys: pytest.CaptureFixture[str]) -> None:
-    from gcs.cli import main
+    from gcs.cli.main import main
 
     with socket.socket() as busy:
         busy.bind(("127.0.0.1", 0))

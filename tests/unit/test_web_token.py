@@ -188,7 +188,7 @@ def test_other_unusable_tokens_are_one_line(tmp_path: Path) -> None:
 
 
 def test_a_token_file_without_web_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    from gcs.cli import main
+    from gcs.cli.main import main
 
     (tmp_path / "token").write_text("s3cret\n")
     assert main(["gcs", "--sitl", "--web-token-file", str(tmp_path / "token")]) == 2

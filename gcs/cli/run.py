@@ -1,0 +1,397 @@
+"""`vil run`: headless missions in lockstep, the paper's Table II by default.
+
+    vil run                                    # Table II: pool12 cautious/greedy/none, bay24 greedy
+    vil run missions/pool12.toml --strategy greedy --seed 3 --json out.json
+    vil run pool12 --seeds 20                  # cautious, greedy, none on 20 freshly drawn fleets
+    vil run --seeds 20                         # the same for pool12 and bay24: Table II's shape per seed
+    vil run pool12 --loss 0.2 --latency 200ms --duplicate 0.05 # aPad link over UDP through a fault proxy
+    VIL_SIGNING_KEY=secret vil run pool12      # MAVLink 2 signing on the aPad link (or --signing-key FILE)
+    vil run pool12 --resume                    # continue the run in its folder after a crash (kill -9)
+    vil run pool12 --strategy mine.py:slack_first,cautious   # a strategy of your own beside a shipped one
+
+Every run gets a new folder, OUT/SCENARIO-STRATEGY-seedN-runK (K one past the highest there), and
+OUT/latest points at the last one started; `--resume` continues the newest folder of the same
+scenario, strategy and seed that holds a checkpoint, and writes each event once.
+
+Exit status: 0 every run finished with every aMussel where it should be; 2 bad input (one line
+on stderr); 3 the runs finished but some aMussel is not where it should be (left at the surface,
+off its position, or on a slot the GCS does not know): a red table says who is where; 130
+interrupted (Ctrl-C): one line says where the checkpoint is and the exact command that resumes it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shlex
+import sys
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+from acoustic import per
+from gcs.cli import flags
+from gcs.cli.tables import (
+    apads_table,
+    days_table,
+    happened_lines,
+    misplaced_table,
+    output_console,
+    results_table,
+    seed_stats_table,
+    shape_table,
+    time_table,
+)
+from gcs.link.faultproxy import LinkFaults
+from gcs.mission import checkpoint
+from gcs.mission.checkpoint import CheckpointError
+from gcs.mission.headless import run_mission, run_stem
+from gcs.mission.world import LinkOptions
+from gcs.records.run_folder import CHECKPOINT, RunFolder
+from gcs.results.run_result import RunResult, seed_stats
+from gcs.scenario.model_params import check_inputs
+from gcs.scenario.reader import SEED_MAX, THETA_RANGE, Scenario, ScenarioError, load_scenario
+from gcs.strategies import COLLECT, StrategyError, is_plugin, load_strategy, source_of
+from mavlink_dialect.signing import SigningKeyError, load_key
+from missiontime import mm_ss
+
+# The paper's Table II runs: (scenario, collection strategy).
+TABLE_II = (("pool12", "cautious"), ("pool12", "greedy"), ("pool12", "none"), ("bay24", "greedy"))
+# Over many seeds every scenario runs these, so the shape of Table II can be checked per seed.
+SHAPE_STRATEGIES = ("cautious", "greedy", "none")
+EXIT_MISPLACED = 3  # the runs finished, but some aMussel is not where it should be (the table says who)
+EXIT_INTERRUPTED = 130  # Ctrl-C, as a shell reports SIGINT
+MAX_SEEDS = 1000
+MAX_JOBS = 256
+# One-way delay bound: slower than this the GCS never hears the aPad's first heartbeat in time (10 s
+# round trips) and the aPad's failsafe (3 s without the GCS) holds it at every gap.
+MAX_DELAY_S = 5.0
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "scenario", nargs="?", metavar="SCENARIO",
+        help="scenario file (TOML) or a name in missions/ (pool12, bay24); none: the Table II reproduction",
+    )
+    parser.add_argument("--strategy", type=_strategies, metavar="NAME[,NAME...]",
+                        help=f"collection strategy or a comma list of them: shipped ({', '.join(COLLECT)}), "
+                             "FILE.py:FUNCTION, MODULE:FUNCTION or an installed vil.strategies entry point "
+                             "(docs/strategies.md); default: the scenario's")
+    parser.add_argument("--seed", type=flags.integer_in(0, SEED_MAX),
+                        help="seed of the run's random draws (default: the scenario's); with a saved start "
+                             "configuration the fleet stays the saved one: the seed then draws the drift only")
+    parser.add_argument("--seeds", type=flags.integer_in(1, MAX_SEEDS), metavar="N",
+                        help=f"run seeds 1..N (N <= {MAX_SEEDS}), each on a fleet drawn from its seed; "
+                             "print mean and spread")
+    parser.add_argument("--draw-fleet", action="store_true",
+                        help="draw the fleet from the seed instead of the scenario's saved start configuration")
+    parser.add_argument("--duration", type=flags.duration,
+                        help="mission time with its unit, up to 90 days: 90s, 40min, 1h, 7d (default: the scenario's)")
+    parser.add_argument("--theta", type=flags.number_in(*THETA_RANGE),
+                        help=f"aMussel time scale in [{THETA_RANGE[0]:g}, {THETA_RANGE[1]:g}] "
+                             "(default: the scenario's, 30)")
+    parser.add_argument("--json", type=flags.writable_file, metavar="FILE", help="write the result(s) as JSON")
+    parser.add_argument("--out", type=flags.writable_dir, default="runs", metavar="DIR",
+                        help="output folder; each run leaves a new DIR/SCENARIO-STRATEGY-seedN-runK/ and "
+                             "DIR/latest points at the last one (default: runs)")
+    faults = parser.add_argument_group("link faults and security (the aPad link over real UDP through a seeded proxy)")
+    faults.add_argument("--loss", type=flags.fraction, default=0.0, metavar="FRAC",
+                        help="drop this fraction of datagrams")
+    faults.add_argument("--latency", type=flags.duration_up_to(MAX_DELAY_S), default=0.0, metavar="T",
+                        help=f"one-way delay in mission time, with its unit: 200ms, 0.2s (at most {MAX_DELAY_S:g}s)")
+    faults.add_argument("--jitter", type=flags.duration_up_to(MAX_DELAY_S), default=0.0, metavar="T",
+                        help="extra delay uniform in [0, T], with its unit; reorders datagrams")
+    faults.add_argument("--duplicate", type=flags.fraction, default=0.0, metavar="FRAC",
+                        help="send this fraction of datagrams twice")
+    faults.add_argument("--outage", type=flags.window, action="append", default=[], metavar="START:END",
+                        help="total link loss between these mission times, with units: 92s:112s; repeatable")
+    faults.add_argument("--fail-apad", type=flags.apad_at, action="append", default=[], metavar="SYSID:T",
+                        help="that aPad goes silent for good at mission time T, with its unit (3:10min): the "
+                             "swarm re-shares its aMussels; repeatable")
+    faults.add_argument("--proxy", action="store_true", help="route through the proxy even with no faults")
+    faults.add_argument("--signing-key", type=Path, metavar="FILE",
+                        help="MAVLink 2 signing with the passphrase in FILE (default: $VIL_SIGNING_KEY if set)")
+    parser.add_argument("--resume", action="store_true",
+                        help="after a crash: continue the newest DIR/SCENARIO-STRATEGY-seedN-runK/ holding a "
+                             "checkpoint, in that folder, each event written once; give the flags the run was "
+                             "started with. The mission is replayed to its checkpoint (its logs muted), so the "
+                             "results are those of a run never interrupted")
+    parser.add_argument("--jobs", type=flags.integer_in(1, MAX_JOBS), default=os.cpu_count() or 1,
+                        help="parallel runs (default: CPU count)")
+
+
+def _strategies(text: str) -> list[str]:
+    """Each strategy named, loaded if it comes from a file, module or package (gcs.strategies.plugins)."""
+    specs = [n.strip() for n in text.split(",") if n.strip()]
+    if not specs:
+        raise argparse.ArgumentTypeError(f"no strategy in {text!r} (shipped: {', '.join(COLLECT)})")
+    try:
+        names = [load_strategy(spec) for spec in specs]
+    except StrategyError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return list(dict.fromkeys(names))  # a name twice would run (or resume) the same folder twice
+
+
+@dataclass(frozen=True)
+class Job:
+    scenario: Scenario
+    out_dir: Path  # the run's own folder (claimed by `_place`)
+    options: LinkOptions | None = None
+    resume: bool = False
+    resume_from_s: float = 0.0  # resuming: the mission time of its checkpoint (read once, by `_place`)
+    finished: RunResult | None = None  # resuming several: this one had ended, its result is kept
+    strategy_source: str = ""  # what loads the strategy in a worker process (a strategy from outside the package)
+
+
+def _link_options(args: argparse.Namespace) -> LinkOptions | None:
+    key = load_key(args.signing_key)
+    faults = LinkFaults(args.loss, args.latency, args.jitter, args.duplicate, seed=args.seed or 0,
+                        outages_s=tuple(args.outage))
+    use_proxy = args.proxy or faults.any
+    if not use_proxy and key is None and not args.fail_apad:
+        return None
+    return LinkOptions(faults=faults if use_proxy else None, signing_key=key, fail_apads=tuple(args.fail_apad))
+
+
+def _jobs(args: argparse.Namespace) -> list[Job]:
+    strategies: list[str | None] = list(args.strategy) if args.strategy else [None]
+    if args.scenario:
+        if args.seeds and not args.strategy:
+            strategies = list(SHAPE_STRATEGIES)
+        pairs = [(args.scenario, s) for s in strategies]
+    elif args.seeds:
+        pairs = [(name, s) for name in ("pool12", "bay24") for s in (args.strategy or SHAPE_STRATEGIES)]
+    else:
+        pairs = [(name, s) for name, s in TABLE_II if not args.strategy or s in args.strategy]
+    seeds: list[int | None] = list(range(1, args.seeds + 1)) if args.seeds else [args.seed]
+    cache: dict[str, Scenario] = {}
+    options = _link_options(args)
+    for name, _ in pairs:
+        if name not in cache:
+            cache[name] = load_scenario(name)
+            if args.seeds or args.draw_fleet:  # before the check: a saved start of another size is not used
+                cache[name] = replace(cache[name], fleet=replace(cache[name].fleet, start_config=None))
+            check_inputs(cache[name])
+            notice = seed_notice(cache[name], args.seed, faults=options is not None and options.faults is not None)
+            if notice:
+                print(f"vil run: {notice}", file=sys.stderr)
+            ids = {a.system_id for a in cache[name].apads}
+            for sysid, _ in args.fail_apad:
+                if sysid not in ids:
+                    raise ScenarioError(f"--fail-apad {sysid}: {name} has no aPad {sysid} (its aPads: "
+                                        f"{', '.join(map(str, sorted(ids)))})")
+    jobs = []
+    for name, strategy in pairs:
+        base = cache.setdefault(name, load_scenario(name))
+        for seed in seeds:
+            s = base.with_overrides(strategy=strategy, seed=seed, duration_s=args.duration, theta=args.theta)
+            if strategy is not None and is_plugin(strategy) and seed == seeds[0]:
+                check_inputs(s)  # a strategy from outside plans once on the start: a bad plan is a line now
+            jobs.append(Job(s, args.out, options, args.resume, strategy_source=source_of(s.mission.collect_strategy)))
+    return jobs
+
+
+def seed_notice(scenario: Scenario, seed: int | None, faults: bool) -> str | None:
+    """What `--seed` changes when the scenario's fleet comes from its saved start configuration
+    (the seed feeds the world's one rng, the swarm's k-means start and the fault proxy), or None."""
+    start = scenario.fleet.start_config
+    if seed is None or start is None:
+        return None
+    drift_cm = scenario.fleet.drift_cm
+    drawn = [f"the aMussels' random drift (up to {drift_cm:g} cm a step)"] if drift_cm else []
+    drawn += ["where the swarm's k-means sharing starts"] if len(scenario.apads) > 1 else []
+    drawn += ["the link faults' draws"] if faults else []
+    listed = f"{', '.join(drawn[:-1])} and {drawn[-1]}" if len(drawn) > 1 else "".join(drawn)
+    what = f"changes only {listed}" if drawn else "changes nothing in this run"
+    return (f"{scenario.name}'s fleet is its saved start configuration ({start.name}): --seed {seed} {what}; "
+            "add --draw-fleet to draw the fleet from the seed too")
+
+
+def _place(jobs: list[Job], command: str) -> list[Job]:
+    """Each job's folder: a new one (which keeps `command`, what resumes it), or (resuming) the newest
+    of its run with a usable checkpoint of it. Resuming several runs (a Ctrl-C stops them where they
+    are), one with no checkpoint runs from its start in a new folder, and says so; none: an error."""
+    found = [RunFolder.newest_resumable(j.out_dir, run_stem(j.scenario)) if j.resume else None for j in jobs]
+    some = len(jobs) > 1 and any(found)  # several runs, some of them stopped mid-mission: resume those
+    placed = []
+    for job, folder in zip(jobs, found, strict=True):
+        stem = run_stem(job.scenario)
+        if job.resume and folder is None and some:
+            done = _finished(job.out_dir, stem, command)
+            if done is not None:
+                print(f"vil run: {stem} had finished in {done.out_dir}/: its result is kept", file=sys.stderr)
+                placed.append(replace(job, out_dir=Path(done.out_dir), resume=False, finished=done))
+                continue
+            print(f"vil run: no checkpoint of {stem} under {job.out_dir}: it runs from the start", file=sys.stderr)
+            job = replace(job, resume=False)
+        if not job.resume:
+            made = RunFolder.new(job.out_dir, stem)
+            made.command.write_text(command.removesuffix(" --resume") + "\n", encoding="utf-8")
+            placed.append(replace(job, out_dir=made.path))
+            continue
+        if folder is None:
+            raise CheckpointError(f"nothing to resume: no {CHECKPOINT} in any {job.out_dir / stem}-runK/"
+                                  + _resumable_hint(job.out_dir))
+        saved = checkpoint.load(folder.checkpoint)  # a corrupt one is refused here, not mid-run
+        key = checkpoint.scenario_key(job.scenario)
+        if saved.run_key != key:
+            raise CheckpointError(f"{folder.checkpoint} is of run {saved.run_key}, not {key}")
+        placed.append(replace(job, out_dir=folder.path, resume_from_s=saved.time_us / 1e6))
+    return placed
+
+
+def _finished(root: Path, stem: str, command: str) -> RunResult | None:
+    """The result of the newest run of `stem` if the same command made it and it ended (a result, no
+    checkpoint): the run of the interrupted batch that finished before the Ctrl-C."""
+    folder = RunFolder.newest(root, stem)
+    if folder is None or folder.checkpoint.exists() or not folder.result.exists() or not folder.command.exists():
+        return None
+    if folder.command.read_text(encoding="utf-8").strip() != command.removesuffix(" --resume"):
+        return None
+    try:
+        return RunResult.from_json(json.loads(folder.result.read_text(encoding="utf-8")))
+    except (OSError, ValueError, TypeError, KeyError):  # unreadable or of another version: run it again
+        return None
+
+
+def _resumable_hint(root: Path) -> str:
+    """What could be resumed under `root` instead, and how (the run's own command: every flag counts)."""
+    others = RunFolder.resumable(root)
+    if not others:
+        return ""
+    newest = others[0]
+    how = newest.resume_command()
+    more = f" (and {len(others) - 1} more)" if len(others) > 1 else ""
+    return (f"; {newest.path} holds one{more}: " + (f"resume it with: {how}" if how else
+            "resume it with the scenario and flags it was started with, and --resume"))
+
+
+def _command_line(args: argparse.Namespace) -> str:
+    """The command as given (`vil run ...`), quoted for a shell."""
+    return shlex.join(["vil", *getattr(args, "argv", ["run"])])
+
+
+def _interrupted(jobs: list[Job]) -> str:
+    """One line for a Ctrl-C: what was kept, and the exact command to go on."""
+    kept = [f for f in (RunFolder(j.out_dir) for j in jobs) if f.checkpoint.exists()]
+    if not kept:
+        return "interrupted before the first checkpoint: nothing to resume (run the command again)"
+    try:
+        at = ", ".join(mm_ss(checkpoint.load(f.checkpoint).time_us / 1e6) for f in kept)
+    except CheckpointError:
+        at = "?"
+    how = kept[0].resume_command() or "the same command with --resume"
+    where = str(kept[0].path) if len(kept) == 1 else f"{len(kept)} run folders under {kept[0].path.parent}"
+    return f"interrupted; checkpoint kept in {where} (mission time {at}); resume with: {how}"
+
+
+def _run_job(job: Job) -> RunResult:
+    """One run in a pool worker. A Ctrl-C (the whole process group gets it) ends the worker, not just
+    this run: a worker that only lost its run would take the next queued one, and the pool would
+    wait for it."""
+    try:
+        load_strategy(job.strategy_source or job.scenario.mission.collect_strategy)
+        return run_mission(job.scenario, job.out_dir, options=job.options, resume=job.resume)
+    except KeyboardInterrupt:  # the run's logs are closed and its checkpoint kept by now
+        os._exit(EXIT_INTERRUPTED)
+
+
+def run(args: argparse.Namespace) -> int:
+    console = output_console()
+    try:
+        jobs = _place(_jobs(args), _command_line(args))
+    except (ScenarioError, SigningKeyError, CheckpointError) as exc:
+        print(f"vil run: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # the output folder went away or filled up since the flag was checked
+        print(f"vil run: --out {args.out}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    RunFolder(jobs[-1].out_dir).point_latest()
+    for job in jobs:
+        if job.resume:
+            print(f"vil run: resuming {job.out_dir} from its checkpoint at {mm_ss(job.resume_from_s)} (the "
+                  "mission is replayed to it, its logs muted)", file=sys.stderr)
+    try:
+        results = _run_all(jobs, args.jobs, console)
+    except TimeoutError as exc:  # e.g. an --outage over the start: the aPad was never heard
+        print(f"vil run: {exc}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:  # Ctrl-C: an ordinary way to stop; the checkpoint says where to go on
+        print(f"vil run: {_interrupted(jobs)}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    results.sort(key=lambda r: ([(j.scenario.name, j.scenario.mission.collect_strategy) for j in jobs]
+                                .index((r.scenario, r.strategy)), r.seed))
+    if args.seeds:
+        title = f"{len(results)} runs, fleets drawn from seeds 1..{args.seeds}"
+        console.print(seed_stats_table(seed_stats(results), title))
+        console.print(shape_table(results))
+    else:
+        title = "Table II reproduction (lockstep SITL)" if not args.scenario else "Mission result"
+        console.print(results_table(results, title))
+        per_apad = apads_table(results)
+        if per_apad is not None:
+            console.print(per_apad)
+        where_time_went = time_table(results)
+        if where_time_went is not None:
+            console.print(where_time_went)
+        per_day = days_table([(f"{r.scenario} {r.strategy} s{r.seed}", r.days) for r in results])
+        if per_day is not None:
+            console.print(per_day)
+    for line in happened_lines(results):  # faults, holds, link losses, lost aPads: what the figures do not say
+        console.print(line, highlight=False)
+    mission_s = sum(r.duration_s for r in results)
+    run_s = sum(r.wall_s for r in results)
+    console.print(f"{len(results)} run(s) of {mission_s / 60 / len(results):.0f} mission minutes, "
+                  f"{run_s / len(results):.1f} s each (real-time factor {mission_s / run_s:.0f}); "
+                  f"logs, .tlog and traces in {_folders(results)}")
+    if args.json:
+        payload = [r.to_json() for r in results]
+        args.json.write_text(json.dumps(payload[0] if len(payload) == 1 else payload, indent=1) + "\n")
+    misplaced = misplaced_table(results)
+    if misplaced is not None:
+        console.print(misplaced)
+        return EXIT_MISPLACED
+    return 0
+
+
+def _folders(results: list[RunResult]) -> str:
+    """The run folders, by name: all of them when they are few, else where they are and the first."""
+    folders = [f"{r.out_dir}/" for r in results]
+    if len(folders) <= 4:
+        return ", ".join(folders)
+    parents = sorted({str(Path(r.out_dir).parent) for r in results})
+    return f"{len(folders)} folders in {', '.join(parents)}/ ({Path(folders[0]).name}, ...)"
+
+
+def _run_all(jobs: list[Job], n_jobs: int, console: Console) -> list[RunResult]:
+    kept = [j.finished for j in jobs if j.finished is not None]
+    to_run = [j for j in jobs if j.finished is None]
+    if any(j.scenario.acoustic.enabled for j in to_run):
+        per.load()  # the channel's curve imports scipy.special at first use: here, not in a mission's time
+    return kept + (_run_jobs(to_run, n_jobs, console) if to_run else [])
+
+
+def _run_jobs(jobs: list[Job], n_jobs: int, console: Console) -> list[RunResult]:
+    columns = (TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
+               TextColumn("mission s" if len(jobs) == 1 else "runs"), TimeElapsedColumn())
+    with Progress(*columns, console=console, transient=True) as progress:
+        if len(jobs) == 1:
+            job = jobs[0]
+            task = progress.add_task(f"{job.scenario.name} {job.scenario.mission.collect_strategy}",
+                                     total=int(job.scenario.mission.duration_s))
+            return [run_mission(job.scenario, job.out_dir, options=job.options, resume=job.resume,
+                                progress=lambda t_s: progress.update(task, completed=int(t_s)))]
+        task = progress.add_task(f"{len(jobs)} missions", total=len(jobs))
+        results = []
+        pool = ProcessPoolExecutor(max_workers=min(n_jobs, len(jobs)))
+        try:
+            for future in as_completed([pool.submit(_run_job, job) for job in jobs]):
+                results.append(future.result())
+                progress.advance(task)
+        finally:  # a Ctrl-C reached the workers too: what has not started never will
+            pool.shutdown(wait=True, cancel_futures=True)
+        return results

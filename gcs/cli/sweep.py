@@ -1,0 +1,97 @@
+"""`vil sweep`: many headless missions over scenarios, strategies, seeds and scenario fields, on Dask.
+
+    vil sweep missions/sweeps/strategies.toml --out sweeps/strategies   # every strategy, pool12 + bay24
+    vil sweep SPEC.toml --out DIR --scheduler tcp://HOST:8786           # on a running Dask cluster
+    vil sweep report DIR                                                # tables and plots again
+
+The spec (TOML; docs/sweeps.md) is checked whole before anything runs. Each mission runs in
+lockstep as `vil run` runs it and writes DIR/cells/KEY.json when it finishes; a mission already
+there is not run again, so an interrupted sweep continues where it stopped. At the end:
+DIR/results.parquet and DIR/results.csv (one row per mission), DIR/active.parquet (active count
+over mission time) and the report in DIR/report/.
+
+Exit status: 0 done; 1 some missions failed (listed; run again to retry them); 2 bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from rich.console import Console
+
+from gcs.cli import flags
+from gcs.cli.tables import output_console
+from gcs.sweep import store
+from gcs.sweep.cells import make_cells
+from gcs.sweep.cluster import ClusterError
+from gcs.sweep.runner import sweep
+from gcs.sweep.spec import SpecError, load_spec
+
+MAX_WORKERS = 256
+EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 1, 2, 130
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("spec", metavar="SPEC.toml | report", help="the sweep spec, or `report` to report on DIR")
+    parser.add_argument("dir", nargs="?", metavar="DIR", help="with `report`: the sweep folder")
+    parser.add_argument("--out", type=flags.writable_dir, metavar="DIR",
+                        help="the sweep folder: finished missions, results.parquet/csv, report/")
+    parser.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                        help="run on this Dask scheduler's workers (default: a local cluster, a worker per core)")
+    parser.add_argument("--workers", type=flags.integer_in(1, MAX_WORKERS), metavar="N",
+                        help="workers of the local cluster (default: CPU count)")
+    parser.add_argument("--keep-runs", action="store_true",
+                        help="keep each mission's folder (.tlog, logs, traces) in DIR/runs/ (default: none written)")
+    parser.add_argument("--no-report", action="store_true", help="skip the tables and plots at the end")
+
+
+def run(args: argparse.Namespace) -> int:
+    console = output_console()
+    if args.spec == "report":
+        return _report(args.dir, console)
+    if args.dir is not None:
+        return _bad(f"unexpected argument {args.dir!r} (the folder is --out DIR)")
+    if args.out is None:
+        return _bad("--out DIR is required: where the missions and results go")
+    if args.scheduler is not None and args.workers is not None:
+        return _bad("--workers sizes the local cluster; with --scheduler the cluster has its own")
+    try:
+        spec = load_spec(args.spec)
+        cells = make_cells(spec)
+    except SpecError as exc:
+        return _bad(str(exc))
+    try:
+        outcome = sweep(spec, cells, args.out, console, args.scheduler, args.workers, args.keep_runs)
+    except OSError as exc:  # the folder went away or filled up
+        return _bad(f"--out {args.out}: {exc.strerror or exc}")
+    except ClusterError as exc:
+        print(f"vil sweep: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    except KeyboardInterrupt:
+        kept = len(store.finished(args.out) & {c.key for c in cells})
+        print(f"vil sweep: interrupted; {kept} of {len(cells)} missions are in {args.out}: run it again to continue",
+              file=sys.stderr)
+        return EXIT_INTERRUPTED
+    if outcome.rows and not args.no_report:
+        _report(str(args.out), console)
+    return EXIT_FAILED if outcome.failed else 0
+
+
+def _report(folder: str | None, console: Console) -> int:
+    if folder is None:
+        return _bad("report needs the sweep folder: vil sweep report DIR")
+    from gcs.sweep.report import ReportError, write_report  # matplotlib only when reporting
+
+    try:
+        written = write_report(Path(folder), console)
+    except (ReportError, store.StoreError) as exc:
+        return _bad(str(exc))
+    console.print(f"report: {', '.join(str(p) for p in written)}")
+    return 0
+
+
+def _bad(what: str) -> int:
+    print(f"vil sweep: {what}", file=sys.stderr)
+    return EXIT_BAD_INPUT

@@ -1,0 +1,337 @@
+"""What one aPad's energy-sharing loop knows of the fleet, from what the GCS has heard.
+
+`FleetKnowledge` answers with public reads: the charging pool and why an aMussel cannot be
+collected now, the aPad's slots, each aMussel's state, battery and distance, this aPad's share of
+the fleet with several aPads (`gcs.swarm.shares`), and the outlook a strategy plans with. It
+commands nothing: the aPad's actions (`gcs.loop.actions`) and the loop's phases
+(`gcs.loop.phases`) are built on it.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from apad_sitl.vocabulary import Latch
+from gcs.acoustic_net.knowledge import UNDERWATER, age_s, believed_battery
+from gcs.belief.duty import Duty, OrdersSent
+from gcs.belief.foresight import foreseen_battery, foreseen_deployed
+from gcs.belief.real_fleet import MAX_REPORT_AGE_S, RealFleet
+from gcs.link.apad_api import ApadApi, Location
+from gcs.link.telemetry import SlotView
+from gcs.loop.control import LoopLog, LoopSettings
+from gcs.strategies import Outlook, traits
+from gcs.swarm.shares import FleetShares, orphans
+from missiontime import Clock
+from mussel_sim.battery import ChargeProfile, charge_profile, discharge_profile, sim_minutes
+from mussel_sim.geo import pair_distance_m
+from mussel_sim.vocabulary import MusselState
+
+if TYPE_CHECKING:
+    from gcs.acoustic_net.network import AcousticNetwork
+
+# An aMussel is collectable only if its battery lasts until the aPad can dock it: the trip there (at
+# the aPad's speed, this much slower for acceleration and the last metres) or, if it can only be
+# called up on arrival, the trip and its rise, and this margin for the close-in and the latch.
+TRIP_SLOWNESS = 1.2
+DOCK_MARGIN_S = 10.0
+DOCK_S = 20.0  # besides surfacing, at each collection stop: closing in and latching
+RELEASE_MARGIN_S = 60.0  # released early, an aMussel still has this much charge left at the end
+
+
+def outlook(settings: LoopSettings, now_s: float) -> Outlook:
+    """What a planning step at mission time `now_s` is told of the time left and the battery models."""
+    mission = settings.mission
+    return Outlook(
+        time_left_s=max(mission.duration_s - now_s, 0.0),
+        drain_per_s=discharge_profile(settings.mussel_discharge).rate_per_min * sim_minutes(mission.theta, 1.0),
+        charge=charge_profile(settings.mussel_charge),
+        theta=mission.theta,
+        speed_mps=settings.apad_speed_mps,
+        stop_s=settings.mussel_surfacing_s + DOCK_S,
+        charged_frac=mission.charged_threshold,
+    )
+
+
+class FleetKnowledge:
+    """One aPad's view of the fleet. `unreachable` collects the aMussels found outside the geofence
+    (each logged once)."""
+
+    def __init__(
+        self, api: ApadApi, clock: Clock, settings: LoopSettings, homes: dict[int, Location], apad_id: int,
+        log: LoopLog, shares: FleetShares | None = None, real: RealFleet | None = None,
+        acoustic: AcousticNetwork | None = None, orders: OrdersSent | None = None,
+    ) -> None:
+        """`homes`: where each aMussel goes back to (filled in for real ones as they are first heard);
+        `shares`: with several aPads, the one record of who serves which aMussel; `real`: estimates of
+        real aMussels between their sparse reports; `acoustic`: the acoustic network, through which
+        submerged aMussels are heard (in their TDMA slots) and called up; `orders`: the sleep orders
+        sent so far (the loop's status keeps them; a restored mission's come from its checkpoint)."""
+        self.api = api
+        self.clock = clock
+        self.settings = settings
+        self.homes = homes
+        self.apad_id = apad_id
+        self.shares = shares
+        self.real = real
+        self.acoustic = acoustic
+        self.unreachable: set[int] = set()
+        self.orders = orders if orders is not None else OrdersSent()
+        self._default_duty = Duty(discharge_profile(settings.mussel_discharge).rate_per_min)
+        self._default_charge = charge_profile(settings.mussel_charge)
+        self._drains: tuple[tuple[int, int], NDArray[np.float64]] | None = None  # (table size, duty changes)
+        self._duties_changed = 0
+        self._log = log
+
+    # --- the charging pool ----------------------------------------------------------------------
+
+    def candidates(self) -> list[int]:
+        """The charging pool: ids of active aMussels below the pool threshold, lowest first, that
+        the aPad may go to (one outside the geofence, e.g. carried off by a current while it
+        floated, is left out with one `unreachable` event instead of being tried again and again)."""
+        threshold = self.settings.mission.pool_threshold
+        if self.acoustic is None:
+            ids = self._active_below(threshold)
+        else:  # heard now and then: the estimate decides, and one silent too long is not planned for
+            ids = [m for m in self.api.mussels.select((MusselState.ACTIVE,))
+                   if self.battery(m) < threshold and self.heard_alive(m)]
+        if self.real is not None:  # a real one's last report may be old: its estimate decides
+            real = set(self.real.ids())
+            below = self.real.below(threshold, self.clock.now_us, self.drain_per_min, self.orders.changed.get)
+            ids = sorted({m for m in ids if m not in real} | set(below))
+        out = []
+        for m in ids:
+            if not self.api.mussels[m].simulated:
+                self.note_home(m)
+            if m not in self.homes or not self.serves(m) or self.cannot_collect(m) is not None:
+                continue
+            if self.api.inside_geofence(self.api.get_location(m)):
+                out.append(m)
+            elif m not in self.unreachable:
+                self.unreachable.add(m)
+                where = self.api.get_location(m)
+                self._log("unreachable", mussel=m, lat=where.lat, lon=where.lon, why="outside the geofence")
+        return out
+
+    def _active_below(self, threshold: float) -> list[int]:
+        """Ids of ACTIVE aMussels whose battery (`battery`) is below `threshold`, lowest first: the
+        simulated ones' run forward from their reports in one go (`foresight.foreseen_deployed`), a real
+        one by its estimate."""
+        t = self.api.mussels
+        active = t.state == MusselState.ACTIVE
+        belief = foreseen_deployed(t.battery_frac, t.time_us, self.clock.now_us, self._drain_rows())
+        ids = t.ids[active & t.simulated & (belief < threshold)].tolist()
+        ids += [m for m in t.ids[active & ~t.simulated].tolist() if self.battery(m) < threshold]
+        return sorted(ids)
+
+    def _drain_rows(self) -> NDArray[np.float64]:
+        """Each table row's aMussel's drain per mission second (`drain_per_s`), made again only when the
+        table grew or a sleep order changed a duty."""
+        t = self.api.mussels
+        key = (t.ids.size, self._duties_changed)
+        if self._drains is None or self._drains[0] != key:
+            self._drains = key, np.array([self.drain_per_s(m) for m in t.ids.tolist()], float)
+        return self._drains[1]
+
+    def cannot_collect(self, mussel_id: int) -> str | None:
+        """Why the aPad should not set off for this aMussel now, or None: it has depleted (below
+        3600 mV it cannot surface), it is no longer waiting on the seabed or at the surface (e.g.
+        docked elsewhere), or its battery will give out before the aPad could dock it (eq. 1 over
+        the trip, its rise and the latch: it drains the same on the seabed and at the surface, and
+        would be left in the water or at the surface, depleted)."""
+        state = self.state(mussel_id)
+        if state == MusselState.DEPLETED:
+            return "depleted"
+        if state not in (MusselState.ACTIVE, MusselState.FLOATING):
+            return f"it is {state.name.lower()}"
+        if self.real is not None:
+            distance = self.distance_to(mussel_id)
+            trip_s = TRIP_SLOWNESS * distance / self.settings.apad_speed_mps
+            rise_s = 0.0 if state == MusselState.FLOATING else self.settings.mussel_surfacing_s
+            call_up_s = 0.0 if distance <= self.settings.acoustic_range_m else trip_s
+            need_s = max(trip_s, call_up_s + rise_s) + DOCK_MARGIN_S
+            per_s = self.drain_per_s(mussel_id)
+            battery = self.battery(mussel_id)
+            if battery <= per_s * need_s:
+                return f"its battery ({battery:.3f}) would give out before it could be docked ({need_s:.0f} s)"
+        return None
+
+    def pool_needed(self, min_pool: int) -> int:
+        """Candidates to wait for before a collection: the scenario's `min_pool` is for the whole fleet;
+        with several aPads each waits for its share's part of it (`min_pool` x share / fleet, at least
+        one), or an aPad with a share of 6 would wait for 4 of its 6 as one aPad waits for 4 of 12.
+        Never more than this aPad's aMussels on the seabed (at least one): a fleet smaller than
+        `min_pool`, or one that depletion has thinned below it, would otherwise never be collected while
+        the rest of it depleted too (issue 20: two always-on aMussels, or pool12 after a home charge)."""
+        if self.shares is None or not self.shares.owner:
+            need = min_pool
+        else:
+            share = sum(1 for owner in self.shares.owner.values() if owner == self.apad_id)
+            need = max(1, math.ceil(min_pool * share / len(self.shares.owner)))
+        heard = [m for m in self.homes if m in self.api.mussels and self.serves(m)]
+        if not heard:  # nothing heard yet: nothing to count
+            return need
+        seabed = sum(1 for m in heard if self.state(m) == MusselState.ACTIVE and self.heard_alive(m))
+        return max(1, min(need, seabed))
+
+    def heard_alive(self, mussel_id: int) -> bool:
+        """Whether the aMussel may still be alive as far as the GCS can know: always, where every aMussel
+        reports over WiFi (at least every keep-alive window); in an acoustic scenario, heard within
+        MAX_REPORT_AGE_S and not believed empty (a depleted aMussel under water falls silent: its
+        estimate and its silence tell)."""
+        view = self.api.mussels[mussel_id]
+        if self.acoustic is None or not view.simulated:  # a real one's report carries its own clock: `RealFleet`
+            return True
+        heard_s = age_s(view, self.clock.now_us)
+        return self.battery(mussel_id) > 0.0 and heard_s <= MAX_REPORT_AGE_S
+
+    def too_late_to_call_up(self) -> bool:
+        return self.settings.mission.duration_s - self.clock.time() < self.settings.call_up_margin_s
+
+    def outlook(self) -> Outlook:
+        return outlook(self.settings, self.clock.time())
+
+    def charged(self, mussel_id: int, strategy: str) -> bool:
+        """Whether a docked aMussel may go back now: at the scenario's charged threshold, or, for a
+        strategy that releases early, once it holds enough to stay active to the mission end."""
+        battery = self.battery(mussel_id)
+        if battery >= self.settings.mission.charged_threshold:
+            return True
+        if not traits(strategy).release_early:
+            return False
+        view = self.outlook()
+        return battery >= self.drain_per_s(mussel_id) * (view.time_left_s + RELEASE_MARGIN_S)
+
+    # --- each aMussel's duty: its drain and wake schedule --------------------------------------
+
+    def duty(self, mussel_id: int) -> Duty:
+        """What it does deployed, as known: its scenario profile or the last sleep order sent to it."""
+        ordered = self.orders.duties.get(mussel_id)
+        return ordered if ordered is not None else self.profile_duty(mussel_id)
+
+    def profile_duty(self, mussel_id: int) -> Duty:
+        """What its scenario profile makes it do, whatever was ordered since (a real aMussel, not in the
+        scenario's fleet, takes the scenario's default)."""
+        return self.settings.duties.get(mussel_id, self._default_duty)
+
+    def ordered(self, mussel_id: int, duty: Duty) -> None:
+        """A sleep order was sent: plan with it from now on (one heard now and then, acoustically or a
+        real aMussel, was believed run down at the old duty until now, and at the new one from here)."""
+        heard_now_and_then = mussel_id in self.api.mussels and (
+            self.acoustic is not None if self.api.mussels[mussel_id].simulated else self.real is not None)
+        if heard_now_and_then:
+            self.orders.changed[mussel_id] = (self.clock.now_us, self.battery(mussel_id))
+        self.orders.duties[mussel_id] = duty
+        self._duties_changed += 1
+
+    def drain_per_s(self, mussel_id: int) -> float:
+        return self.duty(mussel_id).drain_per_s(self.settings.mission.theta)
+
+    def drain_per_min(self, mussel_id: int) -> float:
+        """Battery fraction per simulated minute deployed, by its duty (a real one's estimate runs on it)."""
+        return self.duty(mussel_id).rate_per_min
+
+    def wake_in_s(self, mussel_id: int) -> float:
+        """Mission seconds until it next hears a call-up (0: awake, or always on)."""
+        return self.duty(mussel_id).wake_in_s(mussel_id, self.clock.time(), self.settings.mission.theta)
+
+    def asleep(self, mussel_id: int) -> bool:
+        """Asleep now as far as its duty says (a call-up would wait for its wake: ping it first)."""
+        return self.wake_in_s(mussel_id) > 0
+
+    def call_up_wait_s(self, mussel_id: int) -> float:
+        """How long a call-up may take to float it: the loop's bound, or its longest wake gap and twice
+        its rise (a sleep order given during the mission may sleep longer than the scenario's profiles)."""
+        gap_s = self.duty(mussel_id).longest_wait_s(self.settings.mission.theta)
+        return max(self.settings.surfacing_timeout_s, gap_s + 2 * self.settings.mussel_surfacing_s)
+
+    # --- slots and aMussels ---------------------------------------------------------------------
+
+    def free_slots(self) -> list[int]:
+        return self.api.apad(self.apad_id).free_slots()
+
+    def slot(self, slot: int) -> SlotView:
+        return self.api.slots(self.apad_id)[slot - 1]
+
+    def docked(self) -> dict[int, int]:
+        """slot -> aMussel id of every latched slot."""
+        return {s.slot: s.mussel_id for s in self.api.slots(self.apad_id) if s.latch == Latch.LATCHED}
+
+    def floating(self, mussel_id: int) -> bool:
+        return self.state(mussel_id) == MusselState.FLOATING
+
+    def state(self, mussel_id: int) -> MusselState:
+        return self.api.mussels[mussel_id].state
+
+    def battery(self, mussel_id: int) -> float:
+        """As the GCS can know it now. A simulated aMussel: its last report run forward in the model's
+        steps (`foresight`: the fleet reports by exception); in an acoustic scenario, one under water
+        run down since its last report (`believed_battery`). A real one out of the water: estimated since
+        its report (`RealFleet`)."""
+        view = self.api.mussels[mussel_id]
+        if view.simulated:
+            if self.acoustic is not None and view.state in UNDERWATER:
+                return believed_battery(view, self.clock.now_us, self.drain_per_s(mussel_id),
+                                        self.orders.changed.get(mussel_id))
+            # Docked (here or on another aPad's slot): charging on, unless a slot let it go since its report.
+            released_us = None
+            if view.state == MusselState.DOCKED and mussel_id not in self.docked().values():
+                let_go_us = self.api.link.registry.released_us.get(mussel_id)
+                if let_go_us is not None and let_go_us >= view.time_us:
+                    released_us = let_go_us
+            return foreseen_battery(view, self.clock.now_us, self.drain_per_s(mussel_id), self.charge(mussel_id),
+                                    self.settings.mission.theta, released_us)
+        if self.real is not None and mussel_id in self.real.heard_us:
+            on_slot = mussel_id in self.docked().values()
+            return self.real.estimate(mussel_id, self.clock.now_us, on_slot, self.drain_per_min(mussel_id),
+                                      self.orders.changed.get(mussel_id)).battery_frac
+        return view.battery_frac
+
+    def charge(self, mussel_id: int) -> ChargeProfile:
+        """Its charge profile on a slot: its scenario profile's (a sleep order keeps it), else the loop's."""
+        own = self.profile_duty(mussel_id).charge
+        return own if own is not None else self._default_charge
+
+    def distance_to(self, mussel_id: int) -> float:
+        here, there = self.api.position(self.apad_id), self.api.get_location(mussel_id)
+        return pair_distance_m(here.lat, here.lon, there.lat, there.lon)
+
+    def note_home(self, mussel_id: int) -> None:
+        """A real aMussel goes back where it was first found (a simulated one: its start)."""
+        if mussel_id not in self.homes and mussel_id in self.api.mussels:
+            self.homes[mussel_id] = self.api.get_location(mussel_id)
+
+    # --- this aPad's share ----------------------------------------------------------------------
+
+    def orphans(self) -> list[int]:
+        """aMussels of this aPad's share floating with no live claim (`swarm.orphans`): fetch them first."""
+        if self.shares is None:
+            return []
+        return orphans(self.shares, self.api.link.registry, self.apad_id, self.clock.now_us)
+
+    def serves(self, mussel_id: int) -> bool:
+        """Whether this aPad may call the aMussel up (always, with no other aPad)."""
+        return self.shares is None or self.shares.serves(self.apad_id, mussel_id, self.clock.now_us)
+
+    def claimed(self, mussel_id: int) -> bool:
+        """Whether this aPad holds the claim on it (fetching it, or holding it on a slot); never, alone."""
+        return self.shares is not None and self.shares.holds(self.apad_id, mussel_id)
+
+    def claim(self, mussel_id: int) -> bool:
+        """Claim the aMussel for this aPad before calling it up (never two aPads; always, alone)."""
+        return self.shares is None or self.shares.claim(self.apad_id, mussel_id, self.clock.now_us)
+
+    def taken_over(self, mussel_id: int) -> bool:
+        """This aPad was lost long enough for another to take over its claim: leave the aMussel to
+        that one (no sink: it is being fetched). Logged."""
+        if self.shares is None or self.shares.holds(self.apad_id, mussel_id):
+            return False
+        self._log("skip", mussel=mussel_id, why="taken over by another aPad while this one was unheard")
+        return True
+
+    def release(self, mussel_id: int) -> None:
+        if self.shares is not None:
+            self.shares.release(self.apad_id, mussel_id)
