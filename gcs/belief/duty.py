@@ -67,6 +67,7 @@ class OrdersSent:
 
     duties: dict[int, Duty] = field(default_factory=dict)
     changed: dict[int, tuple[int, float]] = field(default_factory=dict)
+    sent: int = 0  # orders sent so far: a belief cached on the duties is made again when it grows
 
 
 def scenario_duties(scenario: Scenario, ids: list[int]) -> dict[int, Duty]:

@@ -15,7 +15,9 @@ from functools import partial
 
 from apad_sitl.vocabulary import Latch, Progress
 from gcs.acoustic_net.call_ups import CallUp
+from gcs.belief.duty import Duty
 from gcs.link.apad_api import CommandError, GeofenceError, Location
+from gcs.loop.book import LoopBook
 from gcs.loop.control import EndReason, LoopControl, LoopLog, LoopStatus, MissionEnded, Phase
 from gcs.loop.fleet_knowledge import FleetKnowledge
 from gcs.loop.telemetry_pace import HOLDING_PHASES, PACE_WORTH_S, PLANNING_PHASES, TelemetryPace
@@ -44,8 +46,10 @@ class ApadActions:
     """One aPad's commands with their waits, over what its loop knows of the fleet. `leaving` holds
     the aMussels let go in the current redeployment and not yet seen off their slots (`finish`)."""
 
-    def __init__(self, knows: FleetKnowledge, control: LoopControl, status: LoopStatus, log: LoopLog) -> None:
+    def __init__(self, knows: FleetKnowledge, book: LoopBook, control: LoopControl, status: LoopStatus,
+                 log: LoopLog) -> None:
         self.knows = knows
+        self.book = book
         self.api = knows.api
         self.clock = knows.clock
         self.settings = knows.settings
@@ -190,11 +194,28 @@ class ApadActions:
             self.command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
             if self.wait_until(lambda: self.knows.state(mussel_id) not in (MusselState.FLOATING, MusselState.SURFACING),
                                 timeout_s=self.settings.poll_s * 8, interruptible=False):
-                self.knows.release(mussel_id)
+                self.book.release(mussel_id)
                 return
         self._log("lost", mussel=mussel_id, why="does not answer the sink command",
                   state=self.knows.state(mussel_id).name)
-        self.knows.release(mussel_id)  # floating, unclaimed: an orphan its owner will come back for
+        self.book.release(mussel_id)  # floating, unclaimed: an orphan its owner will come back for
+
+    def hold(self) -> bool:
+        """Hold position here (a command: False at its bound, logged)."""
+        return self.command(self.api.hold)
+
+    def tell_to_sink(self, mussel_id: int) -> bool:
+        """Tell an aMussel to go down, not waiting to see it leave (a simulated one, a local party: the
+        command cannot be lost; `sink` sees one over a radio off the surface)."""
+        return self.command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
+
+    def sleep_order(self, mussel_id: int, duty: Duty) -> bool:
+        """Send the aMussel a sleep order (its wake interval and awake time) through the aPad."""
+        return self.command(self.api.sleep_order, mussel_id, duty.interval_s, duty.awake_s, self.apad_id)
+
+    def slow_telemetry(self) -> None:
+        """Slow telemetry while it holds for long (hours at the charger); fast again at the next move."""
+        self.pace.hold()
 
     def command(self, fn: Callable[..., None], *args: object, **kwargs: object) -> bool:
         """Run an API command; a refused or unanswered one is logged and tried again, at most
@@ -327,14 +348,14 @@ class ApadActions:
     def call_up_if_in_range(self, mussel_id: int) -> bool:
         """Safety: an aMussel is only called to the surface with an aPad within acoustic range.
         With several aPads it must be this one's to call, and is claimed first (never two aPads)."""
-        if not self.knows.claim(mussel_id):
+        if not self.book.claim(mussel_id):
             return False
-        self.knows.note_home(mussel_id)
+        self.book.note_home(mussel_id)
         if self.knows.state(mussel_id) == MusselState.FLOATING:
             return True  # already up (an orphan): nothing to call
         distance = self.knows.distance_to(mussel_id)
         if distance > self.settings.acoustic_range_m:
-            self.knows.release(mussel_id)
+            self.book.release(mussel_id)
             return False
         acoustic = self.knows.acoustic
         if acoustic is None:
@@ -344,7 +365,7 @@ class ApadActions:
             outcome = acoustic.call_ups.call_up(mussel_id, partial(self.knows.asleep, mussel_id), self.apad_id,
                                               self._wait, wanted=partial(self.knows.heard_alive, mussel_id))
             if outcome is CallUp.ABANDONED:  # believed empty before a call-up went: not called
-                self.knows.release(mussel_id)
+                self.book.release(mussel_id)
                 return False
             self._log("call_up", mussel=mussel_id, distance_m=round(distance, 2), acoustic=True,
                       acked=outcome is CallUp.ACKED)

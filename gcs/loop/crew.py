@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from gcs.loop.actions import ApadActions
+from gcs.loop.book import LoopBook
 from gcs.loop.control import LoopControl, LoopLog, LoopSettings, LoopStatus
 from gcs.loop.fleet_knowledge import FleetKnowledge
 from gcs.strategies import CostWeights
@@ -13,10 +14,11 @@ from gcs.strategies import CostWeights
 
 @dataclass(frozen=True)
 class Crew:
-    """What a phase works with: the fleet as known, the aPad's actions, the status, the operator's
-    controls, the loop's event log."""
+    """What a phase works with: the fleet as known (reads), what the loop writes down, the aPad's actions,
+    the status, the operator's controls, the loop's event log."""
 
     knows: FleetKnowledge
+    book: LoopBook
     act: ApadActions
     status: LoopStatus
     control: LoopControl

@@ -1,6 +1,7 @@
 """The energy-sharing loop of one aPad (the paper's Fig. 7), composed of parts written on the aPad API.
 
-    FleetKnowledge  what the loop knows of the fleet (gcs.loop.fleet_knowledge)
+    FleetKnowledge  what the loop knows of the fleet: reads only (gcs.loop.fleet_knowledge)
+    LoopBook        what it writes down: claims, homes, sleep orders sent (gcs.loop.book)
     ApadActions     the aPad's commands with their waits (gcs.loop.actions)
     phases          idle wait, plan and run a collection, charging wait, plan and run a
                     redeployment, recover after a crash (gcs.loop.phases)
@@ -19,6 +20,7 @@ from gcs.acoustic_net.network import AcousticNetwork
 from gcs.belief.real_fleet import RealFleet
 from gcs.link.apad_api import ApadApi, Location
 from gcs.loop.actions import ApadActions
+from gcs.loop.book import LoopBook
 from gcs.loop.control import EndReason, LoopControl, LoopLog, LoopSettings, LoopStatus, MissionEnded, Phase
 from gcs.loop.crew import Crew
 from gcs.loop.fleet_knowledge import FleetKnowledge
@@ -55,10 +57,10 @@ class EnergySharingLoop:
         self.control = control or LoopControl()
         self.status = status or LoopStatus(strategy=settings.mission.collect_strategy)
         log = LoopLog(events or EventLog(), clock, apad_id if shares is not None else None)
-        self.knows = FleetKnowledge(api, clock, settings, homes, apad_id, log, shares, real, acoustic,
-                                    self.status.orders)
-        self.act = ApadActions(self.knows, self.control, self.status, log)
-        self.crew = Crew(self.knows, self.act, self.status, self.control, log)
+        self.knows = FleetKnowledge(api, clock, settings, homes, apad_id, shares, real, acoustic, self.status.orders)
+        self.book = LoopBook(self.knows, self.status.orders, log)
+        self.act = ApadActions(self.knows, self.book, self.control, self.status, log)
+        self.crew = Crew(self.knows, self.book, self.act, self.status, self.control, log)
 
     @property
     def api(self) -> ApadApi:

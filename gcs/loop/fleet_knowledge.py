@@ -3,8 +3,8 @@
 `FleetKnowledge` answers with public reads: the charging pool and why an aMussel cannot be
 collected now, the aPad's slots, each aMussel's state, battery and distance, this aPad's share of
 the fleet with several aPads (`gcs.swarm.shares`), and the outlook a strategy plans with. It
-commands nothing: the aPad's actions (`gcs.loop.actions`) and the loop's phases
-(`gcs.loop.phases`) are built on it.
+commands and writes nothing (what the loop writes down is its book's, `gcs.loop.book`): the aPad's
+actions (`gcs.loop.actions`) and the loop's phases (`gcs.loop.phases`) are built on it.
 """
 
 from __future__ import annotations
@@ -22,7 +22,8 @@ from gcs.belief.foresight import foreseen_battery, foreseen_deployed
 from gcs.belief.real_fleet import MAX_REPORT_AGE_S, RealFleet
 from gcs.link.apad_api import ApadApi, Location
 from gcs.link.telemetry import SlotView
-from gcs.loop.control import LoopLog, LoopSettings
+from gcs.loop.control import LoopSettings
+from gcs.results.accounting import SURFACE_DEPTH_M
 from gcs.strategies import Outlook, traits
 from gcs.swarm.shares import FleetShares, orphans
 from missiontime import Clock
@@ -57,12 +58,11 @@ def outlook(settings: LoopSettings, now_s: float) -> Outlook:
 
 
 class FleetKnowledge:
-    """One aPad's view of the fleet. `unreachable` collects the aMussels found outside the geofence
-    (each logged once)."""
+    """One aPad's view of the fleet: reads only (what the loop writes down is its `LoopBook`'s)."""
 
     def __init__(
         self, api: ApadApi, clock: Clock, settings: LoopSettings, homes: dict[int, Location], apad_id: int,
-        log: LoopLog, shares: FleetShares | None = None, real: RealFleet | None = None,
+        shares: FleetShares | None = None, real: RealFleet | None = None,
         acoustic: AcousticNetwork | None = None, orders: OrdersSent | None = None,
     ) -> None:
         """`homes`: where each aMussel goes back to (filled in for real ones as they are first heard);
@@ -78,20 +78,16 @@ class FleetKnowledge:
         self.shares = shares
         self.real = real
         self.acoustic = acoustic
-        self.unreachable: set[int] = set()
         self.orders = orders if orders is not None else OrdersSent()
         self._default_duty = Duty(discharge_profile(settings.mussel_discharge).rate_per_min)
         self._default_charge = charge_profile(settings.mussel_charge)
-        self._drains: tuple[tuple[int, int], NDArray[np.float64]] | None = None  # (table size, duty changes)
-        self._duties_changed = 0
-        self._log = log
+        self._drains: tuple[tuple[int, int], NDArray[np.float64]] | None = None  # (table size, orders sent)
 
     # --- the charging pool ----------------------------------------------------------------------
 
-    def candidates(self) -> list[int]:
-        """The charging pool: ids of active aMussels below the pool threshold, lowest first, that
-        the aPad may go to (one outside the geofence, e.g. carried off by a current while it
-        floated, is left out with one `unreachable` event instead of being tried again and again)."""
+    def pool(self) -> list[int]:
+        """Ids of the active aMussels below the pool threshold, lowest first, as the GCS believes them
+        (`LoopBook.charging_pool` makes the charging pool of them)."""
         threshold = self.settings.mission.pool_threshold
         if self.acoustic is None:
             ids = self._active_below(threshold)
@@ -102,19 +98,18 @@ class FleetKnowledge:
             real = set(self.real.ids())
             below = self.real.below(threshold, self.clock.now_us, self.drain_per_min, self.orders.changed.get)
             ids = sorted({m for m in ids if m not in real} | set(below))
-        out = []
+        return ids
+
+    def within_reach(self, ids: list[int]) -> tuple[list[int], list[int]]:
+        """Of `ids`, (those the aPad may go to, those outside the geofence); one with no home known, of
+        another aPad's share, or that cannot be collected now is in neither."""
+        inside: list[int] = []
+        outside: list[int] = []
         for m in ids:
-            if not self.api.mussels[m].simulated:
-                self.note_home(m)
             if m not in self.homes or not self.serves(m) or self.cannot_collect(m) is not None:
                 continue
-            if self.api.inside_geofence(self.api.get_location(m)):
-                out.append(m)
-            elif m not in self.unreachable:
-                self.unreachable.add(m)
-                where = self.api.get_location(m)
-                self._log("unreachable", mussel=m, lat=where.lat, lon=where.lon, why="outside the geofence")
-        return out
+            (inside if self.api.inside_geofence(self.api.get_location(m)) else outside).append(m)
+        return inside, outside
 
     def _active_below(self, threshold: float) -> list[int]:
         """Ids of ACTIVE aMussels whose battery (`battery`) is below `threshold`, lowest first: the
@@ -131,7 +126,7 @@ class FleetKnowledge:
         """Each table row's aMussel's drain per mission second (`drain_per_s`), made again only when the
         table grew or a sleep order changed a duty."""
         t = self.api.mussels
-        key = (t.ids.size, self._duties_changed)
+        key = (t.ids.size, self.orders.sent)
         if self._drains is None or self._drains[0] != key:
             self._drains = key, np.array([self.drain_per_s(m) for m in t.ids.tolist()], float)
         return self._drains[1]
@@ -217,15 +212,10 @@ class FleetKnowledge:
         scenario's fleet, takes the scenario's default)."""
         return self.settings.duties.get(mussel_id, self._default_duty)
 
-    def ordered(self, mussel_id: int, duty: Duty) -> None:
-        """A sleep order was sent: plan with it from now on (one heard now and then, acoustically or a
-        real aMussel, was believed run down at the old duty until now, and at the new one from here)."""
-        heard_now_and_then = mussel_id in self.api.mussels and (
+    def heard_now_and_then(self, mussel_id: int) -> bool:
+        """Heard only now and then (acoustically, or a real aMussel): a belief runs down between reports."""
+        return mussel_id in self.api.mussels and (
             self.acoustic is not None if self.api.mussels[mussel_id].simulated else self.real is not None)
-        if heard_now_and_then:
-            self.orders.changed[mussel_id] = (self.clock.now_us, self.battery(mussel_id))
-        self.orders.duties[mussel_id] = duty
-        self._duties_changed += 1
 
     def drain_per_s(self, mussel_id: int) -> float:
         return self.duty(mussel_id).drain_per_s(self.settings.mission.theta)
@@ -299,10 +289,43 @@ class FleetKnowledge:
         here, there = self.api.position(self.apad_id), self.api.get_location(mussel_id)
         return pair_distance_m(here.lat, here.lon, there.lat, there.lon)
 
-    def note_home(self, mussel_id: int) -> None:
-        """A real aMussel goes back where it was first found (a simulated one: its start)."""
-        if mussel_id not in self.homes and mussel_id in self.api.mussels:
-            self.homes[mussel_id] = self.api.get_location(mussel_id)
+    def position(self) -> Location:
+        """Where the aPad is, as last heard."""
+        return self.api.position(self.apad_id)
+
+    def location(self, mussel_id: int) -> Location:
+        """Where the aMussel is, as last heard (or believed)."""
+        return self.api.get_location(mussel_id)
+
+    def heard(self, mussel_id: int) -> bool:
+        return mussel_id in self.api.mussels
+
+    def simulated(self, mussel_id: int) -> bool:
+        """One of the simulated fleet (a local party: a command to it cannot be lost)."""
+        return self.api.mussels[mussel_id].simulated
+
+    def at_surface(self, mussel_id: int) -> bool:
+        return self.api.mussels[mussel_id].depth_m <= SURFACE_DEPTH_M
+
+    def in_states(self, states: tuple[MusselState, ...]) -> list[int]:
+        """Ids of the aMussels last reported in one of `states`."""
+        return self.api.mussels.select(states)
+
+    def battery_v(self) -> float | None:
+        """The aPad's battery, volts, as last heard (None: not heard yet)."""
+        return self.api.battery_v(self.apad_id)
+
+    def charging_at_home(self) -> bool:
+        """The aPad reports its home charger charging it."""
+        return self.api.apad(self.apad_id).charging
+
+    def slot_count(self) -> int:
+        """The aPad's slots as heard (0: not heard yet)."""
+        return len(self.api.slots(self.apad_id))
+
+    def latches_in_motion(self) -> list[int]:
+        """Slots whose latch is closing or opening."""
+        return [s.slot for s in self.api.slots(self.apad_id) if s.latch in (Latch.CLOSING, Latch.RELEASING)]
 
     # --- this aPad's share ----------------------------------------------------------------------
 
@@ -320,18 +343,7 @@ class FleetKnowledge:
         """Whether this aPad holds the claim on it (fetching it, or holding it on a slot); never, alone."""
         return self.shares is not None and self.shares.holds(self.apad_id, mussel_id)
 
-    def claim(self, mussel_id: int) -> bool:
-        """Claim the aMussel for this aPad before calling it up (never two aPads; always, alone)."""
-        return self.shares is None or self.shares.claim(self.apad_id, mussel_id, self.clock.now_us)
-
     def taken_over(self, mussel_id: int) -> bool:
         """This aPad was lost long enough for another to take over its claim: leave the aMussel to
-        that one (no sink: it is being fetched). Logged."""
-        if self.shares is None or self.shares.holds(self.apad_id, mussel_id):
-            return False
-        self._log("skip", mussel=mussel_id, why="taken over by another aPad while this one was unheard")
-        return True
-
-    def release(self, mussel_id: int) -> None:
-        if self.shares is not None:
-            self.shares.release(self.apad_id, mussel_id)
+        that one (no sink: it is being fetched)."""
+        return self.shares is not None and not self.shares.holds(self.apad_id, mussel_id)

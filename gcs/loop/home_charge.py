@@ -25,7 +25,7 @@ def within_energy(crew: Crew, route: list[int]) -> list[int]:
     knows = crew.knows
     if not needs_home(knows, route):
         return route
-    budget, volts = knows.settings.energy, knows.api.battery_v(knows.apad_id)
+    budget, volts = knows.settings.energy, knows.battery_v()
     if budget is not None and volts is not None and budget.charged(volts):
         fits = next((k for k in range(len(route) - 1, -1, -1) if not needs_home(knows, route[:k])), 0)
         crew.log("route_trimmed", route=route, kept=route[:fits], why="more than a charged battery covers")
@@ -39,26 +39,26 @@ def go_home_and_charge(crew: Crew, route: list[int]) -> None:
     knows, act = crew.knows, crew.act
     budget, home = knows.settings.energy, knows.settings.home
     assert budget is not None and home is not None
-    volts = knows.api.battery_v(knows.apad_id)
+    volts = knows.battery_v()
     act.set_phase(Phase.HOME_CHARGE)
     reschedule(crew, GOING_HOME, why="home charge")  # hours away: a strategy that orders sleep does so now
     crew.log("home_charge", battery_v=round(volts or 0.0, 3), trip_wh=round(trip_need_wh(knows, route), 1),
              route=route)
     act.go_to(Location(*home))
-    act.command(act.api.hold)
-    act.pace.hold()  # hours at the charger: slow telemetry (the battery's reports keep their rate)
+    act.hold()
+    act.slow_telemetry()  # hours at the charger (the battery's reports keep their rate)
     arrived_s = knows.clock.time()
     charging_seen = [arrived_s]
 
     def done() -> bool:
-        view = knows.api.apad(knows.apad_id)
-        if view.charging:
+        if knows.charging_at_home():
             charging_seen[0] = knows.clock.time()
-        return (view.battery_v is not None and budget.charged(view.battery_v)) or (
+        volts = knows.battery_v()
+        return (volts is not None and budget.charged(volts)) or (
             knows.clock.time() - charging_seen[0] >= NOT_CHARGING_S)
 
     act.wait_until(done)
-    after = knows.api.battery_v(knows.apad_id) or 0.0
+    after = knows.battery_v() or 0.0
     if budget.charged(after):
         crew.status.home_charges += 1
         crew.log("home_charged", battery_v=round(after, 3), waited_s=round(knows.clock.time() - arrived_s, 1),

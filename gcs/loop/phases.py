@@ -3,7 +3,8 @@
 Idle wait -> plan collection -> collect (go to, call up, dock) x up to 4 -> charging wait ->
 plan redeployment -> redeploy (go to the original position, undock, sink); and `recover`, which
 settles what a crash interrupted. A phase reads the fleet through `crew.knows`
-(`FleetKnowledge`), commands the aPad through `crew.act` (`ApadActions`) and writes `crew.status`;
+(`FleetKnowledge`), writes claims and homes in `crew.book` (`LoopBook`), commands the aPad through
+`crew.act` (`ApadActions`) only, and writes `crew.status`;
 it never reaches into another phase. The loop's shapes (`gcs.loop.turns`) string them together.
 """
 
@@ -14,14 +15,13 @@ import math
 
 import numpy as np
 
-from apad_sitl.vocabulary import Latch
+from gcs.loop.book import charging_pool
 from gcs.loop.control import Phase
 from gcs.loop.crew import Crew
 from gcs.loop.fleet_knowledge import FleetKnowledge
 from gcs.loop.trip_energy import needs_home
-from gcs.results.accounting import SURFACE_DEPTH_M
 from gcs.strategies import CollectStrategy, PlanInput, StrategyError, plan
-from mussel_sim.vocabulary import MusselCommand, MusselState
+from mussel_sim.vocabulary import MusselState
 
 RESHARED = "another aPad's since the fleet was re-shared"
 GONE_QUIET = "believed empty or unheard too long (acoustic)"
@@ -33,7 +33,7 @@ def idle_wait(crew: Crew) -> None:
     """Hold until the pool holds enough candidates for the free slots (or orphans wait to be fetched)."""
     knows, act, mission = crew.knows, crew.act, crew.settings.mission
     act.set_phase(Phase.IDLE_WAIT)
-    act.command(act.api.hold)
+    act.hold()
 
     def pool_full() -> bool:
         if needs_home(knows, []):
@@ -47,7 +47,7 @@ def idle_wait(crew: Crew) -> None:
             return False
         # The pool first: it is empty at most looks, and the share's count (`pool_needed`, at least 1) is
         # the dearer of the two.
-        found = len(knows.candidates())
+        found = len(charging_pool(knows, crew.book))
         return found > 0 and found >= min(knows.pool_needed(mission.min_pool), free) and act.link_up()
 
     act.wait_until(pool_full)
@@ -70,7 +70,7 @@ def plan_collection(crew: Crew) -> list[int]:
 def collection_route(crew: Crew, reserved: int = 0) -> list[int]:
     """The strategy's route over the charging pool for the free slots but `reserved`."""
     knows = crew.knows
-    inp = collection_input(crew, knows.candidates(), len(knows.free_slots()) - reserved)
+    inp = collection_input(crew, charging_pool(knows, crew.book), len(knows.free_slots()) - reserved)
     return strategy_route(crew, inp)
 
 
@@ -97,14 +97,14 @@ def strategy_route(crew: Crew, inp: PlanInput) -> list[int]:
 def collection_input(crew: Crew, ids: list[int], capacity: int) -> PlanInput:
     """A planning step over these aMussels where they are now, from where the aPad is now."""
     knows = crew.knows
-    views = [knows.api.mussels[m] for m in ids]
-    position = knows.api.position(knows.apad_id)
+    where = [knows.location(m) for m in ids]
+    position = knows.position()
     return PlanInput(
         apads={knows.apad_id: (position.lat, position.lon)},
         capacity={knows.apad_id: capacity},
         mussel_ids=np.array(ids, np.int64),
-        lat_deg=np.array([m.location.lat for m in views]),
-        lon_deg=np.array([m.location.lon for m in views]),
+        lat_deg=np.array([w.lat for w in where]),
+        lon_deg=np.array([w.lon for w in where]),
         battery_frac=np.array([knows.battery(m) for m in ids]),
         outlook=knows.outlook(),
         drain_per_s=np.array([knows.drain_per_s(m) for m in ids], np.float64),
@@ -114,7 +114,7 @@ def collection_input(crew: Crew, ids: list[int], capacity: int) -> PlanInput:
 
 def collect(crew: Crew, route: list[int]) -> None:
     """Fetch each aMussel of the route in turn: go to it, call it up, close in, dock it."""
-    knows, act, status, api = crew.knows, crew.act, crew.status, crew.knows.api
+    knows, act, status = crew.knows, crew.act, crew.status
     act.set_phase(Phase.COLLECT)
     route = list(route)
     while route:
@@ -139,7 +139,7 @@ def collect(crew: Crew, route: list[int]) -> None:
             crew.log("skip", mussel=mussel_id, why=GONE_QUIET)
             continue
         # From a call-up on, the waits ignore the mission end: the margin above leaves time to finish.
-        if not act.go_to(api.get_location(mussel_id), interruptible=not called):
+        if not act.go_to(knows.location(mussel_id), interruptible=not called):
             if called:
                 act.sink(mussel_id)
             continue
@@ -150,23 +150,22 @@ def collect(crew: Crew, route: list[int]) -> None:
         rise_s = knows.wake_in_s(mussel_id) + crew.settings.mussel_surfacing_s  # a sleeper's wake first
         if not act.wait_until(functools.partial(_floating_or_depleted, knows, mussel_id),
                               knows.call_up_wait_s(mussel_id), interruptible=False, holding_for_s=rise_s):
-            if knows.taken_over(mussel_id):
+            if taken_over(crew, mussel_id):
                 continue
             crew.log("skip", mussel=mussel_id, why="did not surface", state=knows.state(mussel_id).name)
             act.sink(mussel_id)  # it may surface later: it must not float there forever
             continue
         if knows.state(mussel_id) == MusselState.DEPLETED:  # no use waiting it out: it cannot move now
-            knows.release(mussel_id)
-            at_surface = api.mussels[mussel_id].depth_m <= SURFACE_DEPTH_M
+            crew.book.release(mussel_id)
             crew.log("skipped", mussel=mussel_id,
-                     why="depleted at the surface" if at_surface else "depleted before it floated")
+                     why="depleted at the surface" if knows.at_surface(mussel_id) else "depleted before it floated")
             continue
         # It surfaced where it was last localised underwater, give or take drift: close in.
-        if knows.taken_over(mussel_id):
+        if taken_over(crew, mussel_id):
             continue
         if knows.distance_to(mussel_id) > 0.8 * crew.settings.dock_reach_m:
-            act.go_to(api.get_location(mussel_id), interruptible=False)
-        if knows.taken_over(mussel_id):
+            act.go_to(knows.location(mussel_id), interruptible=False)
+        if taken_over(crew, mussel_id):
             continue
         if act.dock(free[0], mussel_id):
             crew.log("docked", mussel=mussel_id, slot=free[0])
@@ -203,6 +202,15 @@ def recheck_route(crew: Crew, route: list[int]) -> list[int]:
     return new
 
 
+def taken_over(crew: Crew, mussel_id: int) -> bool:
+    """This aPad was lost long enough for another to take over its claim: leave the aMussel to that
+    one (no sink: it is being fetched). Logged."""
+    if not crew.knows.taken_over(mussel_id):
+        return False
+    crew.log("skip", mussel=mussel_id, why="taken over by another aPad while this one was unheard")
+    return True
+
+
 def _floating_or_depleted(knows: FleetKnowledge, mussel_id: int) -> bool:
     return knows.state(mussel_id) in (MusselState.FLOATING, MusselState.DEPLETED)
 
@@ -223,7 +231,7 @@ def charging_wait(crew: Crew) -> None:
     """Hold until every aMussel on board may go back (`FleetKnowledge.charged`)."""
     knows, act = crew.knows, crew.act
     act.set_phase(Phase.CHARGING_WAIT)
-    act.command(act.api.hold)
+    act.hold()
     act.wait_until(lambda: all(knows.charged(m, crew.status.strategy) for m in knows.docked().values()))
 
 
@@ -234,8 +242,8 @@ def plan_redeployment(crew: Crew, only: set[int] | None = None) -> list[tuple[in
     docked = {s: m for s, m in knows.docked().items() if only is None or m in only}  # slot -> mussel
     ids = list(docked.values())
     for m in ids:
-        knows.note_home(m)  # one docked with no home known (e.g. held since a crash): back to here
-    position = knows.api.position(knows.apad_id)
+        crew.book.note_home(m)  # one docked with no home known (e.g. held since a crash): back to here
+    position = knows.position()
     inp = PlanInput(
         apads={knows.apad_id: (position.lat, position.lon)},
         capacity={knows.apad_id: len(ids)},
@@ -254,7 +262,7 @@ def plan_redeployment(crew: Crew, only: set[int] | None = None) -> list[tuple[in
 
 def redeploy(crew: Crew, route: list[tuple[int, int]]) -> None:
     """Take each aMussel home, undock it and send it down."""
-    knows, act, status, api = crew.knows, crew.act, crew.status, crew.knows.api
+    knows, act, status = crew.knows, crew.act, crew.status
     act.set_phase(Phase.REDEPLOY)
     act.begin_redeployment()
     for slot, mussel_id in route:
@@ -265,9 +273,9 @@ def redeploy(crew: Crew, route: list[tuple[int, int]]) -> None:
             crew.log("kept_on_board", mussel=mussel_id, slot=slot, why="its position could not be reached")
             continue
         if act.undock(slot, mussel_id):
-            if api.mussels[mussel_id].simulated:  # a local party: the command cannot be lost
-                act.command(api.command_mussel, mussel_id, MusselCommand.SINK, knows.apad_id)
-                knows.release(mussel_id)
+            if knows.simulated(mussel_id):  # a local party: the command cannot be lost
+                act.tell_to_sink(mussel_id)
+                crew.book.release(mussel_id)
                 act.let_go(mussel_id)  # not waited for here: the next leg gives it time
             else:
                 act.sink(mussel_id)  # over a radio: seen to leave the surface (releases the claim)
@@ -288,16 +296,13 @@ def recover(crew: Crew) -> None:
     """After a crash: finish latches in motion, send down whatever was called up and not docked
     (of this aPad's share, with no other aPad's claim on it), and complete a charging cycle whose
     aMussels are still on board."""
-    knows, act, api = crew.knows, crew.act, crew.knows.api
+    knows, act = crew.knows, crew.act
     act.sleep(2.0, interruptible=False)  # hear the aPad's slots and the fleet's status afresh
-
-    def moving() -> list[int]:
-        return [s.slot for s in api.slots(knows.apad_id) if s.latch in (Latch.CLOSING, Latch.RELEASING)]
-
-    if not act.wait_until(lambda: not moving(), crew.settings.surfacing_timeout_s, interruptible=False):
-        crew.log("gave_up", what="waiting for latches in motion", slots=moving())
+    if not act.wait_until(lambda: not knows.latches_in_motion(), crew.settings.surfacing_timeout_s,
+                          interruptible=False):
+        crew.log("gave_up", what="waiting for latches in motion", slots=knows.latches_in_motion())
     on_board = set(knows.docked().values())
-    for mussel_id in api.mussels.select((MusselState.FLOATING, MusselState.SURFACING)):
+    for mussel_id in knows.in_states((MusselState.FLOATING, MusselState.SURFACING)):
         # Several aPads: only what is this one's to handle (another may be latching it right now).
         if mussel_id not in on_board and knows.serves(mussel_id):
             crew.log("recover", mussel=mussel_id, action="sink", state=knows.state(mussel_id).name)

@@ -1,7 +1,7 @@
 """Sleep orders from the loop: a strategy with a sleep scheduler (`strategies.SCHEDULERS`) is asked, before
 each round and before the aPad goes home to charge, which aMussels of this aPad's share to put to sleep
 or wake back to always on; each decision is sent as the dialect's AMUSSEL_SLEEP_ORDER through the aPad
-(`ApadApi.sleep_order`), logged (`sleep_order`) and planned with from then on (`FleetKnowledge.ordered`).
+(`ApadApi.sleep_order`), logged (`sleep_order`) and planned with from then on (`LoopBook.ordered`).
 
 Only aMussels always on by their scenario profile are ordered (a profile with a schedule of its own is
 left to it), and only those on the seabed or sinking to it: one docked or rising is being charged.
@@ -38,9 +38,9 @@ def reschedule(crew: Crew, start_s: float = 0.0, why: str = "round") -> int:
     sent = 0
     for mussel_id, wake in sorted(decisions.items()):
         duty = ALWAYS_ON if wake else ASLEEP
-        if not act.command(act.api.sleep_order, mussel_id, duty.interval_s, duty.awake_s, knows.apad_id):
+        if not act.sleep_order(mussel_id, duty):
             continue  # not sent (a gave_up event says so): planned as before, asked again next time
-        knows.ordered(mussel_id, duty)
+        crew.book.ordered(mussel_id, duty)
         sent += 1
         crew.log("sleep_order", mussel=mussel_id, interval_s=duty.interval_s, awake_s=duty.awake_s,
                  battery=round(knows.battery(mussel_id), 3), why=why)
@@ -52,18 +52,18 @@ def schedule_input(crew: Crew, start_s: float) -> ScheduleInput | None:
     knows = crew.knows
     # One still sinking from the last redeployment is ordered too: it is on the seabed in seconds, and a
     # home charge that starts right after a round would leave it always on for hours (seen: it depleted).
-    deployed = knows.api.mussels.select((MusselState.ACTIVE, MusselState.SINKING))
+    deployed = knows.in_states((MusselState.ACTIVE, MusselState.SINKING))
     ids = [m for m in deployed if m in knows.homes and knows.serves(m)]
-    slots = len(knows.api.slots(knows.apad_id))
+    slots = knows.slot_count()
     if not ids or not slots:  # nothing to order, or the aPad's slots not heard yet (the mission's first instant)
         return None
     theta = knows.settings.mission.theta
-    views = [knows.api.mussels[m] for m in ids]
+    where = [knows.location(m) for m in ids]
     profile = [knows.profile_duty(m) for m in ids]
     return ScheduleInput(
         mussel_ids=np.array(ids, np.int64),
-        lat_deg=np.array([v.location.lat for v in views]),
-        lon_deg=np.array([v.location.lon for v in views]),
+        lat_deg=np.array([w.lat for w in where]),
+        lon_deg=np.array([w.lon for w in where]),
         battery_frac=np.array([knows.battery(m) for m in ids]),
         drain_per_s=np.array([knows.drain_per_s(m) for m in ids]),
         awake_drain_per_s=np.full(len(ids), ALWAYS_ON.drain_per_s(theta)),

@@ -22,8 +22,8 @@ def trip_need_wh(knows: FleetKnowledge, route: list[int]) -> float:
     """Energy the next trip takes, Wh: `route` collected, charged and redeployed, then the way home."""
     budget, home = knows.settings.energy, knows.settings.home
     assert budget is not None and home is not None
-    here = knows.api.position(knows.apad_id)
-    stops = [knows.api.mussels[m].location for m in route]
+    here = knows.position()
+    stops = [knows.location(m) for m in route]
     out_m = route_length_m((here.lat, here.lon), [(s.lat, s.lon) for s in stops])
     last = stops[-1] if stops else here
     home_m = pair_distance_m(last.lat, last.lon, home[0], home[1])  # remembered: an idle wait prices it at every poll
@@ -42,7 +42,7 @@ def needs_home(knows: FleetKnowledge, route: list[int]) -> bool:
     """Whether the battery, as last heard, would not cover `route` (see `trip_need_wh`) and the reserve;
     False without an energy budget or a battery reading, or with an aMussel on board."""
     budget = knows.settings.energy
-    volts = knows.api.battery_v(knows.apad_id)
+    volts = knows.battery_v()
     if budget is None or knows.settings.home is None or volts is None or knows.docked():
         return False
     return not budget.affords(volts, trip_need_wh(knows, route))

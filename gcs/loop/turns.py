@@ -56,7 +56,7 @@ def rolling(crew: Crew) -> None:
     put back the charged ones (nearest first), then fetch what the strategy plans for the free slots."""
     knows, act, strategy = crew.knows, crew.act, crew.status.strategy
     act.set_phase(Phase.IDLE_WAIT)
-    act.command(act.api.hold)
+    act.hold()
     next_look_s = 0.0
 
     def work() -> bool:

@@ -59,7 +59,7 @@ def test_real_amussels_on_the_bridge_are_served_beside_the_simulated_fleet(tmp_p
         sleeper_state = world.api.mussels[sleeper].state
         now_us = world.clock.now_us
         unordered = loop.knows.battery(sleeper)
-        loop.knows.ordered(sleeper, order)
+        loop.book.ordered(sleeper, order)
         ordered_drain, believed = loop.knows.drain_per_min(sleeper), loop.knows.battery(sleeper)
         asleep = world.real.estimate(sleeper, later_us, drain_per_min=ordered_drain, anchor=(now_us, believed))
         from_report = world.real.estimate(sleeper, later_us, drain_per_min=ordered_drain)
