@@ -107,12 +107,11 @@ class SitlVehicle:
         self.frame = LocalFrame(home_lat_deg, home_lon_deg)
         self.geofence = Geofence.of(geofence_deg, self.frame) if geofence_deg else None
         self.home_lat_deg, self.home_lon_deg = home_lat_deg, home_lon_deg
-        self._current_mps = current_mps  # (east, north) m/s; scenarios may change it at run time
         self.physics_hz = physics_hz
         self.park_at_rest = park_at_rest
 
         # The aPad's state (what a checkpoint saves); the parts change it.
-        self.apad = ApadState(with_param(params, "SYSID_THISMAV", system_id))
+        self.apad = ApadState(with_param(params, "SYSID_THISMAV", system_id), current_mps)
         self.now_us = 0
         self.closed = False
         self.dropped: Counter[str] = Counter()  # received messages dropped, by reason
@@ -213,7 +212,6 @@ class SitlVehicle:
 
     @params.setter
     def params(self, value: ApadParams) -> None:
-        self.apad.settle()  # the ticks until now ran with the old set
         self.apad.params = value
 
     @property
@@ -227,12 +225,11 @@ class SitlVehicle:
     @property
     def current_mps(self) -> tuple[float, float]:
         """The water current (east, north) m/s the hull drifts in."""
-        return self._current_mps
+        return self.apad.current_mps
 
     @current_mps.setter
     def current_mps(self, value: tuple[float, float]) -> None:
-        self.apad.settle()  # the ticks until now drifted in the old current
-        self._current_mps = value
+        self.apad.current_mps = value
 
     @property
     def primitive(self) -> PrimitiveState:
@@ -241,48 +238,27 @@ class SitlVehicle:
 
     def set_primitive(self, new: PrimitiveState) -> None:
         """Swap in a new primitive state; logged and announced (on-change telemetry) by the listeners."""
-        self.apad.settle()
         self.apad.set_primitive(new)
 
     @property
     def mode(self) -> int:
+        """Read-only: the parts change it with `ApadState.set_mode`, a checkpoint with `ApadState.restore`."""
         return self.apad.mode
-
-    @mode.setter
-    def mode(self, value: int) -> None:
-        """Silently, as a checkpoint's restore does; the parts change it with `ApadState.set_mode`."""
-        self.apad.settle()
-        self.apad.mode = value
 
     @property
     def armed(self) -> bool:
+        """Read-only: the parts change it with `ApadState.set_armed`, a checkpoint with `ApadState.restore`."""
         return self.apad.armed
-
-    @armed.setter
-    def armed(self, value: bool) -> None:
-        """Silently, as a checkpoint's restore does; the parts change it with `ApadState.set_armed`."""
-        self.apad.settle()
-        self.apad.armed = value
 
     @property
     def speed_override_mps(self) -> float:
         """DO_CHANGE_SPEED for later Go Tos; 0: SPEED_MAX."""
         return self.apad.speed_override_mps
 
-    @speed_override_mps.setter
-    def speed_override_mps(self, value: float) -> None:
-        self.apad.speed_override_mps = value
-
     @property
     def energy_counters(self) -> EnergyCounters:
-        """Energy passed to aMussels and taken at home (a checkpoint restores it in place)."""
-        self.apad.settle()  # the home charger's top-ups of the ticks a parked physics task skipped
+        """Energy passed to aMussels and taken at home."""
         return self.apad.energy
-
-    @energy_counters.setter
-    def energy_counters(self, value: EnergyCounters) -> None:
-        self.apad.settle()
-        self.apad.energy = value
 
     @property
     def position_deg(self) -> tuple[float, float]:
@@ -292,12 +268,12 @@ class SitlVehicle:
 
     def gcs_link_lost(self) -> bool:
         """True if a GCS was heard and has been silent for FS_GCS_TIMEOUT."""
-        self.apad.settle()  # the time of the last tick, which a parked physics task skipped
+        self.apad.settle()  # the vehicle's time (see `send`)
         return self.modes.gcs_link_lost()
 
     @property
     def failsafe_active(self) -> bool:
-        self.apad.settle()  # a tick's failsafe check ends it
+        self.apad.settle()  # Modes' flag, which the failsafe check of a skipped tick resets
         return self.modes.failsafe_active
 
     @property
@@ -379,7 +355,9 @@ class SitlVehicle:
     # ------------------------------------------------------------------ what the parts share
 
     def send(self, msg: mavlink.MAVLink_message) -> None:
-        self.apad.settle()  # stamped (and signed) at the last tick's time, which a parked physics task skipped
+        # The vehicle's time, `now_us`, is the one thing the parked ticks advance that is not the
+        # aPad's state (ApadState settles for the rest): what is stamped (and signed) with it settles here.
+        self.apad.settle()
         frame = self.codec.encode(msg)
         self.transport.send(frame)
         if self.log is not None:
@@ -390,5 +368,5 @@ class SitlVehicle:
 
     def event(self, event: str, /, **fields: Any) -> None:
         if self.log is not None:
-            self.apad.settle()
+            self.apad.settle()  # stamped with the vehicle's time (see `send`)
             self.log.event(self.now_us, event, **fields)

@@ -7,8 +7,9 @@ largest share of a quiet second. So while the hull rests and its primitive is no
 parked: taken off the scheduler, its ticks skipped. They are taken when they matter, as stepping
 would have left them:
 
-- before the hull is read (`ApadState.state` calls `settle`: a stream, a checkpoint, the outcome)
-  and before it is written (the state's setter settles first);
+- before what they change is read and before what they step on is written: `ApadState`'s accessors
+  settle (the hull and the energy counters read by a stream, a checkpoint, the outcome; the hull,
+  the parameters, the current, the primitive, mode and arming written);
 - before anything is sent or logged (stamps and signing read the vehicle's time), and before and
   after the messages of a poll are handled: after, the task is back on the scheduler at its next
   tick, on the grid it never left, if what was handled ended the rest (only a message changes
@@ -47,7 +48,6 @@ class TickHost(Protocol):
     energy: EnergyMeter
     mussels: MusselFixTable
     modes: Modes
-    current_mps: tuple[float, float]
     now_us: int
     log: VehicleLog | None
 
@@ -90,7 +90,7 @@ class PhysicsTicks:
         apad = host.apad
         if apad.params.fs_gcs_enable:
             host.modes.check_failsafe()
-        step_hull(apad, host.energy, host.mussels, host.current_mps, (now_us - last_us) / US_PER_S)
+        step_hull(apad, host.energy, host.mussels, apad.current_mps, (now_us - last_us) / US_PER_S)
 
     def settle(self) -> None:
         """Take the ticks skipped so far (see the module's docstring); parked still if the rest holds."""
@@ -107,7 +107,7 @@ class PhysicsTicks:
         n = (upto - last) // period
         if n > 0:
             now_before, end = host.now_us, last + n * period
-            taken = rest_steps(apad, host.energy, rest_key(apad, host.current_mps), period / US_PER_S, n)
+            taken = rest_steps(apad, host.energy, rest_key(apad, apad.current_mps), period / US_PER_S, n)
             if taken:
                 if apad.params.fs_gcs_enable:
                     for t in sorted({last + period, last + taken * period}):  # the first and the last
@@ -128,7 +128,7 @@ class PhysicsTicks:
 
     def _rest_holds(self) -> bool:
         apad, dt_s = self._host.apad, self.task.period_us / US_PER_S
-        return rest_holds(apad, rest_key(apad, self._host.current_mps), dt_s) and not _busy(apad)
+        return rest_holds(apad, rest_key(apad, apad.current_mps), dt_s) and not _busy(apad)
 
     def stop(self) -> None:
         """The vehicle closes: the ticks up to now taken, no more."""

@@ -393,7 +393,5 @@ def restore(world: World, ckpt: Checkpoint) -> None:
         v = world.vehicles.get(sysid)
         if v is None:
             continue  # a real aPad now where the checkpoint had a SITL one: it keeps its own state
-        v.state, v.mode, v.armed = snap.state, snap.mode, snap.armed
-        v.speed_override_mps = snap.speed_override_mps
-        v.energy_counters = copy.copy(snap.energy)
-        v.set_primitive(snap.primitive)
+        v.apad.restore(snap.state, snap.primitive, snap.mode, snap.armed, snap.speed_override_mps,
+                       copy.copy(snap.energy))

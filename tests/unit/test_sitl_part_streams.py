@@ -97,7 +97,8 @@ def test_a_requested_message_is_sent_once_by_the_reply(tm: Telemetry) -> None:
 
 
 def test_the_heartbeat_says_the_mode_and_arming_of_the_state(tm: Telemetry) -> None:
-    tm.apad.mode, tm.apad.armed = RoverMode.GUIDED, False
+    tm.apad.set_mode(RoverMode.GUIDED)
+    tm.apad.set_armed(False)
     tm.streams.send_heartbeat()
     (hb,) = tm.host.take()
     assert (hb.custom_mode, hb.base_mode & mavlink.MAV_MODE_FLAG_SAFETY_ARMED) == (RoverMode.GUIDED, 0)
