@@ -1,4 +1,4 @@
-"""`vil gcs` and `vil replay`: arguments and start-up of the console apps.
+"""`vil gcs`: the operator console, live against an aPad: a running one (--connect) or one it embeds (--sitl).
 
     vil gcs --sitl                                   # demo: embedded SITL aPad, pool12
     vil gcs --sitl --scenario missions/pool12x2.toml # two aPads: `a` picks the one the keys command
@@ -7,12 +7,11 @@
     vil gcs --sitl --web 8000                        # the same console in a browser: http://127.0.0.1:8000/
     vil gcs --sitl --web 0.0.0.0:8000                # for the boat's network, behind a token: open the
                                                      #   printed http://ADDRESS:8000/?token=... (403 without it)
-    vil replay runs/latest --speed 16                # the last run; or runs/pool12-cautious-seed1-run1
 
 Everything `vil gcs` is given (scenario and its files, address, output folder) is opened before the
 console starts: what it cannot use is one line on stderr and exit 2, never a console that hangs.
-Textual is imported only when a console starts, so other subcommands start fast.
 """
+# Textual is imported only when a console starts, so other subcommands start fast.
 
 from __future__ import annotations
 
@@ -30,17 +29,17 @@ from gcs.records.run_folder import RunFolder
 from gcs.scenario.reader import MISSIONS_DIR, Scenario, ScenarioError, load_scenario, resolve_scenario
 from gcs.strategies import StrategyError, load_strategy, source_of
 from mavlink_dialect.signing import SigningKeyError, load_key
-from missiontime import mm_ss, unix_time_us
+from missiontime import unix_time_us
 
 if TYPE_CHECKING:
     from gcs.console.runner import ResumePoint
 
 DEFAULT_SCENARIO = MISSIONS_DIR / "pool12.toml"
-SPEED_RANGE = (0.1, 1000.0)  # x real time, for a paced SITL world and for replays
+SPEED_RANGE = (0.1, 1000.0)  # x real time, for a paced SITL world and for replays (gcs/cli/replay.py)
 
 
 def add_gcs_arguments(parser: argparse.ArgumentParser) -> None:
-    link = parser.add_mutually_exclusive_group(required=True)
+    link = parser.add_mutually_exclusive_group()  # one of them is needed: run_gcs says so, suggesting --sitl
     link.add_argument("--connect", metavar="ADDR[,ADDR...]",
                       help="the aPad(s) at udp:HOST:PORT (or tcp:, serial:); several addresses comma-separated")
     link.add_argument("--sitl", action="store_true", help="embed a SITL aPad (no other process needed)")
@@ -106,6 +105,10 @@ def modem_refusal(modem: str | None, sea: str | None, speed: float | None, acous
 def run_gcs(args: argparse.Namespace) -> int:
     from gcs.scenario.model_params import check_inputs
 
+    if not args.connect and not args.sitl:
+        print("vil gcs: which aPad? --sitl for a first look (an embedded SITL aPad, no other process), or "
+              "--connect udp:HOST:PORT for a running one", file=sys.stderr)
+        return 2
     try:
         path = resolve_scenario(args.scenario or DEFAULT_SCENARIO)
         scenario = load_scenario(path)
@@ -242,32 +245,3 @@ def _resume_point(out: Path | None, stem: str, scenario: Scenario) -> tuple[Path
     check_setup(saved, setup_digest(scenario))
     cut_logs(folder, saved)  # the stretch after it runs again: each event logged once
     return folder.path, epoch_us, ResumePoint(files, saved)
-
-
-def add_replay_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("run", metavar="RUN_DIR_OR_TLOG",
-                        help="a run folder (gcs.tlog, events.jsonl; runs/latest: the last run) or a .tlog")
-    parser.add_argument("--scenario", metavar="FILE", help="scenario TOML for the area and thresholds "
-                                                           "(default: the one the run names)")
-    parser.add_argument("--speed", type=flags.number_in(*SPEED_RANGE), default=8.0,
-                        help=f"playback speed, x real time ({SPEED_RANGE[0]:g} to {SPEED_RANGE[1]:g}, default 8)")
-    parser.add_argument("--start", type=flags.mission_time, default=0.0, metavar="T",
-                        help="start at this mission time, with its unit: 90s, 12min")
-    parser.add_argument("--paused", action="store_true", help="start paused")
-
-
-def run_replay(args: argparse.Namespace) -> int:
-    from gcs.console.app import ReplayConsole
-    from gcs.records.replay import ReplayError, load_replay
-
-    try:
-        replay = load_replay(args.run, args.scenario)
-    except (ReplayError, ScenarioError, OSError) as exc:
-        print(f"vil replay: {exc}", file=sys.stderr)
-        return 2
-    if args.start > replay.end_s:
-        print(f"vil replay: --start {mm_ss(args.start)} is past the end of {args.run} ({mm_ss(replay.end_s)})",
-              file=sys.stderr)
-        return 2
-    ReplayConsole(replay, start_s=args.start, playing=not args.paused, speed=args.speed).run()
-    return 0

@@ -38,6 +38,7 @@ from gcs.report.compare import write_comparison
 from gcs.report.geojson import write_geojson
 from gcs.report.load import load_run
 from gcs.report.page import Figure, write_page
+from gcs.report.per_week import LONG_DAYS
 from gcs.report.run_data import RunData
 from gcs.report.style import use_files_only
 from gcs.scenario.reader import ScenarioError
@@ -74,7 +75,9 @@ FIGURES: tuple[tuple[str, Draw, str, str], ...] = (
     ("days.png", days.days_png, "Per simulated day",
      "The aMussels' days (86,400 s / theta of mission time each): above, the fleet's mean uptime that day (bars) "
      "and the aMussels alive at its end (line); below, the aMussels each aPad charged that day (line) and the "
-     "energy it passed into them (dotted). Every day is in the table of the same name."),
+     f"energy it passed into them (dotted). Past {LONG_DAYS} days, by week: the fleet's uptime as a band from the "
+     "week's lowest to its highest day around the week's mean, and each aPad's aMussels charged and Wh passed a "
+     "day (the week's mean) as heat maps of aPad x week. Every day is in the table of the same name."),
     ("partition.png", maps.partition_png, "The fleet shared among the aPads",
      "Which aPad served which aMussels (k-means, balanced; in an acoustic fleet each aMussel joins the nearest "
      "share with room as it is first heard): the first sharing, then the last re-shares after an aPad was lost "

@@ -118,10 +118,10 @@ class ConsoleApp(App[None]):
 class LiveConsole(ConsoleApp):
     TITLE = "vil gcs"
     HELP_INTRO = ("Live console. The up and down arrow keys (or a click) pick the aMussel in the fleet table that g, "
-                  "d and u act on. Override, go-to, dock and undock pause the loop; p resumes it. q quits within a "
-                  "second (asks first if aMussels are at the surface); Q, ctrl+q quit at once: the aPads hold, "
-                  "floating aMussels sink. Top line: each link's last heartbeat (amber 1.5 s, LINK LOST 3 s), "
-                  "lost frames, signing, restarts.")
+                  "d and u act on. Override, go-to, dock and undock pause the loop; p resumes it. q (or ctrl+c, "
+                  "ctrl+q) quits within a second, asking first if aMussels are at the surface; Q quits at once: the "
+                  "aPads hold, floating aMussels sink. Top line: each link's last heartbeat (amber 1.5 s, LINK LOST "
+                  "3 s), lost frames, signing, restarts.")
     SWARM_HELP = (" With several aPads, a picks the aPad these keys act on (highlighted on the map, detailed in the "
                   "panel); on the map each aMussel shows the number of the aPad whose share it is.")
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -251,6 +251,12 @@ class LiveConsole(ConsoleApp):
         """ctrl+q (Textual's own quit key) quits as q does, bounded, never leaving a blank screen waiting."""
         self.action_quit_console()
 
+    def action_help_quit(self) -> None:
+        """ctrl+c, an operator's reflex: the quit q starts (Textual's own only says which key quits).
+        While the confirm asks, it waits for its answer."""
+        if not isinstance(self.screen, ConfirmQuit):
+            self.action_quit_console()
+
     def _quit_choice(self, choice: QuitChoice | None) -> None:
         if choice == "now":
             self._quit(finish=False)
@@ -336,6 +342,10 @@ class ReplayConsole(ConsoleApp):
 
     def header(self) -> str:
         return f"REPLAY  {Path(self.replay.source).name}"
+
+    def action_help_quit(self) -> None:
+        """ctrl+c quits, as q does (Textual's own only says which key quits)."""
+        self.exit()
 
     def action_toggle_play(self) -> None:
         if not self.playing and self.position_s >= self.replay.end_s:

@@ -136,8 +136,8 @@ class StatusPanel(Static):
             t.append(f"  selected of {len(snap.apads)} (a: next)", style=AXIS)
         t.append("\nphase     ", style=AXIS).append(snap.phase, style="bold")
         t.append("   strategy ", style=AXIS).append(snap.strategy, style="bold")
-        if snap.pending_strategy and snap.pending_strategy != snap.strategy:
-            t.append(f" → {snap.pending_strategy} at next plan", style=APAD)
+        if snap.pending_strategy and snap.pending_strategy != snap.strategy:  # a line of its own: it fits
+            t.append("\nnext plan ", style=AXIS).append(f"strategy {snap.pending_strategy}", style=APAD)
         t.append("\nprimitive ", style=AXIS).append(snap.primitive)  # can be long: the mode is on the aPad line
         volts = "-" if snap.apad_battery_v is None else f"{snap.apad_battery_v:.2f} V ({snap.apad_battery_pct} %)"
         active = int(np.count_nonzero(snap.state == MusselState.ACTIVE))

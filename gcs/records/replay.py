@@ -117,7 +117,7 @@ def run_files(path: str | Path) -> RunFiles:
         if not tlog.exists():
             raise ReplayError(f"{folder.path}: no {tlog.name} in this folder")
     elif folder.path.is_file():
-        tlog, folder = folder.path, RunFolder(folder.path.parent)
+        tlog, folder = folder.path, RunFolder.at(folder.path.parent)  # runs/latest/gcs.tlog: the run's own name
     else:
         raise ReplayError(f"{folder.path}: no such run folder or .tlog")
     result = {**_read_json(folder.console), **_read_json(folder.result)}

@@ -48,9 +48,12 @@ class RunFolder:
 
     @classmethod
     def at(cls, path: str | Path) -> RunFolder:
-        """The run folder at `path` (a `latest` text file followed to the folder it names)."""
+        """The run folder at `path`, `latest` followed to the folder it names (a symlink or a text
+        file), so what reads the run shows its own name."""
         p = Path(path)
-        if p.name == LATEST and p.is_file() and not p.is_symlink():
+        if p.name == LATEST and p.is_symlink():
+            p = p.parent / os.readlink(p)  # relative as point_latest makes it, or absolute
+        elif p.name == LATEST and p.is_file():
             name = p.read_text(encoding="utf-8").strip()
             if name and "/" not in name:
                 p = p.parent / name

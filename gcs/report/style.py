@@ -90,6 +90,12 @@ def grid(ax: Axes) -> None:
     ax.grid(True, alpha=0.3)
 
 
+def legend_above(ax: Axes, handles: list[Any]) -> None:
+    """The legend in one row above `ax`, off its data (a legend inside covers lines that fill the plot)."""
+    ax.legend(handles=handles, loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=len(handles), fontsize=8,
+              frameon=False, borderaxespad=0.2, handlelength=1.8, columnspacing=1.2)
+
+
 def save(fig: Figure, path: Path) -> Path:
     import matplotlib.pyplot as plt
 

@@ -291,8 +291,9 @@ def _event_text(ev: MissionEvent) -> str:
         why = f.pop("why", None)
         f.pop("result", None)
         names = {"mussel": "aMussel"}
+        # A field named as the action is its new value: "operator strategy -> weighted", said once.
         body = f"{ev.kind} {action}: {why}" if why else " ".join(
-            [ev.kind, action, *(f"{names.get(k, k)} {v}" for k, v in f.items())])
+            [ev.kind, action, *(f"-> {v}" if k == action else f"{names.get(k, k)} {v}" for k, v in f.items())])
     elif ev.kind == "apad_restart":
         body = "aPad restarted" + (f", held {f['held']} before" if f.get("held") else "")
     elif ev.kind == "mission_end":

@@ -119,9 +119,10 @@ def run_replay(w: Work) -> None:
     end); q quits."""
     shutil.copytree(w.fixture("recorded_runs") / "runs", w.path / "runs", symlinks=True)
     strategy = json.loads((w.path / "runs/latest/result.json").read_text())["strategy"]
+    run = (w.path / "runs/latest").resolve().name  # the title names the run, not `latest`
     console = w.console(w.line(REPLAY))
     try:
-        console.wait("Map", "REPLAY latest", f"strategy {strategy}", "events", "mission_start")
+        console.wait("Map", f"REPLAY of {run}", f"strategy {strategy}", "events", "mission_start")
         assert console.quit() == 0, console.text()[-2000:]
     finally:
         console.close()

@@ -98,7 +98,7 @@ def test_override_then_a_refused_dock_hands_back_to_the_loop_and_q_still_quits(t
     asyncio.run(scenario())
 
 
-def test_q_asks_while_amussels_float_and_quits_within_the_bound(tmp_path: Path) -> None:
+def test_q_and_ctrl_c_ask_while_amussels_float_and_quit_within_the_bound(tmp_path: Path) -> None:
     async def scenario() -> None:
         app, runner = make_app(tmp_path, speed=8.0)  # slow enough to pause before the aMussel is docked
         async with app.run_test(size=SIZE) as pilot:
@@ -112,8 +112,11 @@ def test_q_asks_while_amussels_float_and_quits_within_the_bound(tmp_path: Path) 
             await pilot.press("n")
             await wait_for(pilot, lambda: not isinstance(app.screen, ConfirmQuit))
             assert app.is_running and not runner.finished.is_set()
-            await pilot.press("q")
+            await pilot.press("ctrl+c")  # an operator's reflex: the same question as q, not Textual's toast
             await wait_for(pilot, lambda: isinstance(app.screen, ConfirmQuit))
+            await pilot.press("ctrl+c")  # pressed again while it asks: it still waits for the answer
+            await pilot.pause(0.2)
+            assert isinstance(app.screen, ConfirmQuit) and len(app.screen_stack) == 2 and app.is_running
             pressed = time.monotonic()
             await pilot.press("y")
             await wait_for(pilot, lambda: not app.is_running)

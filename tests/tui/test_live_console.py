@@ -7,12 +7,14 @@ SITL aPad over an in-memory pair of real MAVLink bytes; assertions read the SITL
 from __future__ import annotations
 
 import asyncio
+import re
 from pathlib import Path
 
 import pytest
 from tui_helpers import screen_text, wait_for
 
 from apad_sitl.vocabulary import Primitive
+from gcs.cli.main import main
 from gcs.console.app import LiveConsole
 from gcs.console.runner import ConsoleConfig, ConsoleRunner
 from gcs.scenario.reader import load_scenario
@@ -111,13 +113,15 @@ def test_override_sends_hold_to_the_sitl() -> None:
 def test_strategy_switch_takes_effect_at_the_next_planning_step() -> None:
     async def scenario() -> None:
         app, runner = make_app(start_paused=True)
-        async with app.run_test(size=SIZE) as pilot:
+        async with app.run_test(size=(160, 46)) as pilot:
             await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.apad_lat_deg is not None)
             first = load_scenario(POOL12).mission.collect_strategy
             wanted = COLLECT[(COLLECT.index(first) + 1) % len(COLLECT)]
             await pilot.press("s")
             assert runner.control.strategy == wanted
-            await wait_for(pilot, lambda: f"→ {wanted} at next plan" in screen_text(app))
+            # At 160 columns the pending switch reads whole, and the events pane says it once.
+            await wait_for(pilot, lambda: re.search(rf"next plan strategy {wanted} *│", screen_text(app)) is not None)
+            await wait_for(pilot, lambda: f"operator strategy -> {wanted}" in screen_text(app))
             assert not events_of(runner, "plan_collection")  # nothing planned yet: the switch is pending
             await pilot.press("p")
             await wait_for(pilot, lambda: bool(events_of(runner, "plan_collection")))
@@ -205,3 +209,9 @@ def test_messages_the_link_refuses_are_counted_on_screen() -> None:
             await wait_for(pilot, runner.finished.is_set)
 
     asyncio.run(scenario())
+
+
+def test_plain_vil_gcs_suggests_sitl_for_a_first_look(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["gcs"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("vil gcs: ") and "--sitl for a first look" in err

@@ -99,3 +99,32 @@ def test_a_swarm_run_replays_with_every_apad_and_its_share(tmp_path: Path) -> No
     shares = {a.system_id: set(a.share) for a in last.apads}
     assert shares == {row["sysid"]: set(row["share_at_end"]) for row in result.apads}  # as the run shared it
     assert all(a.lat_deg is not None for a in last.apads)  # each aPad's own telemetry, from the .tlog
+
+
+def test_runs_latest_replays_under_the_runs_own_name_and_ctrl_c_quits(recorded_run: Path, tmp_path: Path) -> None:
+    """The title names the run's folder, not `latest`, however the run is given; ctrl+c quits as q."""
+    latest = tmp_path / "latest"
+    latest.symlink_to(recorded_run, target_is_directory=True)
+    for given in (latest, latest / "gcs.tlog"):
+        assert Path(load_replay(given).source).name == recorded_run.name
+
+    async def scenario() -> None:
+        app = ReplayConsole(load_replay(latest), playing=False)
+        async with app.run_test(size=(150, 46)) as pilot:
+            await pilot.pause(0.3)
+            text = screen_text(app)
+            assert f"REPLAY of {recorded_run.name}" in text and f"REPLAY  {recorded_run.name}" in text
+            assert "latest" not in text
+            await pilot.press("ctrl+c")
+            await wait_for(pilot, lambda: not app.is_running)
+
+    asyncio.run(scenario())
+
+
+def test_replay_help_describes_replay_not_the_live_console(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        main(["replay", "--help"])
+    description = capsys.readouterr().out.split("\n\n")[1]
+    assert description.startswith("`vil replay`: a recorded run")
+    assert "vil gcs --" not in description and "start-up" not in description
+

@@ -9,11 +9,14 @@ from __future__ import annotations
 
 import json
 import shutil
+from dataclasses import replace
 from datetime import datetime
 from html.parser import HTMLParser
 from pathlib import Path
+from typing import Any
 from urllib.parse import urlsplit
 
+import numpy as np
 import pytest
 from shapely.geometry import LinearRing
 
@@ -205,3 +208,64 @@ def test_a_strategy_switch_and_a_docking_the_loop_did_not_list_are_reported(tmp_
     assert data.strategy == "cautious, then weighted" and data.title == "pool12 cautious, then weighted seed 1"
     for m in data.mussels:
         assert (m.end_state == "docked") <= (m.dockings >= 1 and not m.never_collected), m
+
+
+def _days(n: int, apads: tuple[str, ...]) -> list[dict[str, object]]:
+    """Day rows as gcs.results.days writes them into result.json, with figures that differ day by day."""
+    return [{"day": d, "from_s": 48.0 * (d - 1), "to_s": 48.0 * d, "uptime_pct": 40.0 + (d % 9) * 5.0,
+             "alive": 12 - d // 10, "depleted": int(d % 10 == 0),
+             "charges": {a: (d % 7) + int(a) for a in apads},
+             "passed_wh": {a: 2.5 * (d % 5) + int(a) for a in apads}} for d in range(1, n + 1)]
+
+
+def _legends_off_the_data(fig: Any) -> int:
+    """How many legends the figure has, each checked to lie outside every plot it could cover."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    legends = [ax.get_legend() for ax in fig.axes if ax.get_legend() is not None]
+    for legend in legends:
+        box = legend.get_window_extent(renderer)
+        for ax in fig.axes:
+            plot = ax.get_window_extent(renderer)
+            assert box.y0 >= plot.y1 - 1 or box.y1 <= plot.y0 + 1 or box.x0 >= plot.x1 or box.x1 <= plot.x0, \
+                [t.get_text() for t in legend.get_texts()]
+    return len(legends)
+
+
+def test_a_long_run_is_drawn_by_week_its_legend_off_the_data(compared: Path, tmp_path: Path) -> None:
+    """Issue 39: 210 simulated days of five aPads were ten lines under a legend. Past LONG_DAYS: the
+    fleet's uptime as a weekly band, each aPad's charges and Wh a day (the week's mean) as heat maps."""
+    from matplotlib.collections import QuadMesh
+
+    from gcs.report.per_day import days_figure, days_png
+    from gcs.report.per_week import LONG_DAYS
+
+    swarm = load_run(compared.parent / "pool12x2")
+    rows = _days(45, ("1", "2"))
+    assert len(rows) > LONG_DAYS
+    data = replace(swarm, result={**swarm.result, "days": rows})
+    fig = days_figure(data)
+    assert fig is not None and fig.get_suptitle().startswith("Per simulated week, 45 days")
+    meshes = [c for ax in fig.axes for c in ax.collections if isinstance(c, QuadMesh) and c.colorbar]
+    assert len(meshes) == 2  # charged, then Wh passed: aPad x week
+    weeks = [rows[k:k + 7] for k in range(0, 45, 7)]  # 6 weeks of 7, then 3 days
+    for mesh, key in zip(meshes, ("charges", "passed_wh"), strict=True):
+        shown = np.asarray(mesh.get_array()).reshape(2, len(weeks))
+        expected = [[np.mean([r[key][a] for r in week]) for week in weeks] for a in ("1", "2")]
+        np.testing.assert_allclose(shown, expected)
+    lines = [line for ax in fig.axes for line in ax.get_lines() if len(line.get_xdata()) == 45]
+    assert [line.get_label() for line in lines] == ["aMussels alive at the day's end"]  # no line per aPad a day
+    assert _legends_off_the_data(fig) == 1
+    assert days_png(data, tmp_path / "days.png") is not None
+    assert (tmp_path / "days.png").read_bytes().startswith(PNG_MAGIC)
+
+
+def test_a_short_run_keeps_a_line_a_day_its_legends_off_the_data(compared: Path) -> None:
+    from gcs.report.per_day import days_figure
+
+    swarm = load_run(compared.parent / "pool12x2")
+    fig = days_figure(replace(swarm, result={**swarm.result, "days": _days(12, ("1", "2"))}))
+    assert fig is not None
+    lines = [line for ax in fig.axes for line in ax.get_lines() if len(line.get_xdata()) == 12]
+    assert len(lines) == 1 + 2 * 2  # alive; each aPad's charged and Wh passed, day by day as before
+    assert _legends_off_the_data(fig) == 2
