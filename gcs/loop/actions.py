@@ -17,20 +17,20 @@ from apad_sitl.vocabulary import Latch, Progress
 from gcs.acoustic_net.call_ups import CallUp
 from gcs.belief.duty import Duty
 from gcs.link.apad_api import CommandError, GeofenceError, Location
+from gcs.loop import wait_check
 from gcs.loop.book import LoopBook
 from gcs.loop.control import EndReason, LoopControl, LoopLog, LoopStatus, MissionEnded, Phase
 from gcs.loop.fleet_knowledge import FleetKnowledge
 from gcs.loop.telemetry_pace import HOLDING_PHASES, PACE_WORTH_S, PLANNING_PHASES, TelemetryPace
+from gcs.loop.wake_times import others_lapse_look_by
 from gcs.swarm.shares import route_conflicts
-from missiontime import seconds_to_us, us_to_s
+from missiontime import us_to_s
 from mussel_sim.geo import pair_distance_m
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
 # A Go To not reported done by GOTO_SLACK_S + GOTO_SLOWNESS x the trip at the aPad's speed is sent again.
 GOTO_SLACK_S = 60.0
 GOTO_SLOWNESS = 3.0
-# The aPad unheard this long: the loop starts nothing new (no call-up, no trip) until it is heard.
-LINK_LOST_S = 3.0
 GOTO_HEARD_S = 5.0  # the aPad reports its primitive every second; five lost in a row is rare even at 40 % loss
 
 
@@ -126,7 +126,8 @@ class ApadActions:
         if not blocked():
             return
         self._log("separation_wait", lat=target.lat, lon=target.lon, apads=blocked())
-        if not self.wait_until(lambda: not blocked(), self.settings.separation_wait_s, interruptible):
+        if not self.wait_until(lambda: not blocked(), self.settings.separation_wait_s, interruptible,
+                               look_by=partial(others_lapse_look_by, self.knows)):
             self._log("separation_wait_expired", lat=target.lat, lon=target.lon, apads=blocked())
 
     def dock(self, slot: int, mussel_id: int) -> bool:
@@ -234,8 +235,7 @@ class ApadActions:
     # --- the link -----------------------------------------------------------------------------
 
     def link_up(self) -> bool:
-        silent_us = self.clock.now_us - self.api.apad(self.apad_id).last_heartbeat_us
-        return silent_us <= seconds_to_us(LINK_LOST_S)
+        return self.knows.link_up()
 
     def wait_for_link(self, timeout_s: float | None = None, interruptible: bool = True) -> bool:
         """Wait until the aPad is heard again (events `link_lost`, `link_back`); False at the bound."""
@@ -252,10 +252,18 @@ class ApadActions:
     # --- waiting, ending, pausing -----------------------------------------------------------
 
     def wait_until(self, done: Callable[[], bool], timeout_s: float | None = None, interruptible: bool = True,
-                   holding_for_s: float = 0.0) -> bool:
-        """Wait (polling) until `done`; False at `timeout_s`. With slow telemetry in a holding phase, or
-        when it holds in place for about `holding_for_s` (above an aMussel on its way up) and that is
-        worth two rounds of requests (`PACE_WORTH_S`)."""
+                   holding_for_s: float = 0.0, look_by: Callable[[], float | None] | None = None) -> bool:
+        """Wait until `done`; False at `timeout_s`. What it waits for is declared: `done` reads what the GCS
+        knows, so news (a report, an acknowledgement) can turn it true, and time alone from `look_by()` on
+        (the first instant, mission s, a belief running between reports could: `gcs.loop.wake_times`;
+        None: only news can). Lockstep and the field look at every `poll_s`, as a field script's sleep loop
+        does (the reference); a platform that jumps from event to event wakes at news or `look_by`
+        instead, and `gcs.loop.wait_check` holds the declarations to what lockstep sees.
+        With slow telemetry in a holding phase, or when it holds in place for about `holding_for_s` (above
+        an aMussel on its way up) and that is worth two rounds of requests (`PACE_WORTH_S`)."""
+        if wait_check.ENABLED:
+            done = partial(wait_check.WaitCheck(self.knows, look_by, getattr(done, "__qualname__", "wait")).looked,
+                           done)
         deadline = None if timeout_s is None else self.clock.time() + timeout_s
         holding = holding_for_s > PACE_WORTH_S or self.status.phase in HOLDING_PHASES
         if holding and self.link_up() and not done():

@@ -26,7 +26,7 @@ from gcs.loop.control import LoopSettings
 from gcs.results.accounting import SURFACE_DEPTH_M
 from gcs.strategies import Outlook, traits
 from gcs.swarm.shares import FleetShares, orphans
-from missiontime import Clock
+from missiontime import Clock, seconds_to_us
 from mussel_sim.battery import ChargeProfile, charge_profile, discharge_profile, sim_minutes
 from mussel_sim.geo import pair_distance_m
 from mussel_sim.vocabulary import MusselState
@@ -41,6 +41,8 @@ TRIP_SLOWNESS = 1.2
 DOCK_MARGIN_S = 10.0
 DOCK_S = 20.0  # besides surfacing, at each collection stop: closing in and latching
 RELEASE_MARGIN_S = 60.0  # released early, an aMussel still has this much charge left at the end
+# The aPad unheard this long: the loop starts nothing new (no call-up, no trip) until it is heard.
+LINK_LOST_S = 3.0
 
 
 def outlook(settings: LoopSettings, now_s: float) -> Outlook:
@@ -310,6 +312,10 @@ class FleetKnowledge:
     def in_states(self, states: tuple[MusselState, ...]) -> list[int]:
         """Ids of the aMussels last reported in one of `states`."""
         return self.api.mussels.select(states)
+
+    def link_up(self) -> bool:
+        """The aPad heard within `LINK_LOST_S`."""
+        return self.clock.now_us - self.api.apad(self.apad_id).last_heartbeat_us <= seconds_to_us(LINK_LOST_S)
 
     def battery_v(self) -> float | None:
         """The aPad's battery, volts, as last heard (None: not heard yet)."""

@@ -57,7 +57,7 @@ def go_home_and_charge(crew: Crew, route: list[int]) -> None:
         return (volts is not None and budget.charged(volts)) or (
             knows.clock.time() - charging_seen[0] >= NOT_CHARGING_S)
 
-    act.wait_until(done)
+    act.wait_until(done, look_by=lambda: charging_seen[0] + NOT_CHARGING_S)  # a charger that does not charge
     after = knows.battery_v() or 0.0
     if budget.charged(after):
         crew.status.home_charges += 1

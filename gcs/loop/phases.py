@@ -20,6 +20,7 @@ from gcs.loop.control import Phase
 from gcs.loop.crew import Crew
 from gcs.loop.fleet_knowledge import FleetKnowledge
 from gcs.loop.trip_energy import needs_home
+from gcs.loop.wake_times import all_charged_look_by, pool_look_by
 from gcs.strategies import CollectStrategy, PlanInput, StrategyError, plan
 from mussel_sim.vocabulary import MusselState
 
@@ -50,7 +51,7 @@ def idle_wait(crew: Crew) -> None:
         found = len(charging_pool(knows, crew.book))
         return found > 0 and found >= min(knows.pool_needed(mission.min_pool), free) and act.link_up()
 
-    act.wait_until(pool_full)
+    act.wait_until(pool_full, look_by=functools.partial(pool_look_by, knows))
 
 
 def plan_collection(crew: Crew) -> list[int]:
@@ -232,7 +233,9 @@ def charging_wait(crew: Crew) -> None:
     knows, act = crew.knows, crew.act
     act.set_phase(Phase.CHARGING_WAIT)
     act.hold()
-    act.wait_until(lambda: all(knows.charged(m, crew.status.strategy) for m in knows.docked().values()))
+    strategy = crew.status.strategy
+    act.wait_until(lambda: all(knows.charged(m, strategy) for m in knows.docked().values()),
+                   look_by=lambda: all_charged_look_by(knows, list(knows.docked().values()), strategy))
 
 
 def plan_redeployment(crew: Crew, only: set[int] | None = None) -> list[tuple[int, int]]:

@@ -24,6 +24,7 @@ from gcs.loop.phases import (
 )
 from gcs.loop.sleep_orders import reschedule
 from gcs.loop.trip_energy import needs_home
+from gcs.loop.wake_times import any_charged_look_by, earliest
 from gcs.strategies import traits
 
 Turn = Callable[[Crew], None]
@@ -68,7 +69,12 @@ def rolling(crew: Crew) -> None:
         next_look_s = knows.clock.time() + LOOK_S
         return bool(act.link_up() and (knows.orphans() or collection_route(crew)))
 
-    act.wait_until(work)
+    def look_by() -> float | None:  # a charge done, or the next look for a free slot
+        looks = [next_look_s] if knows.free_slots() else []
+        return earliest(looks + [t for t in [any_charged_look_by(knows, list(knows.docked().values()), strategy)]
+                                 if t is not None])
+
+    act.wait_until(work, look_by=look_by)
     done = {m for m in knows.docked().values() if knows.charged(m, strategy)}
     if done:
         redeploy(crew, plan_redeployment(crew, only=done))

@@ -54,6 +54,7 @@ class FleetShares:
     partition: Partition | None = None
     first: Partition | None = None  # the sharing the mission started with
     reshares: int = 0
+    version: int = 0  # bumped on every change of owners or claims: news to a loop waiting on its share
 
     def live_claim(self, mussel: int, now_us: int) -> int | None:
         """The aPad whose claim on `mussel` holds now (a lost aPad's, within the grace)."""
@@ -71,6 +72,7 @@ class FleetShares:
         if not self.serves(apad, mussel, now_us):
             return False
         self.claims[mussel] = apad
+        self.version += 1
         return True
 
     def holds(self, apad: int, mussel: int) -> bool:
@@ -80,6 +82,7 @@ class FleetShares:
     def release(self, apad: int, mussel: int) -> None:
         if self.claims.get(mussel) == apad:
             del self.claims[mussel]
+            self.version += 1
 
     def reshare(self, usable: frozenset[int], new: Partition, now_us: int) -> None:
         """Take a new partition among `usable`. An aMussel claimed by a usable aPad stays that
@@ -94,6 +97,7 @@ class FleetShares:
         if self.first is None:
             self.first = new
         self.reshares += 1
+        self.version += 1
 
     def join(self, joiners: dict[int, int]) -> None:
         """aMussels heard for the first time (`joiners`: aMussel id -> aPad) join those aPads' shares;
@@ -106,6 +110,7 @@ class FleetShares:
             self.first = grown
         self.partition = grown
         self.owner |= joiners
+        self.version += 1
 
 
 class SwarmWatch:

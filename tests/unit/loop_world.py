@@ -201,6 +201,9 @@ class ScriptedKnowledge:
     def in_states(self, states: tuple[MusselState, ...]) -> list[int]:
         return sorted(m for m, s in self.world.states.items() if s in states)
 
+    def link_up(self) -> bool:
+        return self.world.link_up
+
     def battery_v(self) -> float | None:
         return self.world.battery_v
 
