@@ -136,20 +136,7 @@ class World:
         process `clock` and within its share of `shares`; `status`: a resumed mission's."""
         s = self.scenario
         a = next(a for a in s.apads if apad_id is None or a.system_id == apad_id)
-        settings = LoopSettings(
-            mission=s.mission,
-            acoustic_range_m=s.fleet.acoustic_range_m,
-            dock_reach_m=a.dock_reach_m,
-            battery_end_v=a.battery_end_v,
-            apad_speed_mps=a.speed_mps,
-            mussel_surfacing_s=s.fleet.surfacing_time_s,
-            surfacing_timeout_s=call_up_wait_s(s, LoopSettings.surfacing_timeout_s),  # sleepers wake first
-            mussel_discharge=planning_profile(s).discharge.name,  # fleet.profile's battery models
-            mussel_charge=planning_profile(s).charge.name,
-            duties=scenario_duties(s, sorted(self.homes)),  # each aMussel's own profile
-            energy=EnergyBudget.of(apad_params(s, a), a.speed_mps),
-            home=(a.home_lat_deg, a.home_lon_deg),
-        )
+        settings = loop_settings(s, a, sorted(self.homes))
         clock = clock or self.clock
         api = self.api if clock is self.clock else self.api.on_clock(clock)
         loop = EnergySharingLoop(api, clock, settings, self.homes, a.system_id, self.events, control, shares,
@@ -357,3 +344,21 @@ def lockstep_world(
     """Everything on one virtual clock from mission time 0, run at CPU speed."""
     return build_world(scenario, VirtualClock(), out_dir, options, mission_start_us=0, append_logs=append_logs,
                        muted_logs=muted_logs)
+
+
+def loop_settings(s: Scenario, a: ApadConfig, ids: list[int]) -> LoopSettings:
+    """The settings of aPad `a`'s loop in scenario `s` (`ids`: the simulated fleet's aMussels)."""
+    return LoopSettings(
+        mission=s.mission,
+        acoustic_range_m=s.fleet.acoustic_range_m,
+        dock_reach_m=a.dock_reach_m,
+        battery_end_v=a.battery_end_v,
+        apad_speed_mps=a.speed_mps,
+        mussel_surfacing_s=s.fleet.surfacing_time_s,
+        surfacing_timeout_s=call_up_wait_s(s, LoopSettings.surfacing_timeout_s),  # sleepers wake first
+        mussel_discharge=planning_profile(s).discharge.name,  # fleet.profile's battery models
+        mussel_charge=planning_profile(s).charge.name,
+        duties=scenario_duties(s, ids),  # each aMussel's own profile
+        energy=EnergyBudget.of(apad_params(s, a), a.speed_mps),
+        home=(a.home_lat_deg, a.home_lon_deg),
+    )

@@ -9,13 +9,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from apad_sitl.vocabulary import N_SLOTS, Latch
-from gcs.belief.duty import Duty, OrdersSent, scenario_duties
-from gcs.belief.energy_budget import EnergyBudget
+from gcs.belief.duty import Duty, OrdersSent
 from gcs.link.apad_api import Location
 from gcs.link.telemetry import SlotView
 from gcs.loop.control import LoopSettings
 from gcs.loop.fleet_knowledge import outlook
-from gcs.scenario.model_params import apad_params, call_up_wait_s, planning_profile
+from gcs.mission.world import loop_settings as world_loop_settings
 from gcs.scenario.reader import Scenario
 from gcs.strategies import Outlook
 from gcs.swarm.shares import FleetShares
@@ -26,22 +25,8 @@ from mussel_sim.vocabulary import MusselState
 
 
 def loop_settings(s: Scenario, ids: list[int]) -> LoopSettings:
-    """The first aPad's loop settings, as `gcs.mission.world.World.mission_loop` builds them (`ids`: the fleet)."""
-    a = s.apad
-    return LoopSettings(
-        mission=s.mission,
-        acoustic_range_m=s.fleet.acoustic_range_m,
-        dock_reach_m=a.dock_reach_m,
-        battery_end_v=a.battery_end_v,
-        apad_speed_mps=a.speed_mps,
-        mussel_surfacing_s=s.fleet.surfacing_time_s,
-        surfacing_timeout_s=call_up_wait_s(s, LoopSettings.surfacing_timeout_s),
-        mussel_discharge=planning_profile(s).discharge.name,
-        mussel_charge=planning_profile(s).charge.name,
-        duties=scenario_duties(s, ids),
-        energy=EnergyBudget.of(apad_params(s, a), a.speed_mps),
-        home=(a.home_lat_deg, a.home_lon_deg),
-    )
+    """The first aPad's loop settings, as the mission builds them (`ids`: the fleet)."""
+    return world_loop_settings(s, s.apad, ids)
 
 
 @dataclass
