@@ -18,12 +18,10 @@ from gcs.acoustic_net.call_ups import CallUp
 from gcs.belief.duty import Duty
 from gcs.link.apad_api import CommandError, GeofenceError, Location
 from gcs.loop import wait_check
-from gcs.loop.book import LoopBook
 from gcs.loop.control import EndReason, LoopControl, LoopLog, LoopStatus, MissionEnded, Phase
 from gcs.loop.fleet_knowledge import FleetKnowledge
 from gcs.loop.telemetry_pace import HOLDING_PHASES, PACE_WORTH_S, PLANNING_PHASES, TelemetryPace
-from gcs.loop.wake_times import others_lapse_look_by
-from gcs.swarm.shares import route_conflicts
+from gcs.swarm.shares import others_lapse_s, route_conflicts
 from missiontime import us_to_s
 from mussel_sim.geo import pair_distance_m
 from mussel_sim.vocabulary import MusselCommand, MusselState
@@ -46,10 +44,8 @@ class ApadActions:
     """One aPad's commands with their waits, over what its loop knows of the fleet. `leaving` holds
     the aMussels let go in the current redeployment and not yet seen off their slots (`finish`)."""
 
-    def __init__(self, knows: FleetKnowledge, book: LoopBook, control: LoopControl, status: LoopStatus,
-                 log: LoopLog) -> None:
+    def __init__(self, knows: FleetKnowledge, control: LoopControl, status: LoopStatus, log: LoopLog) -> None:
         self.knows = knows
-        self.book = book
         self.api = knows.api
         self.clock = knows.clock
         self.settings = knows.settings
@@ -127,7 +123,7 @@ class ApadActions:
             return
         self._log("separation_wait", lat=target.lat, lon=target.lon, apads=blocked())
         if not self.wait_until(lambda: not blocked(), self.settings.separation_wait_s, interruptible,
-                               look_by=partial(others_lapse_look_by, self.knows)):
+                               look_by=partial(others_lapse_s, self.api, self.apad_id)):
             self._log("separation_wait_expired", lat=target.lat, lon=target.lon, apads=blocked())
 
     def dock(self, slot: int, mussel_id: int) -> bool:
@@ -190,16 +186,15 @@ class ApadActions:
         return False
 
     def sink(self, mussel_id: int) -> None:
-        """Tell a called-up aMussel to go back down, and see that it does (the relay is not acknowledged)."""
+        """Tell a called-up aMussel to go back down, and see that it does (the relay is not acknowledged);
+        one that does not answer is logged `lost` (floating: an orphan its owner will come back for)."""
         for _ in range(10):
             self.command(self.api.command_mussel, mussel_id, MusselCommand.SINK, self.apad_id)
             if self.wait_until(lambda: self.knows.state(mussel_id) not in (MusselState.FLOATING, MusselState.SURFACING),
                                 timeout_s=self.settings.poll_s * 8, interruptible=False):
-                self.book.release(mussel_id)
                 return
         self._log("lost", mussel=mussel_id, why="does not answer the sink command",
                   state=self.knows.state(mussel_id).name)
-        self.book.release(mussel_id)  # floating, unclaimed: an orphan its owner will come back for
 
     def hold(self) -> bool:
         """Hold position here (a command: False at its bound, logged)."""
@@ -262,8 +257,8 @@ class ApadActions:
         With slow telemetry in a holding phase, or when it holds in place for about `holding_for_s` (above
         an aMussel on its way up) and that is worth two rounds of requests (`PACE_WORTH_S`)."""
         if wait_check.ENABLED:
-            done = partial(wait_check.WaitCheck(self.knows, look_by, getattr(done, "__qualname__", "wait")).looked,
-                           done)
+            check = wait_check.WaitCheck(self.knows.news, self.clock, look_by, getattr(done, "__qualname__", "wait"))
+            done = partial(check.looked, done)
         deadline = None if timeout_s is None else self.clock.time() + timeout_s
         holding = holding_for_s > PACE_WORTH_S or self.status.phase in HOLDING_PHASES
         if holding and self.link_up() and not done():
@@ -354,16 +349,12 @@ class ApadActions:
     # --- calling up, the phase record -------------------------------------------------------
 
     def call_up_if_in_range(self, mussel_id: int) -> bool:
-        """Safety: an aMussel is only called to the surface with an aPad within acoustic range.
-        With several aPads it must be this one's to call, and is claimed first (never two aPads)."""
-        if not self.book.claim(mussel_id):
-            return False
-        self.book.note_home(mussel_id)
+        """Safety: an aMussel is only called to the surface with an aPad within acoustic range (with several
+        aPads the phase has claimed it first: `phases.call_up`). False: not called."""
         if self.knows.state(mussel_id) == MusselState.FLOATING:
             return True  # already up (an orphan): nothing to call
         distance = self.knows.distance_to(mussel_id)
         if distance > self.settings.acoustic_range_m:
-            self.book.release(mussel_id)
             return False
         acoustic = self.knows.acoustic
         if acoustic is None:
@@ -373,7 +364,6 @@ class ApadActions:
             outcome = acoustic.call_ups.call_up(mussel_id, partial(self.knows.asleep, mussel_id), self.apad_id,
                                               self._wait, wanted=partial(self.knows.heard_alive, mussel_id))
             if outcome is CallUp.ABANDONED:  # believed empty before a call-up went: not called
-                self.book.release(mussel_id)
                 return False
             self._log("call_up", mussel=mussel_id, distance_m=round(distance, 2), acoustic=True,
                       acked=outcome is CallUp.ACKED)

@@ -59,7 +59,7 @@ class EnergySharingLoop:
         log = LoopLog(events or EventLog(), clock, apad_id if shares is not None else None)
         self.knows = FleetKnowledge(api, clock, settings, homes, apad_id, shares, real, acoustic, self.status.orders)
         self.book = LoopBook(self.knows, self.status.orders, log)
-        self.act = ApadActions(self.knows, self.book, self.control, self.status, log)
+        self.act = ApadActions(self.knows, self.control, self.status, log)
         self.crew = Crew(self.knows, self.book, self.act, self.status, self.control, log)
 
     @property

@@ -10,6 +10,8 @@ actions (`gcs.loop.actions`) and the loop's phases (`gcs.loop.phases`) are built
 from __future__ import annotations
 
 import math
+from collections.abc import Hashable
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -312,6 +314,19 @@ class FleetKnowledge:
     def in_states(self, states: tuple[MusselState, ...]) -> list[int]:
         """Ids of the aMussels last reported in one of `states`."""
         return self.api.mussels.select(states)
+
+    def news(self) -> Hashable:
+        """What the GCS holds that a wait can read and only a message changes, as one comparable value: the
+        fleet's table (its version moves with every report), the share's claims and owners, every aPad as last
+        heard (arrival stamps left out: a repeated report of the same thing is no news), and whether this
+        aPad's link is up (it comes back with a heartbeat). A wait's other changes are time's
+        (`gcs.loop.wake_times`)."""
+        registry = self.api.link.registry
+        apads = tuple((sysid, v.custom_mode, v.armed, v.lat_deg, v.lon_deg, v.battery_v, v.charging, v.home,
+                       replace(v.primitive, time_us=0), tuple(v.slots.values()),
+                       None if v.expected is None else (v.expected.kind, v.expected.a, v.expected.b, v.expected.seen))
+                      for sysid, v in sorted(registry.vehicles.items()))
+        return registry.mussels.version, 0 if self.shares is None else self.shares.version, apads, self.link_up()
 
     def link_up(self) -> bool:
         """The aPad heard within `LINK_LOST_S`."""

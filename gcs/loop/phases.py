@@ -135,16 +135,16 @@ def collect(crew: Crew, route: list[int]) -> None:
         if not knows.serves(mussel_id):
             crew.log("skip", mussel=mussel_id, why=RESHARED)
             continue
-        called = act.call_up_if_in_range(mussel_id)
+        called = call_up(crew, mussel_id)
         if not called and not knows.heard_alive(mussel_id):  # planned on a report since run down to empty
             crew.log("skip", mussel=mussel_id, why=GONE_QUIET)
             continue
         # From a call-up on, the waits ignore the mission end: the margin above leaves time to finish.
         if not act.go_to(knows.location(mussel_id), interruptible=not called):
             if called:
-                act.sink(mussel_id)
+                sink(crew, mussel_id)
             continue
-        if not called and not act.call_up_if_in_range(mussel_id):
+        if not called and not call_up(crew, mussel_id):
             crew.log("skip", mussel=mussel_id, why=RESHARED if not knows.serves(mussel_id) else
                      GONE_QUIET if not knows.heard_alive(mussel_id) else "no aPad within acoustic range")
             continue
@@ -154,7 +154,7 @@ def collect(crew: Crew, route: list[int]) -> None:
             if taken_over(crew, mussel_id):
                 continue
             crew.log("skip", mussel=mussel_id, why="did not surface", state=knows.state(mussel_id).name)
-            act.sink(mussel_id)  # it may surface later: it must not float there forever
+            sink(crew, mussel_id)  # it may surface later: it must not float there forever
             continue
         if knows.state(mussel_id) == MusselState.DEPLETED:  # no use waiting it out: it cannot move now
             crew.book.release(mussel_id)
@@ -172,7 +172,7 @@ def collect(crew: Crew, route: list[int]) -> None:
             crew.log("docked", mussel=mussel_id, slot=free[0])
             status.dockings.append((knows.clock.time(), mussel_id))
         else:
-            act.sink(mussel_id)
+            sink(crew, mussel_id)
             crew.log("skip", mussel=mussel_id, why="docking failed")
     status.target_mussel = 0
 
@@ -201,6 +201,25 @@ def recheck_route(crew: Crew, route: list[int]) -> list[int]:
     crew.status.route = new
     crew.log("replan_collection", strategy=crew.status.strategy, route=new)
     return new
+
+
+def call_up(crew: Crew, mussel_id: int) -> bool:
+    """Claim the aMussel (never two aPads), note its home, and call it up if an aPad is within acoustic
+    range (`ApadActions.call_up_if_in_range`); not called: the claim let go again. False: not called."""
+    if not crew.book.claim(mussel_id):
+        return False
+    crew.book.note_home(mussel_id)
+    if crew.act.call_up_if_in_range(mussel_id):
+        return True
+    crew.book.release(mussel_id)
+    return False
+
+
+def sink(crew: Crew, mussel_id: int) -> None:
+    """Send a called-up aMussel down and see it go (`ApadActions.sink`); the claim on it is let go either
+    way (one that does not answer floats unclaimed: an orphan its owner will come back for)."""
+    crew.act.sink(mussel_id)
+    crew.book.release(mussel_id)
 
 
 def taken_over(crew: Crew, mussel_id: int) -> bool:
@@ -281,7 +300,7 @@ def redeploy(crew: Crew, route: list[tuple[int, int]]) -> None:
                 crew.book.release(mussel_id)
                 act.let_go(mussel_id)  # not waited for here: the next leg gives it time
             else:
-                act.sink(mussel_id)  # over a radio: seen to leave the surface (releases the claim)
+                sink(crew, mussel_id)  # over a radio: seen to leave the surface
             crew.log("released", mussel=mussel_id, slot=slot)
     status.target_mussel = 0
 
@@ -309,7 +328,7 @@ def recover(crew: Crew) -> None:
         # Several aPads: only what is this one's to handle (another may be latching it right now).
         if mussel_id not in on_board and knows.serves(mussel_id):
             crew.log("recover", mussel=mussel_id, action="sink", state=knows.state(mussel_id).name)
-            act.sink(mussel_id)
+            sink(crew, mussel_id)
     if knows.docked():
         crew.log("recover", action="finish charging cycle", docked=sorted(on_board))
         charge_and_redeploy(crew)

@@ -2,7 +2,7 @@
 `look_by`), read from what the loop knows.
 
 A wait's condition reads what the GCS has heard and the mission time. News (a report, an acknowledgement, a
-re-share: `news`) can change it at any moment; between news only time does, through the beliefs that run
+re-share: `FleetKnowledge.news`) can change it at any moment; between news only time does, through the beliefs that run
 between reports (`gcs.belief`): a deployed aMussel's battery running down to the pool threshold, a docked
 one's charging up to its release, an acoustic report growing too old, a lost aPad's claims running out.
 Each function gives a lower bound of the first such instant (never later than the truth: a platform that
@@ -12,31 +12,15 @@ each bound gives one step of slack.
 
 from __future__ import annotations
 
-from collections.abc import Hashable
-from dataclasses import replace
-
 from gcs.belief.real_fleet import MAX_REPORT_AGE_S
 from gcs.loop.fleet_knowledge import RELEASE_MARGIN_S, FleetKnowledge
 from gcs.strategies import traits
-from gcs.swarm.shares import APAD_LOST_S, CLAIM_GRACE_S
+from gcs.swarm.shares import CLAIM_GRACE_S
 from missiontime import US_PER_S
 from mussel_sim.battery import sim_minutes
 from mussel_sim.vocabulary import MusselState
 
 STEP_SLACK_S = 1.0  # a belief runs forward in whole model steps (1 s): a bound this much early is safe
-
-
-def news(knows: FleetKnowledge) -> Hashable:
-    """What the GCS holds that a wait can read and only a message changes, as one comparable value: the
-    fleet's table (its version moves with every report), the share's claims and owners, every aPad as last
-    heard (arrival stamps left out: a repeated report of the same thing is no news), and whether this aPad's
-    link is up (it comes back with a heartbeat)."""
-    registry = knows.api.link.registry
-    apads = tuple((sysid, v.custom_mode, v.armed, v.lat_deg, v.lon_deg, v.battery_v, v.charging, v.home,
-                   replace(v.primitive, time_us=0), tuple(v.slots.values()),
-                   None if v.expected is None else (v.expected.kind, v.expected.a, v.expected.b, v.expected.seen))
-                  for sysid, v in sorted(registry.vehicles.items()))
-    return registry.mussels.version, 0 if knows.shares is None else knows.shares.version, apads, knows.link_up()
 
 
 def earliest(times: list[float]) -> float | None:
@@ -92,10 +76,3 @@ def any_charged_look_by(knows: FleetKnowledge, ids: list[int], strategy: str) ->
     """When the first of `ids` could be charged."""
     return earliest([t for m in ids if (t := charged_look_by(knows, m, strategy)) is not None])
 
-
-def others_lapse_look_by(knows: FleetKnowledge) -> float | None:
-    """When another aPad heard now could first count as silent (its Go To target no longer in the way)."""
-    now_s = knows.clock.time()
-    times = [view.last_heartbeat_us / US_PER_S + APAD_LOST_S for sysid, view in knows.api.link.vehicles.items()
-             if sysid != knows.apad_id]
-    return earliest([t for t in times if t >= now_s])

@@ -25,7 +25,7 @@ from gcs.link.registry import VehicleRegistry
 from gcs.link.telemetry import DEG_E7
 from gcs.records.events import EventLog
 from gcs.swarm.partition import Partition, partition
-from missiontime import Clock, seconds_to_us
+from missiontime import US_PER_S, Clock, seconds_to_us
 from mussel_sim.geo import LocalFrame
 from mussel_sim.vocabulary import MusselState
 
@@ -242,3 +242,13 @@ def route_conflicts(api: ApadApi, apad: int, target: Location, separation_m: flo
                 out.append(sysid)
                 break
     return out
+
+
+def others_lapse_s(api: ApadApi, apad: int) -> float | None:
+    """When another aPad heard now could first count as silent (`route_conflicts` then no longer counts
+    where its Go To is taking it), mission s; None if none is heard."""
+    now_us = api.clock.now_us
+    times = [view.last_heartbeat_us + seconds_to_us(APAD_LOST_S) for sysid, view in api.link.vehicles.items()
+             if sysid != apad]
+    ahead = [t for t in times if t >= now_us]
+    return min(ahead) / US_PER_S if ahead else None

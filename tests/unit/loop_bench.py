@@ -56,10 +56,8 @@ class RecordingActions:
     """`ApadActions` recorded, scripted, and acting on a `World` (same public names and signatures; no
     `api` or `pace`: a phase that reached past its actions fails here)."""
 
-    def __init__(self, knows: ScriptedKnowledge, book: LoopBook, control: LoopControl, status: LoopStatus,
-                 log: LoopLog) -> None:
+    def __init__(self, knows: ScriptedKnowledge, control: LoopControl, status: LoopStatus, log: LoopLog) -> None:
         self.knows = knows
-        self.book = book
         self.clock = knows.clock
         self.settings = knows.settings
         self.apad_id = knows.apad_id
@@ -138,7 +136,6 @@ class RecordingActions:
         self._call("sink", mussel_id)
         self._world.states[mussel_id] = MusselState.SINKING
         self._world.surfaced.discard(mussel_id)
-        self.book.release(mussel_id)
 
     def hold(self) -> bool:
         self._call("hold")
@@ -227,16 +224,12 @@ class RecordingActions:
     # --- calling up, the phase record
 
     def call_up_if_in_range(self, mussel_id: int) -> bool:
-        """As the real one: claimed first, its home noted; one floating already needs no call; one the
-        script puts out of range is let go. A call-up floats it by the next wait (`World.rises_to`)."""
+        """As the real one: one floating already needs no call; one the script puts out of range is not
+        called. A call-up floats it by the next wait (`World.rises_to`)."""
         self._call("call_up_if_in_range", mussel_id)
-        if not self.book.claim(mussel_id):
-            return False
-        self.book.note_home(mussel_id)
         if self.knows.state(mussel_id) == MusselState.FLOATING:
             return True
         if self._fails("call_up_if_in_range", mussel_id):
-            self.book.release(mussel_id)
             return False
         self._world.states[mussel_id] = MusselState.SURFACING
         self.rising.append(mussel_id)
@@ -268,7 +261,7 @@ class Bench:
         self.knows = ScriptedKnowledge(self.world, self.clock, self.settings, APAD_ID, self.status.orders)
         knows = cast(FleetKnowledge, self.knows)  # the scripted reads stand in for the real ones
         self.book = LoopBook(knows, self.status.orders, self.log)
-        self.act = RecordingActions(self.knows, self.book, self.control, self.status, self.log)
+        self.act = RecordingActions(self.knows, self.control, self.status, self.log)
         self.crew = Crew(knows, self.book, cast(ApadActions, self.act), self.status, self.control, self.log)
 
     def at(self, east_m: float, north_m: float) -> Location:

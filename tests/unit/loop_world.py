@@ -6,6 +6,7 @@ way `gcs.mission.world` builds them).
 
 from __future__ import annotations
 
+from collections.abc import Hashable
 from dataclasses import dataclass, field
 
 from apad_sitl.vocabulary import N_SLOTS, Latch
@@ -188,6 +189,12 @@ class ScriptedKnowledge:
 
     def link_up(self) -> bool:
         return self.world.link_up
+
+    def news(self) -> Hashable:
+        """What the test set, as one value: a change of the world is news."""
+        w = self.world
+        return (tuple(sorted(w.states.items())), tuple(sorted(w.batteries.items())), tuple(w.slots.values()),
+                w.battery_v, w.charging_at_home, w.link_up)
 
     def battery_v(self) -> float | None:
         return self.world.battery_v
