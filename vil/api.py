@@ -71,7 +71,7 @@ def run(
     )
     try:
         options = run_options(**given, signing_key=signing_key, resume=resume, out=out)
-        prepared = prepare_run(base, options, _command(base, given, signing_key), _say)
+        prepared = prepare_run(base, options, _command(base, given, signing_key, out), _say)
     except (ValueError, CheckpointError) as exc:  # ScenarioError, StrategyError, SigningKeyError are ValueErrors
         raise Error(str(exc)) from None
     except OSError as exc:  # the output folder cannot be made or written
@@ -83,12 +83,13 @@ def run(
     return Result.read(RunFolder(prepared.out_dir))
 
 
-def _command(s: Scenario, given: dict[str, Any], signing_key: str | Path | None) -> str:
+def _command(s: Scenario, given: dict[str, Any], signing_key: str | Path | None, out: str | Path) -> str:
     """The call that made a run, for its command.txt (what resumes it, with resume=True): the
     arguments given other than their defaults; a passphrase stays out of it (give it again)."""
     defaults = {k: p.default for k, p in inspect.signature(run).parameters.items()}
     args = [f"{k}={v!r}" for k, v in given.items() if v != defaults[k] and v != ()]
-    args += [f"signing_key={signing_key!r}"] if isinstance(signing_key, Path) else []
+    args += [f"signing_key=Path({str(signing_key)!r})"] if isinstance(signing_key, Path) else []
+    args += [f"out={str(out)!r}"] if Path(out) != RUNS else []
     return f"vil.run({', '.join([json.dumps(str(s.path)), *args])})"
 
 

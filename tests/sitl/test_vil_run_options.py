@@ -54,7 +54,7 @@ def test_vil_run_with_link_faults_gives_the_figures_of_vil_run_with_the_same_fla
     assert cli["messages"]["proxy_to_gcs_dropped"] > 0 and cli["messages"]["proxy_to_apad_duplicated"] > 0
     assert (r.folder / "command.txt").read_text() == (
         f'vil.run("{ROOT / "missions" / "pool12.toml"}", strategy=\'greedy\', seed=3, duration=\'10min\', '
-        "loss=0.2, latency='200ms', jitter=0.05, duplicate=0.05, outages=('92s:112s',))\n")
+        f"loss=0.2, latency='200ms', jitter=0.05, duplicate=0.05, outages=('92s:112s',), out='{tmp_path / 'api'}')\n")
 
 
 def test_vil_run_signed_with_a_failing_apad_gives_the_figures_of_vil_run_with_the_same_flags(tmp_path: Path) -> None:
