@@ -53,7 +53,7 @@ from gcs.results.run_result import RunResult, seed_stats
 from gcs.scenario.reader import SEED_MAX, THETA_RANGE, Scenario, ScenarioError, load_scenario
 from gcs.strategies import COLLECT, StrategyError, load_strategy
 from mavlink_dialect.signing import SigningKeyError, load_key
-from missiontime import mm_ss
+from missiontime.durations import hms
 
 # The paper's Table II runs: (scenario, collection strategy).
 TABLE_II = (("pool12", "cautious"), ("pool12", "greedy"), ("pool12", "none"), ("bay24", "greedy"))
@@ -74,10 +74,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"collection strategy or a comma list of them: shipped ({', '.join(COLLECT)}), "
                              "FILE.py:FUNCTION, MODULE:FUNCTION or an installed vil.strategies entry point "
                              "(docs/strategies.md); default: the scenario's")
-    parser.add_argument("--seed", type=flags.integer_in(0, SEED_MAX),
+    seeds = parser.add_mutually_exclusive_group()  # both: which would the runs use? refused in one line
+    seeds.add_argument("--seed", type=flags.integer_in(0, SEED_MAX),
                         help="seed of the run's random draws (default: the scenario's); with a saved start "
                              "configuration the fleet stays the saved one: the seed then draws the drift only")
-    parser.add_argument("--seeds", type=flags.integer_in(1, MAX_SEEDS), metavar="N",
+    seeds.add_argument("--seeds", type=flags.integer_in(1, MAX_SEEDS), metavar="N",
                         help=f"run seeds 1..N (N <= {MAX_SEEDS}), each on a fleet drawn from its seed; "
                              "print mean and spread")
     parser.add_argument("--draw-fleet", action="store_true",
@@ -169,7 +170,7 @@ def _interrupted(jobs: list[PreparedRun]) -> str:
     if not kept:
         return "interrupted before the first checkpoint: nothing to resume (run the command again)"
     try:
-        at = ", ".join(mm_ss(checkpoint.load(f.checkpoint).time_us / 1e6) for f in kept)
+        at = ", ".join(hms(checkpoint.load(f.checkpoint).time_us / 1e6) for f in kept)
     except CheckpointError:
         at = "?"
     how = kept[0].resume_command() or "the same command with --resume"
@@ -207,6 +208,15 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_INTERRUPTED
     results.sort(key=lambda r: ([(j.scenario.name, j.scenario.mission.collect_strategy) for j in jobs]
                                 .index((r.scenario, r.strategy)), r.seed))
+    if args.json:  # before the tables: a reader that stops reading them does not lose it
+        payload = [r.to_json() for r in results]
+        args.json.write_text(json.dumps(payload[0] if len(payload) == 1 else payload, indent=1) + "\n")
+    _print_results(results, args, console)  # a reader that stops reading is not an error (`output_console`)
+    return EXIT_MISPLACED if any(r.misplaced for r in results) else 0
+
+
+def _print_results(results: list[RunResult], args: argparse.Namespace, console: Console) -> None:
+    """The tables, what happened besides, the summary line, and who is not where they should be."""
     if args.seeds:
         title = f"{len(results)} runs, fleets drawn from seeds 1..{args.seeds}"
         console.print(seed_stats_table(seed_stats(results), title))
@@ -214,30 +224,22 @@ def run(args: argparse.Namespace) -> int:
     else:
         title = "Table II reproduction (lockstep SITL)" if not args.scenario else "Mission result"
         console.print(results_table(results, title))
-        per_apad = apads_table(results)
-        if per_apad is not None:
-            console.print(per_apad)
-        where_time_went = time_table(results)
-        if where_time_went is not None:
-            console.print(where_time_went)
-        per_day = days_table([(f"{r.scenario} {r.strategy} s{r.seed}", r.days) for r in results])
-        if per_day is not None:
-            console.print(per_day)
+        for table in (apads_table(results), time_table(results),
+                      days_table([(f"{r.scenario} {r.strategy} s{r.seed}", r.days) for r in results])):
+            if table is not None:
+                console.print(table)
     for line in happened_lines(results):  # faults, holds, link losses, lost aPads: what the figures do not say
         console.print(line, highlight=False)
     mission_s = sum(r.duration_s for r in results)
     run_s = sum(r.wall_s for r in results)
-    console.print(f"{len(results)} run(s) of {mission_s / 60 / len(results):.0f} mission minutes, "
+    each_s = mission_s / len(results)
+    length = f"{each_s / 60:.0f} mission minutes" if each_s < 3600 else f"{hms(each_s)} mission time"
+    console.print(f"{len(results)} run(s) of {length}, "
                   f"{run_s / len(results):.1f} s each (real-time factor {mission_s / run_s:.0f}); "
                   f"logs, .tlog and traces in {_folders(results)}")
-    if args.json:
-        payload = [r.to_json() for r in results]
-        args.json.write_text(json.dumps(payload[0] if len(payload) == 1 else payload, indent=1) + "\n")
     misplaced = misplaced_table(results)
     if misplaced is not None:
         console.print(misplaced)
-        return EXIT_MISPLACED
-    return 0
 
 
 def _folders(results: list[RunResult]) -> str:

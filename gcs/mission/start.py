@@ -29,7 +29,7 @@ from gcs.results.run_result import RunResult
 from gcs.scenario.model_params import check_inputs
 from gcs.scenario.reader import MAX_DURATION_S, SEED_MAX, THETA_RANGE, Scenario, ScenarioError, out_of_range
 from gcs.strategies import is_plugin, load_strategy, source_of
-from missiontime import mm_ss
+from missiontime.durations import hms
 
 RUNS = Path("runs")  # where runs go unless told
 # One-way delay bound: slower than this the GCS never hears the aPad's first heartbeat in time (10 s
@@ -197,7 +197,7 @@ def prepare_runs(requests: Sequence[tuple[Scenario, RunOptions]], command: str, 
     RunFolder(prepared[-1].out_dir).point_latest()
     for run in prepared:
         if run.resume_from_s is not None:
-            say(f"resuming {run.out_dir} from its checkpoint at {mm_ss(run.resume_from_s)} (the mission is "
+            say(f"resuming {run.out_dir} from its checkpoint at {hms(run.resume_from_s)} (the mission is "
                 "replayed to it, its logs muted)")
     return prepared
 
