@@ -42,3 +42,14 @@ def parse_duration_s(text: object, max_s: float = MAX_MISSION_S, allow_zero: boo
 def describe_s(seconds: float) -> str:
     """A limit in words: "90 days", "5 s"."""
     return "90 days" if seconds == MAX_MISSION_S else f"{seconds:g} s"
+
+
+def hms(t_s: float) -> str:
+    """Mission time that reads at any length (whole seconds): minutes:seconds under an hour (the console's
+    12:30), hours:minutes:seconds under a day (2:52:00, never 172:00), then days and hours (8 d 0 h)."""
+    t = max(int(t_s), 0)
+    if t < 3600:
+        return f"{t // 60:02d}:{t % 60:02d}"
+    if t < 86400:
+        return f"{t // 3600}:{t % 3600 // 60:02d}:{t % 60:02d}"
+    return f"{t // 86400} d {t % 86400 // 3600} h"

@@ -5,6 +5,8 @@
     r.uptime_avg, r.cost_m                                # the paper's Table II figures
     r.mussels                                             # a pandas DataFrame: one row per aMussel
     r.active                                              # active aMussels over mission time
+    vil.run("pool12", loss=0.2, latency="200ms", seed=3)  # every option `vil run` takes: faults, signing_key=,
+                                                          #   fail_apads=, resume=True after a crash
     s = vil.scenario("pool12", fields={"mission.theta": 60, "fleet.count": 16})   # a variant, built in code
     frame = vil.sweep("missions/sweeps/smoke.toml", out="sweeps/smoke")           # one row per mission
     old = vil.load("runs/latest")                         # a recorded run, as `r` above

@@ -2,17 +2,19 @@
 
 from __future__ import annotations
 
+import inspect
 import json
-from dataclasses import replace
+import sys
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 from rich.console import Console
 
-from gcs.mission.headless import run_mission, run_stem
+from gcs.mission.checkpoint import CheckpointError
+from gcs.mission.start import RUNS, prepare_run, run_prepared
 from gcs.records.run_folder import RunFolder
-from gcs.scenario.model_params import check_inputs
 from gcs.scenario.reader import (
     Scenario,
     ScenarioError,
@@ -21,15 +23,12 @@ from gcs.scenario.reader import (
     resolve_scenario,
     scenario_from_data,
 )
-from gcs.strategies import StrategyError, load_strategy
 from gcs.sweep.cells import make_cells, patched
 from gcs.sweep.cluster import ClusterError
 from gcs.sweep.runner import sweep as run_sweep
 from gcs.sweep.spec import SpecError, load_spec
-from missiontime.durations import parse_duration_s
+from vil.options import ApadAt, Seconds, Window, run_options
 from vil.result import Result
-
-RUNS = Path("runs")  # where `vil run` puts its folders too
 
 
 class Error(ValueError):
@@ -48,28 +47,54 @@ def scenario(name: str | Path = "pool12", fields: dict[str, Any] | None = None) 
 
 def run(
     of: str | Path | Scenario = "pool12", *, strategy: str | None = None, seed: int | None = None,
-    duration: str | float | None = None, theta: float | None = None, draw_fleet: bool = False,
-    out: str | Path = RUNS,
+    duration: Seconds | None = None, theta: float | None = None, draw_fleet: bool = False,
+    loss: float = 0.0, latency: Seconds = 0.0, jitter: Seconds = 0.0, duplicate: float = 0.0,
+    outages: Iterable[Window] = (), fail_apads: Iterable[ApadAt] = (), proxy: bool = False,
+    signing_key: str | Path | None = None, resume: bool = False, out: str | Path = RUNS,
 ) -> Result:
-    """One mission in lockstep, as `vil run` runs it (same scenario, strategy and seed: same figures),
-    in a new folder `out/SCENARIO-STRATEGY-seedN-runK`. `duration`: seconds or "40m", "24h", "7d"."""
+    """One mission in lockstep, as `vil run` runs it with the same flags (same figures), in a new folder
+    `out/SCENARIO-STRATEGY-seedN-runK` (`latest` points at it). Lengths of time are seconds or strings
+    with their unit ("40m", "24h", "200ms").
+
+    Link faults put the aPad link over real UDP through a seeded proxy: `loss` and `duplicate` are
+    fractions, `latency` and `jitter` one-way delays, `outages` windows of total loss ("92s:112s" or
+    (92, 112)), `fail_apads` aPads silent for good from a time ("3:10min" or (3, 600)); `proxy` routes
+    through it with no faults. `signing_key` signs the link: a passphrase (str) or a key file (Path);
+    None: $VIL_SIGNING_KEY if set, as `vil run`. `resume`: continue the newest folder of this run that
+    holds a checkpoint (after a crash), with the options it was started with.
+    """
     base = of if isinstance(of, Scenario) else scenario(of)
+    given: dict[str, Any] = dict(
+        strategy=strategy, seed=seed, duration=duration, theta=theta, draw_fleet=draw_fleet, loss=loss,
+        latency=latency, jitter=jitter, duplicate=duplicate, outages=tuple(outages), fail_apads=tuple(fail_apads),
+        proxy=proxy,
+    )
     try:
-        name = None if strategy is None else load_strategy(strategy)
-        duration_s = None if duration is None else parse_duration_s(duration)
-        s = base.with_overrides(strategy=name, seed=seed, duration_s=duration_s, theta=theta)
-        if draw_fleet:  # the seed's own fleet, not the scenario's saved start (`vil run --draw-fleet`)
-            s = replace(s, fleet=replace(s.fleet, start_config=None))
-        check_inputs(s)
-    except (ScenarioError, StrategyError, ValueError) as exc:
+        options = run_options(**given, signing_key=signing_key, resume=resume, out=out)
+        prepared = prepare_run(base, options, _command(base, given, signing_key, out), _say)
+    except (ValueError, CheckpointError) as exc:  # ScenarioError, StrategyError, SigningKeyError are ValueErrors
         raise Error(str(exc)) from None
-    folder = RunFolder.new(Path(out), run_stem(s))
-    args = {k: v for k, v in dict(strategy=strategy, seed=seed, duration=duration, theta=theta,
-                                  draw_fleet=draw_fleet or None).items() if v is not None}
-    folder.command.write_text(f"vil.run({json.dumps(str(s.path))}, **{args!r})\n", encoding="utf-8")
-    folder.point_latest()
-    run_mission(s, folder.path)
-    return Result.read(folder)
+    except OSError as exc:  # the output folder cannot be made or written
+        raise Error(f"out {out}: {exc.strerror or exc}") from None
+    try:
+        run_prepared(prepared)
+    except TimeoutError as exc:  # e.g. an outage over the start: the aPad was never heard
+        raise Error(str(exc)) from None
+    return Result.read(RunFolder(prepared.out_dir))
+
+
+def _command(s: Scenario, given: dict[str, Any], signing_key: str | Path | None, out: str | Path) -> str:
+    """The call that made a run, for its command.txt (what resumes it, with resume=True): the
+    arguments given other than their defaults; a passphrase stays out of it (give it again)."""
+    defaults = {k: p.default for k, p in inspect.signature(run).parameters.items()}
+    args = [f"{k}={v!r}" for k, v in given.items() if v != defaults[k] and v != ()]
+    args += [f"signing_key=Path({str(signing_key)!r})"] if isinstance(signing_key, Path) else []
+    args += [f"out={str(out)!r}"] if Path(out) != RUNS else []
+    return f"vil.run({', '.join([json.dumps(str(s.path)), *args])})"
+
+
+def _say(line: str) -> None:
+    print(f"vil.run: {line}", file=sys.stderr)
 
 
 def load(run_folder: str | Path) -> Result:

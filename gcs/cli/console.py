@@ -27,7 +27,7 @@ from gcs.cli import flags
 from gcs.console.web import TOKEN_ENV, WebTokenError, read_web_token, serve_console, web_address
 from gcs.records.run_folder import RunFolder
 from gcs.scenario.reader import MISSIONS_DIR, Scenario, ScenarioError, load_scenario, resolve_scenario
-from gcs.strategies import StrategyError, load_strategy, source_of
+from gcs.strategies import StrategyError, source_of
 from mavlink_dialect.signing import SigningKeyError, load_key
 from missiontime import unix_time_us
 
@@ -103,7 +103,7 @@ def modem_refusal(modem: str | None, sea: str | None, speed: float | None, acous
 
 
 def run_gcs(args: argparse.Namespace) -> int:
-    from gcs.scenario.model_params import check_inputs
+    from gcs.mission.start import RunOptions, check_start, check_strategy, variant
 
     if not args.connect and not args.sitl:
         print("vil gcs: which aPad? --sitl for a first look (an embedded SITL aPad, no other process), or "
@@ -111,10 +111,10 @@ def run_gcs(args: argparse.Namespace) -> int:
         return 2
     try:
         path = resolve_scenario(args.scenario or DEFAULT_SCENARIO)
-        scenario = load_scenario(path)
-        if args.strategy is not None:
-            scenario = scenario.with_overrides(strategy=load_strategy(args.strategy))
-        check_inputs(scenario)  # a strategy from outside plans once on the start here
+        base = load_scenario(path)
+        check_start(base, RunOptions())
+        scenario = variant(base, RunOptions(strategy=args.strategy))
+        check_strategy(scenario)  # a strategy from outside plans once on the start here
         key = load_key(args.signing_key)
         web_token = read_web_token(args.web_token_file) if args.web is not None else None
     except (ScenarioError, OSError, SigningKeyError, WebTokenError, StrategyError) as exc:
@@ -211,7 +211,9 @@ def _saved_strategy(out: Path | None, stem: str, scenario: Scenario) -> Scenario
         spec = json.loads(folder.console.read_text(encoding="utf-8")).get("strategy") if folder else None
     except (OSError, ValueError, AttributeError):
         spec = None
-    return scenario.with_overrides(strategy=load_strategy(spec)) if isinstance(spec, str) and spec else scenario
+    from gcs.mission.start import RunOptions, variant
+
+    return variant(scenario, RunOptions(strategy=spec)) if isinstance(spec, str) and spec else scenario
 
 
 def _resume_point(out: Path | None, stem: str, scenario: Scenario) -> tuple[Path, int, ResumePoint]:

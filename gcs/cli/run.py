@@ -27,13 +27,12 @@ import os
 import shlex
 import sys
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from acoustic import per
 from gcs.cli import flags
 from gcs.cli.tables import (
     apads_table,
@@ -46,18 +45,15 @@ from gcs.cli.tables import (
     shape_table,
     time_table,
 )
-from gcs.link.faultproxy import LinkFaults
 from gcs.mission import checkpoint
 from gcs.mission.checkpoint import CheckpointError
-from gcs.mission.headless import run_mission, run_stem
-from gcs.mission.world import LinkOptions
-from gcs.records.run_folder import CHECKPOINT, RunFolder
+from gcs.mission.start import MAX_DELAY_S, PreparedRun, RunOptions, prepare_runs, run_prepared
+from gcs.records.run_folder import RunFolder
 from gcs.results.run_result import RunResult, seed_stats
-from gcs.scenario.model_params import check_inputs
 from gcs.scenario.reader import SEED_MAX, THETA_RANGE, Scenario, ScenarioError, load_scenario
-from gcs.strategies import COLLECT, StrategyError, is_plugin, load_strategy, source_of
+from gcs.strategies import COLLECT, StrategyError, load_strategy
 from mavlink_dialect.signing import SigningKeyError, load_key
-from missiontime import mm_ss
+from missiontime.durations import hms
 
 # The paper's Table II runs: (scenario, collection strategy).
 TABLE_II = (("pool12", "cautious"), ("pool12", "greedy"), ("pool12", "none"), ("bay24", "greedy"))
@@ -67,9 +63,6 @@ EXIT_MISPLACED = 3  # the runs finished, but some aMussel is not where it should
 EXIT_INTERRUPTED = 130  # Ctrl-C, as a shell reports SIGINT
 MAX_SEEDS = 1000
 MAX_JOBS = 256
-# One-way delay bound: slower than this the GCS never hears the aPad's first heartbeat in time (10 s
-# round trips) and the aPad's failsafe (3 s without the GCS) holds it at every gap.
-MAX_DELAY_S = 5.0
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -81,10 +74,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"collection strategy or a comma list of them: shipped ({', '.join(COLLECT)}), "
                              "FILE.py:FUNCTION, MODULE:FUNCTION or an installed vil.strategies entry point "
                              "(docs/strategies.md); default: the scenario's")
-    parser.add_argument("--seed", type=flags.integer_in(0, SEED_MAX),
+    seeds = parser.add_mutually_exclusive_group()  # both: which would the runs use? refused in one line
+    seeds.add_argument("--seed", type=flags.integer_in(0, SEED_MAX),
                         help="seed of the run's random draws (default: the scenario's); with a saved start "
                              "configuration the fleet stays the saved one: the seed then draws the drift only")
-    parser.add_argument("--seeds", type=flags.integer_in(1, MAX_SEEDS), metavar="N",
+    seeds.add_argument("--seeds", type=flags.integer_in(1, MAX_SEEDS), metavar="N",
                         help=f"run seeds 1..N (N <= {MAX_SEEDS}), each on a fleet drawn from its seed; "
                              "print mean and spread")
     parser.add_argument("--draw-fleet", action="store_true",
@@ -136,28 +130,8 @@ def _strategies(text: str) -> list[str]:
     return list(dict.fromkeys(names))  # a name twice would run (or resume) the same folder twice
 
 
-@dataclass(frozen=True)
-class Job:
-    scenario: Scenario
-    out_dir: Path  # the run's own folder (claimed by `_place`)
-    options: LinkOptions | None = None
-    resume: bool = False
-    resume_from_s: float = 0.0  # resuming: the mission time of its checkpoint (read once, by `_place`)
-    finished: RunResult | None = None  # resuming several: this one had ended, its result is kept
-    strategy_source: str = ""  # what loads the strategy in a worker process (a strategy from outside the package)
-
-
-def _link_options(args: argparse.Namespace) -> LinkOptions | None:
-    key = load_key(args.signing_key)
-    faults = LinkFaults(args.loss, args.latency, args.jitter, args.duplicate, seed=args.seed or 0,
-                        outages_s=tuple(args.outage))
-    use_proxy = args.proxy or faults.any
-    if not use_proxy and key is None and not args.fail_apad:
-        return None
-    return LinkOptions(faults=faults if use_proxy else None, signing_key=key, fail_apads=tuple(args.fail_apad))
-
-
-def _jobs(args: argparse.Namespace) -> list[Job]:
+def _requests(args: argparse.Namespace) -> list[tuple[Scenario, RunOptions]]:
+    """Every run the flags ask for: each scenario loaded once, with each strategy and seed."""
     strategies: list[str | None] = list(args.strategy) if args.strategy else [None]
     if args.scenario:
         if args.seeds and not args.strategy:
@@ -168,120 +142,35 @@ def _jobs(args: argparse.Namespace) -> list[Job]:
     else:
         pairs = [(name, s) for name, s in TABLE_II if not args.strategy or s in args.strategy]
     seeds: list[int | None] = list(range(1, args.seeds + 1)) if args.seeds else [args.seed]
-    cache: dict[str, Scenario] = {}
-    options = _link_options(args)
-    for name, _ in pairs:
-        if name not in cache:
-            cache[name] = load_scenario(name)
-            if args.seeds or args.draw_fleet:  # before the check: a saved start of another size is not used
-                cache[name] = replace(cache[name], fleet=replace(cache[name].fleet, start_config=None))
-            check_inputs(cache[name])
-            notice = seed_notice(cache[name], args.seed, faults=options is not None and options.faults is not None)
-            if notice:
-                print(f"vil run: {notice}", file=sys.stderr)
-            ids = {a.system_id for a in cache[name].apads}
-            for sysid, _ in args.fail_apad:
-                if sysid not in ids:
-                    raise ScenarioError(f"--fail-apad {sysid}: {name} has no aPad {sysid} (its aPads: "
-                                        f"{', '.join(map(str, sorted(ids)))})")
-    jobs = []
+    common = RunOptions(
+        duration_s=args.duration, theta=args.theta, draw_fleet=bool(args.seeds or args.draw_fleet),
+        loss_frac=args.loss, latency_s=args.latency, jitter_s=args.jitter, duplicate_frac=args.duplicate,
+        outages_s=tuple(args.outage), fail_apads=tuple(args.fail_apad), proxy=args.proxy,
+        signing_key=load_key(args.signing_key), resume=args.resume, out=args.out,
+    )
+    scenarios: dict[str, Scenario] = {}
+    requests = []
     for name, strategy in pairs:
-        base = cache.setdefault(name, load_scenario(name))
+        if name not in scenarios:
+            scenarios[name] = load_scenario(name)
         for seed in seeds:
-            s = base.with_overrides(strategy=strategy, seed=seed, duration_s=args.duration, theta=args.theta)
-            if strategy is not None and is_plugin(strategy) and seed == seeds[0]:
-                check_inputs(s)  # a strategy from outside plans once on the start: a bad plan is a line now
-            jobs.append(Job(s, args.out, options, args.resume, strategy_source=source_of(s.mission.collect_strategy)))
-    return jobs
-
-
-def seed_notice(scenario: Scenario, seed: int | None, faults: bool) -> str | None:
-    """What `--seed` changes when the scenario's fleet comes from its saved start configuration
-    (the seed feeds the world's one rng, the swarm's k-means start and the fault proxy), or None."""
-    start = scenario.fleet.start_config
-    if seed is None or start is None:
-        return None
-    drift_cm = scenario.fleet.drift_cm
-    drawn = [f"the aMussels' random drift (up to {drift_cm:g} cm a step)"] if drift_cm else []
-    drawn += ["where the swarm's k-means sharing starts"] if len(scenario.apads) > 1 else []
-    drawn += ["the link faults' draws"] if faults else []
-    listed = f"{', '.join(drawn[:-1])} and {drawn[-1]}" if len(drawn) > 1 else "".join(drawn)
-    what = f"changes only {listed}" if drawn else "changes nothing in this run"
-    return (f"{scenario.name}'s fleet is its saved start configuration ({start.name}): --seed {seed} {what}; "
-            "add --draw-fleet to draw the fleet from the seed too")
-
-
-def _place(jobs: list[Job], command: str) -> list[Job]:
-    """Each job's folder: a new one (which keeps `command`, what resumes it), or (resuming) the newest
-    of its run with a usable checkpoint of it. Resuming several runs (a Ctrl-C stops them where they
-    are), one with no checkpoint runs from its start in a new folder, and says so; none: an error."""
-    found = [RunFolder.newest_resumable(j.out_dir, run_stem(j.scenario)) if j.resume else None for j in jobs]
-    some = len(jobs) > 1 and any(found)  # several runs, some of them stopped mid-mission: resume those
-    placed = []
-    for job, folder in zip(jobs, found, strict=True):
-        stem = run_stem(job.scenario)
-        if job.resume and folder is None and some:
-            done = _finished(job.out_dir, stem, command)
-            if done is not None:
-                print(f"vil run: {stem} had finished in {done.out_dir}/: its result is kept", file=sys.stderr)
-                placed.append(replace(job, out_dir=Path(done.out_dir), resume=False, finished=done))
-                continue
-            print(f"vil run: no checkpoint of {stem} under {job.out_dir}: it runs from the start", file=sys.stderr)
-            job = replace(job, resume=False)
-        if not job.resume:
-            made = RunFolder.new(job.out_dir, stem)
-            made.command.write_text(command.removesuffix(" --resume") + "\n", encoding="utf-8")
-            placed.append(replace(job, out_dir=made.path))
-            continue
-        if folder is None:
-            raise CheckpointError(f"nothing to resume: no {CHECKPOINT} in any {job.out_dir / stem}-runK/"
-                                  + _resumable_hint(job.out_dir))
-        saved = checkpoint.load(folder.checkpoint)  # a corrupt one is refused here, not mid-run
-        key = checkpoint.scenario_key(job.scenario)
-        if saved.run_key != key:
-            raise CheckpointError(f"{folder.checkpoint} is of run {saved.run_key}, not {key}")
-        placed.append(replace(job, out_dir=folder.path, resume_from_s=saved.time_us / 1e6))
-    return placed
-
-
-def _finished(root: Path, stem: str, command: str) -> RunResult | None:
-    """The result of the newest run of `stem` if the same command made it and it ended (a result, no
-    checkpoint): the run of the interrupted batch that finished before the Ctrl-C."""
-    folder = RunFolder.newest(root, stem)
-    if folder is None or folder.checkpoint.exists() or not folder.result.exists() or not folder.command.exists():
-        return None
-    if folder.command.read_text(encoding="utf-8").strip() != command.removesuffix(" --resume"):
-        return None
-    try:
-        return RunResult.from_json(json.loads(folder.result.read_text(encoding="utf-8")))
-    except (OSError, ValueError, TypeError, KeyError):  # unreadable or of another version: run it again
-        return None
-
-
-def _resumable_hint(root: Path) -> str:
-    """What could be resumed under `root` instead, and how (the run's own command: every flag counts)."""
-    others = RunFolder.resumable(root)
-    if not others:
-        return ""
-    newest = others[0]
-    how = newest.resume_command()
-    more = f" (and {len(others) - 1} more)" if len(others) > 1 else ""
-    return (f"; {newest.path} holds one{more}: " + (f"resume it with: {how}" if how else
-            "resume it with the scenario and flags it was started with, and --resume"))
+            requests.append((scenarios[name], replace(common, strategy=strategy, seed=seed)))
+    return requests
 
 
 def _command_line(args: argparse.Namespace) -> str:
-    """The command as given (`vil run ...`), quoted for a shell."""
-    return shlex.join(["vil", *getattr(args, "argv", ["run"])])
+    """The command as given (`vil run ...`) without --resume, quoted for a shell: what a new run's
+    folder keeps, and what resumes it with --resume added."""
+    return shlex.join(["vil", *(a for a in getattr(args, "argv", ["run"]) if a != "--resume")])
 
 
-def _interrupted(jobs: list[Job]) -> str:
+def _interrupted(jobs: list[PreparedRun]) -> str:
     """One line for a Ctrl-C: what was kept, and the exact command to go on."""
     kept = [f for f in (RunFolder(j.out_dir) for j in jobs) if f.checkpoint.exists()]
     if not kept:
         return "interrupted before the first checkpoint: nothing to resume (run the command again)"
     try:
-        at = ", ".join(mm_ss(checkpoint.load(f.checkpoint).time_us / 1e6) for f in kept)
+        at = ", ".join(hms(checkpoint.load(f.checkpoint).time_us / 1e6) for f in kept)
     except CheckpointError:
         at = "?"
     how = kept[0].resume_command() or "the same command with --resume"
@@ -289,13 +178,12 @@ def _interrupted(jobs: list[Job]) -> str:
     return f"interrupted; checkpoint kept in {where} (mission time {at}); resume with: {how}"
 
 
-def _run_job(job: Job) -> RunResult:
+def _run_job(job: PreparedRun) -> RunResult:
     """One run in a pool worker. A Ctrl-C (the whole process group gets it) ends the worker, not just
     this run: a worker that only lost its run would take the next queued one, and the pool would
     wait for it."""
     try:
-        load_strategy(job.strategy_source or job.scenario.mission.collect_strategy)
-        return run_mission(job.scenario, job.out_dir, options=job.options, resume=job.resume)
+        return run_prepared(job)
     except KeyboardInterrupt:  # the run's logs are closed and its checkpoint kept by now
         os._exit(EXIT_INTERRUPTED)
 
@@ -303,18 +191,13 @@ def _run_job(job: Job) -> RunResult:
 def run(args: argparse.Namespace) -> int:
     console = output_console()
     try:
-        jobs = _place(_jobs(args), _command_line(args))
+        jobs = prepare_runs(_requests(args), _command_line(args), _say)
     except (ScenarioError, SigningKeyError, CheckpointError) as exc:
         print(f"vil run: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:  # the output folder went away or filled up since the flag was checked
         print(f"vil run: --out {args.out}: {exc.strerror or exc}", file=sys.stderr)
         return 2
-    RunFolder(jobs[-1].out_dir).point_latest()
-    for job in jobs:
-        if job.resume:
-            print(f"vil run: resuming {job.out_dir} from its checkpoint at {mm_ss(job.resume_from_s)} (the "
-                  "mission is replayed to it, its logs muted)", file=sys.stderr)
     try:
         results = _run_all(jobs, args.jobs, console)
     except TimeoutError as exc:  # e.g. an --outage over the start: the aPad was never heard
@@ -325,6 +208,15 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_INTERRUPTED
     results.sort(key=lambda r: ([(j.scenario.name, j.scenario.mission.collect_strategy) for j in jobs]
                                 .index((r.scenario, r.strategy)), r.seed))
+    if args.json:  # before the tables: a reader that stops reading them does not lose it
+        payload = [r.to_json() for r in results]
+        args.json.write_text(json.dumps(payload[0] if len(payload) == 1 else payload, indent=1) + "\n")
+    _print_results(results, args, console)  # a reader that stops reading is not an error (`output_console`)
+    return EXIT_MISPLACED if any(r.misplaced for r in results) else 0
+
+
+def _print_results(results: list[RunResult], args: argparse.Namespace, console: Console) -> None:
+    """The tables, what happened besides, the summary line, and who is not where they should be."""
     if args.seeds:
         title = f"{len(results)} runs, fleets drawn from seeds 1..{args.seeds}"
         console.print(seed_stats_table(seed_stats(results), title))
@@ -332,30 +224,22 @@ def run(args: argparse.Namespace) -> int:
     else:
         title = "Table II reproduction (lockstep SITL)" if not args.scenario else "Mission result"
         console.print(results_table(results, title))
-        per_apad = apads_table(results)
-        if per_apad is not None:
-            console.print(per_apad)
-        where_time_went = time_table(results)
-        if where_time_went is not None:
-            console.print(where_time_went)
-        per_day = days_table([(f"{r.scenario} {r.strategy} s{r.seed}", r.days) for r in results])
-        if per_day is not None:
-            console.print(per_day)
+        for table in (apads_table(results), time_table(results),
+                      days_table([(f"{r.scenario} {r.strategy} s{r.seed}", r.days) for r in results])):
+            if table is not None:
+                console.print(table)
     for line in happened_lines(results):  # faults, holds, link losses, lost aPads: what the figures do not say
         console.print(line, highlight=False)
     mission_s = sum(r.duration_s for r in results)
     run_s = sum(r.wall_s for r in results)
-    console.print(f"{len(results)} run(s) of {mission_s / 60 / len(results):.0f} mission minutes, "
+    each_s = mission_s / len(results)
+    length = f"{each_s / 60:.0f} mission minutes" if each_s < 3600 else f"{hms(each_s)} mission time"
+    console.print(f"{len(results)} run(s) of {length}, "
                   f"{run_s / len(results):.1f} s each (real-time factor {mission_s / run_s:.0f}); "
                   f"logs, .tlog and traces in {_folders(results)}")
-    if args.json:
-        payload = [r.to_json() for r in results]
-        args.json.write_text(json.dumps(payload[0] if len(payload) == 1 else payload, indent=1) + "\n")
     misplaced = misplaced_table(results)
     if misplaced is not None:
         console.print(misplaced)
-        return EXIT_MISPLACED
-    return 0
 
 
 def _folders(results: list[RunResult]) -> str:
@@ -367,15 +251,17 @@ def _folders(results: list[RunResult]) -> str:
     return f"{len(folders)} folders in {', '.join(parents)}/ ({Path(folders[0]).name}, ...)"
 
 
-def _run_all(jobs: list[Job], n_jobs: int, console: Console) -> list[RunResult]:
+def _say(line: str) -> None:
+    print(f"vil run: {line}", file=sys.stderr)
+
+
+def _run_all(jobs: list[PreparedRun], n_jobs: int, console: Console) -> list[RunResult]:
     kept = [j.finished for j in jobs if j.finished is not None]
     to_run = [j for j in jobs if j.finished is None]
-    if any(j.scenario.acoustic.enabled for j in to_run):
-        per.load()  # the channel's curve imports scipy.special at first use: here, not in a mission's time
     return kept + (_run_jobs(to_run, n_jobs, console) if to_run else [])
 
 
-def _run_jobs(jobs: list[Job], n_jobs: int, console: Console) -> list[RunResult]:
+def _run_jobs(jobs: list[PreparedRun], n_jobs: int, console: Console) -> list[RunResult]:
     columns = (TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
                TextColumn("mission s" if len(jobs) == 1 else "runs"), TimeElapsedColumn())
     with Progress(*columns, console=console, transient=True) as progress:
@@ -383,8 +269,7 @@ def _run_jobs(jobs: list[Job], n_jobs: int, console: Console) -> list[RunResult]
             job = jobs[0]
             task = progress.add_task(f"{job.scenario.name} {job.scenario.mission.collect_strategy}",
                                      total=int(job.scenario.mission.duration_s))
-            return [run_mission(job.scenario, job.out_dir, options=job.options, resume=job.resume,
-                                progress=lambda t_s: progress.update(task, completed=int(t_s)))]
+            return [run_prepared(job, progress=lambda t_s: progress.update(task, completed=int(t_s)))]
         task = progress.add_task(f"{len(jobs)} missions", total=len(jobs))
         results = []
         pool = ProcessPoolExecutor(max_workers=min(n_jobs, len(jobs)))

@@ -14,18 +14,28 @@ from rich.console import Console
 from rich.table import Table
 
 from gcs.results.days import MAX_ROWS, groups
-from gcs.results.run_result import PAPER_TABLE_II, SHAPE_CLAIMS, RunResult, SeedStats, fraction_of_seeds
-from missiontime import mm_ss
+from gcs.results.run_result import SHAPE_CLAIMS, RunResult, SeedStats, fraction_of_seeds, paper_figures
+from missiontime.durations import hms
 
 PIPED_WIDTH = 1000  # written to a file or a pipe, output is as wide as it needs, never cut at 80 columns
 
+
+
+class OutputConsole(Console):
+    """rich's console, but a reader that stops reading (`vil run | head -3`) is not an error: it has
+    what it wanted. What is printed after goes nowhere, and the command ends with its own status
+    (rich's default exits 1 on the spot, with no word)."""
+
+    def on_broken_pipe(self) -> None:
+        self.quiet = True
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # Python's own flush at exit, too
 
 
 def output_console() -> Console:
     """Where the tables go: the terminal's width on a terminal (or $COLUMNS if set); a file or a
     pipe gets every column and every line whole (rich would cut them at 80 columns)."""
     piped = not sys.stdout.isatty() and "COLUMNS" not in os.environ
-    return Console(width=PIPED_WIDTH) if piped else Console()
+    return OutputConsole(width=PIPED_WIDTH) if piped else OutputConsole()
 
 
 
@@ -54,10 +64,10 @@ def happened_lines(results: list[RunResult]) -> list[str]:
             said = [f"loss {100 * f['loss']:g} %" if "loss" in f else "", f"latency {f['latency_s']:g} s"
                     if "latency_s" in f else "", f"jitter {f['jitter_s']:g} s" if "jitter_s" in f else "",
                     f"duplicates {100 * f['duplicate']:g} %" if "duplicate" in f else ""]
-            said += [f"outage {mm_ss(a)}-{mm_ss(b)}" for a, b in f.get("outages_s", [])]
+            said += [f"outage {hms(a)}-{hms(b)}" for a, b in f.get("outages_s", [])]
             parts.append("link faults: " + ", ".join(x for x in said if x))
-        parts += [f"aPad {a['apad']} made to fail at {mm_ss(a['at_s'])}" for a in h.get("failed_apads", [])]
-        parts += [f"aPad {a['apad']} lost at {mm_ss(a['at_s'])}" for a in h.get("apads_lost", [])]
+        parts += [f"aPad {a['apad']} made to fail at {hms(a['at_s'])}" for a in h.get("failed_apads", [])]
+        parts += [f"aPad {a['apad']} lost at {hms(a['at_s'])}" for a in h.get("apads_lost", [])]
         for key, words in (("reshares", "fleet re-shared"), ("failsafe_holds", "failsafe hold"),
                            ("link_losses", "link loss"), ("gotos_resumed", "Go To resumed after a hold"),
                            ("gave_up", "step given up at its bound"),
@@ -102,7 +112,7 @@ def apads_table(results: list[RunResult]) -> Table | None:
             travelled = a["travelled_m"]
             row = [str(a["sysid"]), str(len(a["mussels"])), "-" if travelled is None else f"{travelled:.1f}",
                    f"{a['cost_m']:.1f}", str(a["dockings"]), str(a["cycles"]), f"{100 * a['idle_share']:.1f}",
-                   f"lost at {mm_ss(a['lost_at_s'])}" if "lost_at_s" in a else str(a["end_reason"])]
+                   f"lost at {hms(a['lost_at_s'])}" if "lost_at_s" in a else str(a["end_reason"])]
             table.add_row(*([f"{r.scenario} {r.strategy} s{r.seed}"] if several else []), *row)
     return table
 
@@ -136,19 +146,19 @@ def time_table(results: list[RunResult]) -> Table | None:
 
 
 def results_table(results: list[RunResult], title: str = "Results") -> Table:
-    """One row per run; where the paper ran the same thing, its figures follow in a dim row."""
-    with_paper = any((r.scenario, r.strategy) in PAPER_TABLE_II for r in results)
+    """One row per run; where the paper ran the same thing (40 min, theta 30), its figures follow in a dim row."""
+    papers = [paper_figures(r.scenario, r.strategy, r.duration_s, r.theta) for r in results]
+    with_paper = any(p is not None for p in papers)
     table = Table(title=title, caption="paper: the paper's Table II (40 min, theta 30)" if with_paper else None,
                   box=box.SIMPLE_HEAD)
     for col in ("run", "avg %", "max %", "min %", "cost m", "active", "cycles"):
         table.add_column(col, justify="left" if col == "run" else "right", no_wrap=True)
-    for r in results:
+    for r, paper in zip(results, papers, strict=True):
         table.add_row(
             f"{r.scenario} {r.strategy} s{r.seed}",
             f"{r.uptime['avg']:.2f}", f"{r.uptime['max']:.2f}", f"{r.uptime['min']:.2f}",
             f"{r.cost_m:.1f}", f"{r.active_avg:.2f}", str(r.cycles),
         )
-        paper = PAPER_TABLE_II.get((r.scenario, r.strategy))
         if paper is not None:
             avg, mx, mn, cost, active = paper
             table.add_row("  paper", f"{avg:.2f}", f"{mx:.2f}", f"{mn:.2f}", f"{cost:.1f}", f"{active:.2f}", "",

@@ -8,7 +8,7 @@
     traces.npz           active count and battery traces per step, where the time went
     endpoints.json       the UDP ports a run over real sockets opened
     console.json         a console run's scenario and the Unix time of its mission time 0
-    command.txt          the `vil` command line that started the run (what resumes it: add --resume)
+    command.txt          the `vil` command line (or `vil.run` call) that started the run: what resumes it
     checkpoint.pkl       the checkpoint of a mission under way (+ .steps, .traces side files)
     report/              what `vil report` writes
 
@@ -141,11 +141,14 @@ class RunFolder:
         return self.path / COMMAND
 
     def resume_command(self) -> str | None:
-        """The command that resumes this run (its own command line and --resume), if it kept one."""
+        """The command that resumes this run (its own command line and --resume; a `vil.run(...)` call
+        with resume=True), if it kept one."""
         try:
             line = self.command.read_text(encoding="utf-8").strip()
         except OSError:
             return None
+        if line.startswith("vil.run(") and line.endswith(")"):
+            return line if "resume=True" in line else f"{line[:-1]}, resume=True)"
         return line if "--resume" in line.split() else f"{line} --resume" if line else None
 
     @property

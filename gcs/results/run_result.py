@@ -16,6 +16,16 @@ PAPER_TABLE_II: dict[tuple[str, str], tuple[float, float, float, float, float]] 
     ("bay24", "greedy"): (71.98, 90.31, 31.18, 186.4318, 16.2368),
     ("pool12", "none"): (67.36, 79.56, 56.64, 0.0, 8.0837),
 }
+PAPER_DURATION_S = 2400.0
+PAPER_THETA = 30.0
+
+
+def paper_figures(scenario: str, strategy: str, duration_s: float, theta: float) -> tuple[float, ...] | None:
+    """The paper's Table II row for a run of the same scenario and strategy, only if it ran as the
+    paper's did (40 minutes at theta 30): a 6-hour run's figures are not comparable to it."""
+    if duration_s != PAPER_DURATION_S or theta != PAPER_THETA:
+        return None
+    return PAPER_TABLE_II.get((scenario, strategy))
 
 
 @dataclass(frozen=True)

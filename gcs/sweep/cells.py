@@ -21,17 +21,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gcs.mission.headless import run_mission, run_stem
+from gcs.mission.start import RunOptions, check_start, check_strategy, variant
 from gcs.mission.world import World
-from gcs.scenario.model_params import check_inputs
 from gcs.scenario.reader import Scenario, ScenarioError, load_scenario, scenario_from_data
-from gcs.strategies import (
-    StrategyError,
-    fingerprint,
-    is_plugin,
-    load_strategy,
-    shipped_names,
-    source_of,
-)
+from gcs.strategies import StrategyError, fingerprint, load_strategy, shipped_names, source_of
 from gcs.sweep.spec import SweepSpec, Value
 from missiontime import US_PER_S
 
@@ -69,20 +62,19 @@ def make_cells(spec: SweepSpec) -> list[Cell]:
         for point in spec.points:
             fields = spec.fixed | point
             data = patched(raw, fields)
+            fleet = RunOptions(draw_fleet=spec.draw_fleet)
             try:
                 base = scenario_from_data(path, data)
-                if spec.draw_fleet:
-                    base = replace(base, fleet=replace(base.fleet, start_config=None))
-                check_inputs(base)
-                for strategy in (s for s in strategies if is_plugin(s)):  # one from outside: a plan on this start
-                    check_inputs(base.with_overrides(strategy=strategy))
+                check_start(base, fleet)
+                for strategy in strategies:  # one from outside the package: a plan on this start
+                    check_strategy(variant(base, replace(fleet, strategy=strategy)))
             except ScenarioError as exc:
                 given = ", ".join(f"{k} = {v!r}" for k, v in fields.items())
                 raise spec.fail(f"{ref}" + (f" with {given}" if given else "") + f": {exc}") from None
             for strategy in strategies:
                 for seed in spec.seeds:
                     key = cell_key(base.name, data, strategy, seed, spec.draw_fleet, fingerprint(strategy))
-                    scenario = base.with_overrides(strategy=strategy, seed=seed)
+                    scenario = variant(base, replace(fleet, strategy=strategy, seed=seed))
                     cells.append(Cell(len(cells), key, scenario, dict(point), strategy, seed,
                                       source_of(strategy)))
     seen: dict[str, Cell] = {}

@@ -14,7 +14,7 @@ import pytest
 from testkit import scenario_variant
 
 from gcs.cli import flags
-from gcs.cli.run import seed_notice
+from gcs.mission.start import RunOptions, seed_notice, variant
 from gcs.scenario.reader import MISSIONS_DIR, ScenarioError, load_scenario, resolve_scenario
 from missiontime.durations import parse_duration_s
 
@@ -106,7 +106,7 @@ def test_a_scenario_found_nowhere_is_one_line_listing_the_shipped_ones(in_tmp: P
 def test_the_seed_notice_says_exactly_what_a_seed_changes_over_a_saved_fleet() -> None:
     pool = load_scenario("pool12")
     assert seed_notice(pool, None, faults=False) is None  # no --seed: nothing to say
-    assert seed_notice(replace(pool, fleet=replace(pool.fleet, start_config=None)), 3, faults=False) is None
+    assert seed_notice(variant(pool, RunOptions(draw_fleet=True)), 3, faults=False) is None
     assert seed_notice(pool, 3, faults=False) == (
         "pool12's fleet is its saved start configuration (pool12.geojson): --seed 3 changes only the aMussels' "
         "random drift (up to 0.5 cm a step); add --draw-fleet to draw the fleet from the seed too")
