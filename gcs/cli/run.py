@@ -54,7 +54,7 @@ from gcs.mission.world import LinkOptions
 from gcs.records.run_folder import CHECKPOINT, RunFolder
 from gcs.results.run_result import RunResult, seed_stats
 from gcs.scenario.model_params import check_inputs
-from gcs.scenario.reader import SEED_MAX, THETA_RANGE, Scenario, ScenarioError, load_scenario
+from gcs.scenario.reader import SEED_MAX, THETA_RANGE, Scenario, ScenarioError, load_scenario, shipped_scenarios
 from gcs.strategies import COLLECT, StrategyError, is_plugin, load_strategy, source_of
 from mavlink_dialect.signing import SigningKeyError, load_key
 from missiontime import mm_ss
@@ -75,7 +75,7 @@ MAX_DELAY_S = 5.0
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "scenario", nargs="?", metavar="SCENARIO",
-        help="scenario file (TOML) or a name in missions/ (pool12, bay24); none: the Table II reproduction",
+        help=f"scenario file (TOML) or a name in missions/ ({', '.join(shipped_scenarios())}); none: Table II",
     )
     parser.add_argument("--strategy", type=_strategies, metavar="NAME[,NAME...]",
                         help=f"collection strategy or a comma list of them: shipped ({', '.join(COLLECT)}), "
