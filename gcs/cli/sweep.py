@@ -17,7 +17,6 @@ Exit status: 0 done; 1 some missions failed (listed; run again to retry them); 2
 from __future__ import annotations
 
 import argparse
-import io
 import sys
 from pathlib import Path
 from typing import IO, cast
@@ -92,13 +91,14 @@ def run(args: argparse.Namespace) -> int:
     return EXIT_FAILED if outcome.failed else 0
 
 
-class LineEnds(io.TextIOBase):
+class LineEnds:
     """The console's output, remembering whether its last line was ended, so a message on stderr after an
     interruption starts a line of its own when both go to one file."""
 
     def __init__(self, out: IO[str]) -> None:
         self.out = out
         self.ended = True
+        self.encoding: str = getattr(out, "encoding", None) or "utf-8"  # rich draws ASCII boxes where not UTF-8
 
     def write(self, text: str) -> int:
         if text:
