@@ -8,11 +8,12 @@
     vil.run("pool12", loss=0.2, latency="200ms", seed=3)  # every option `vil run` takes: faults, signing_key=,
                                                           #   fail_apads=, resume=True after a crash
     s = vil.scenario("pool12", fields={"mission.theta": 60, "fleet.count": 16})   # a variant, built in code
-    frame = vil.sweep("missions/sweeps/smoke.toml", out="sweeps/smoke")           # one row per mission
+    frame = vil.sweep("missions/sweeps/quick.toml", out="sweeps/quick")           # one row per mission
     old = vil.load("runs/latest")                         # a recorded run, as `r` above
 
 Strategies are named as everywhere else: a shipped name, "FILE.py:FUNCTION", "MODULE:FUNCTION" or
 an installed `vil.strategies` entry point (docs/strategies.md). Errors are `vil.Error` with one line.
+In a script, call `vil.sweep` under `if __name__ == "__main__":` (its workers import the script again).
 """
 
 from __future__ import annotations

@@ -27,6 +27,7 @@ from gcs.sweep.cells import make_cells, patched
 from gcs.sweep.cluster import ClusterError
 from gcs.sweep.runner import sweep as run_sweep
 from gcs.sweep.spec import SpecError, load_spec
+from vil.main_guard import ADVICE, unguarded_call
 from vil.options import ApadAt, Seconds, Window, run_options
 from vil.result import Result
 
@@ -108,7 +109,14 @@ def load(run_folder: str | Path) -> Result:
 def sweep(spec: str | Path, out: str | Path, *, scheduler: str | None = None, workers: int | None = None,
           quiet: bool = True) -> pd.DataFrame:
     """The missions of a sweep spec on Dask (a local cluster, or `scheduler`'s), those already in
-    `out` kept; one row per mission, as `out/results.parquet` (docs/sweeps.md)."""
+    `out` kept; one row per mission, as `out/results.parquet` (docs/sweeps.md).
+
+    A local cluster's workers are spawned processes that import the calling script again, so in a
+    script call it under `if __name__ == "__main__":` (a notebook needs nothing); unguarded, it is
+    an `Error` saying so before any process starts."""
+    unguarded = unguarded_call() if scheduler is None else None
+    if unguarded is not None:
+        raise Error(ADVICE.format(file=unguarded[0], line=unguarded[1]))
     try:
         loaded = load_spec(spec)
         cells = make_cells(loaded)

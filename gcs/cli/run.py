@@ -50,7 +50,7 @@ from gcs.mission.checkpoint import CheckpointError
 from gcs.mission.start import MAX_DELAY_S, PreparedRun, RunOptions, prepare_runs, run_prepared
 from gcs.records.run_folder import RunFolder
 from gcs.results.run_result import RunResult, seed_stats
-from gcs.scenario.reader import SEED_MAX, THETA_RANGE, Scenario, ScenarioError, load_scenario
+from gcs.scenario.reader import SEED_MAX, THETA_RANGE, Scenario, ScenarioError, load_scenario, shipped_scenarios
 from gcs.strategies import COLLECT, StrategyError, load_strategy
 from mavlink_dialect.signing import SigningKeyError, load_key
 from missiontime.durations import hms
@@ -68,7 +68,7 @@ MAX_JOBS = 256
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "scenario", nargs="?", metavar="SCENARIO",
-        help="scenario file (TOML) or a name in missions/ (pool12, bay24); none: the Table II reproduction",
+        help=f"scenario file (TOML) or a name in missions/ ({', '.join(shipped_scenarios())}); none: Table II",
     )
     parser.add_argument("--strategy", type=_strategies, metavar="NAME[,NAME...]",
                         help=f"collection strategy or a comma list of them: shipped ({', '.join(COLLECT)}), "

@@ -30,7 +30,7 @@ from typing import Any
 
 from gcs.scenario.model_params import check_inputs
 from gcs.scenario.reader import Scenario, ScenarioError, load_scenario, read_toml, resolve_scenario, scenario_from_data
-from gcs.scenario.schema import SCHEMA_DIRECTIVE, SCHEMA_PATH, schema_problems
+from gcs.scenario.schema import SCHEMA_DIRECTIVE, SCHEMA_PATH, directive_problem, schema_problems
 from mussel_sim.placement import load_area
 
 EXIT_BAD = 2
@@ -78,6 +78,9 @@ def _check(name: str) -> int:
             scenario = load_scenario(path)
             check_inputs(scenario)
             print(f"{path}: ok: {_summary(scenario)}")
+            warning = directive_problem(path)
+            if warning:  # the file runs; only an editor's help is lost
+                print(warning, file=sys.stderr)
             return 0
     except ScenarioError as exc:
         problems = [str(exc)]

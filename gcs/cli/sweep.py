@@ -3,6 +3,7 @@
     vil sweep missions/sweeps/strategies.toml --out sweeps/strategies   # every strategy, pool12 + bay24
     vil sweep SPEC.toml --out DIR --scheduler tcp://HOST:8786           # on a running Dask cluster
     vil sweep report DIR                                                # tables and plots again
+    vil sweep missions/sweeps/quick.toml --out sweeps/quick             # a first try: a minute on 2 cores
 
 The spec (TOML; docs/sweeps.md) is checked whole before anything runs. Each mission runs in
 lockstep as `vil run` runs it and writes DIR/cells/KEY.json when it finishes; a mission already
@@ -18,6 +19,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import IO, cast
 
 from rich.console import Console
 
@@ -27,17 +29,22 @@ from gcs.sweep import store
 from gcs.sweep.cells import make_cells
 from gcs.sweep.cluster import ClusterError
 from gcs.sweep.runner import sweep
-from gcs.sweep.spec import SpecError, load_spec
+from gcs.sweep.spec import MAX_CELLS, SpecError, load_spec
 
 MAX_WORKERS = 256
 EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 1, 2, 130
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.usage = "vil sweep SPEC.toml --out DIR [--seeds N] [options]\n       vil sweep report DIR"
     parser.add_argument("spec", metavar="SPEC.toml | report", help="the sweep spec, or `report` to report on DIR")
     parser.add_argument("dir", nargs="?", metavar="DIR", help="with `report`: the sweep folder")
     parser.add_argument("--out", type=flags.writable_dir, metavar="DIR",
-                        help="the sweep folder: finished missions, results.parquet/csv, report/")
+                        help="required with SPEC.toml: the sweep folder: finished missions, results.parquet/csv, "
+                             "report/")
+    parser.add_argument("--seeds", type=flags.integer_in(1, MAX_CELLS), metavar="N",
+                        help="only the spec's first N seeds (a quick try of a big spec; the same cells as the "
+                             "whole spec's, so a later run of all of them keeps these)")
     parser.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                         help="run on this Dask scheduler's workers (default: a local cluster, a worker per core)")
     parser.add_argument("--workers", type=flags.integer_in(1, MAX_WORKERS), metavar="N",
@@ -49,6 +56,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     console = output_console()
+    lines = LineEnds(console.file)
+    console.file = cast(IO[str], lines)
     if args.spec == "report":
         return _report(args.dir, console)
     if args.dir is not None:
@@ -59,6 +68,8 @@ def run(args: argparse.Namespace) -> int:
         return _bad("--workers sizes the local cluster; with --scheduler the cluster has its own")
     try:
         spec = load_spec(args.spec)
+        if args.seeds is not None:
+            spec = spec.first_seeds(args.seeds)
         cells = make_cells(spec)
     except SpecError as exc:
         return _bad(str(exc))
@@ -71,12 +82,42 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_FAILED
     except KeyboardInterrupt:
         kept = len(store.finished(args.out) & {c.key for c in cells})
+        lines.end_line()  # a progress line cut short (output to a file or a pipe) is not the message's start
         print(f"vil sweep: interrupted; {kept} of {len(cells)} missions are in {args.out}: run it again to continue",
               file=sys.stderr)
         return EXIT_INTERRUPTED
     if outcome.rows and not args.no_report:
         _report(str(args.out), console)
     return EXIT_FAILED if outcome.failed else 0
+
+
+class LineEnds:
+    """The console's output, remembering whether its last line was ended, so a message on stderr after an
+    interruption starts a line of its own when both go to one file."""
+
+    def __init__(self, out: IO[str]) -> None:
+        self.out = out
+        self.ended = True
+        self.encoding: str = getattr(out, "encoding", None) or "utf-8"  # rich draws ASCII boxes where not UTF-8
+
+    def write(self, text: str) -> int:
+        if text:
+            self.ended = text.endswith("\n")
+        return self.out.write(text)
+
+    def flush(self) -> None:
+        self.out.flush()
+
+    def isatty(self) -> bool:
+        return self.out.isatty()
+
+    def fileno(self) -> int:
+        return self.out.fileno()
+
+    def end_line(self) -> None:
+        if not self.ended:
+            self.write("\n")
+        self.flush()
 
 
 def _report(folder: str | None, console: Console) -> int:

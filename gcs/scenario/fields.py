@@ -9,6 +9,7 @@ of the format: the schema cannot drift from what the reader accepts.
 
 from __future__ import annotations
 
+import difflib
 import math
 from pathlib import Path
 from typing import Any, NamedTuple, Protocol
@@ -96,11 +97,13 @@ class FieldTable:
 
     def __init__(self, path: Path, data: dict[str, Any], prefix: str) -> None:
         self.path, self.data, self.prefix = path, dict(data), prefix
+        self.asked: list[str] = []  # the fields read so far: an unknown one is matched against them
 
     def fail(self, key: str, what: str) -> ScenarioError:
         return ScenarioError(f"{self.path}: {self.prefix}{key}: {what}")
 
     def _take(self, key: str, default: Any) -> Any:
+        self.asked.append(key)
         if key in self.data:
             return self.data.pop(key)
         if default is REQUIRED:
@@ -202,4 +205,11 @@ class FieldTable:
 
     def done(self) -> None:
         for key in self.data:
-            raise self.fail(key, "unknown field")
+            raise self.fail(key, f"unknown field{did_you_mean(key, self.asked, self.prefix)}")
+
+
+def did_you_mean(given: str, known: list[str], prefix: str = "") -> str:
+    """" (did you mean PREFIX.NAME?)" for the known name closest to a misspelt one (case aside), else ""."""
+    by_lower = {k.lower(): k for k in known}
+    close = difflib.get_close_matches(given.lower(), list(by_lower), n=1, cutoff=0.6)
+    return f" (did you mean {prefix}{by_lower[close[0]]}?)" if close else ""

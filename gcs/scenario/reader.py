@@ -8,6 +8,7 @@ looked for in the working directory first, then among the shipped missions/ (`re
 
 from __future__ import annotations
 
+import difflib
 import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -146,8 +147,11 @@ def resolve_scenario(name: str | Path) -> Path:
     for candidate in tries:
         if candidate.is_file():
             return candidate
-    raise ScenarioError(f"{name}: no such scenario file, here or in {MISSIONS_DIR} "
-                        f"(shipped: {', '.join(shipped_scenarios())})")
+    shipped = shipped_scenarios()
+    close = difflib.get_close_matches(path.stem.lower(), shipped, n=1, cutoff=0.6)  # Pool12, pool21
+    hint = f"; did you mean {close[0]}?" if close else ""
+    raise ScenarioError(f"{name}: no such scenario file, here or in {MISSIONS_DIR}{hint} "
+                        f"(shipped: {', '.join(shipped)})")
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -188,8 +192,9 @@ def read_scenario(root: Fields, path: Path) -> Scenario:
     `scenario_schema.SchemaTable` it writes the JSON Schema of the format (so each field is described
     here, once: kind, default, range, choices, and in `about` what it means where its name does not say)."""
     top = root.sub("scenario")
-    name = top.text("name", Derived(path.stem, "the file's name without .toml"),
-                    about="names the run folders and results")
+    name = _own_name(top.text("name", Derived(path.stem, "the file's name without .toml"),
+                              about="names the run folders and results; a shipped scenario's name in a copy "
+                                    "of it elsewhere: the copy's file name without .toml"), path)
     seed = top.integer("seed", 1, lo=0, hi=SEED_MAX, about="the seed of every random draw (a drawn fleet too)")
     top.done()
 
@@ -268,6 +273,17 @@ def read_scenario(root: Fields, path: Path) -> Scenario:
         raise root.fail("acoustic", f"the nanomodem's addresses allow 255 aMussels, got {fleet.count}")
     root.done()
     return Scenario(name, path.resolve(), seed, fleet, apads, mission, environment, acoustic)
+
+
+def _own_name(given: str, path: Path) -> str:
+    """The name a scenario runs under. A copy of a shipped scenario (`cp missions/pool12.toml mine.toml`)
+    carries the shipped one's `name` along with the rest: under it, its runs would land among the
+    shipped scenario's and `--resume` would pick theirs. So a shipped scenario's name is the shipped
+    file's only; in any other file it gives way to that file's own name. A name of one's own is kept."""
+    shipped = MISSIONS_DIR / f"{given}.toml"
+    if given and given != path.stem and shipped.is_file() and shipped.resolve() != path.resolve():
+        return path.stem
+    return given
 
 
 def _profiles(f: Fields) -> tuple[tuple[str, tuple[int, ...]], ...]:

@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import functools
 import json
+import os
 import sys
 from collections.abc import Iterable
 from pathlib import Path
@@ -27,7 +28,7 @@ from typing import Any
 from jsonschema import Draft7Validator, validators
 from jsonschema.exceptions import ValidationError, best_match
 
-from gcs.scenario.fields import REQUIRED, Derived, Fields, ScenarioError
+from gcs.scenario.fields import REQUIRED, Derived, Fields, ScenarioError, did_you_mean
 from gcs.scenario.reader import read_scenario
 from missiontime.durations import UNIT_S, parse_duration_s
 
@@ -199,6 +200,28 @@ def schema_problems(data: dict[str, Any]) -> list[str]:
     return [line for error in _validator().iter_errors(data) for line in _describe(error)]
 
 
+def directive_problem(path: Path) -> str | None:
+    """Why the file's `#:schema PATH` line (relative to its folder) does not lead an editor to the shipped
+    schema, as one line; None when it does, when it names a URL, or when there is no such line (a copy of a
+    shipped scenario carries `#:schema ../gcs/...`, which points nowhere from another folder)."""
+    try:
+        with path.open(encoding="utf-8") as f:
+            first = f.readline().strip()
+    except (OSError, UnicodeDecodeError):
+        return None  # the reader says why the file cannot be read
+    if not first.startswith(SCHEMA_DIRECTIVE):
+        return None
+    target = first[len(SCHEMA_DIRECTIVE):].strip()
+    if "://" in target:
+        return None
+    named = (path.parent / target).resolve()
+    if named == SCHEMA_PATH.resolve() or (named.is_file() and named.read_bytes() == SCHEMA_PATH.read_bytes()):
+        return None
+    why = "is not the shipped schema" if named.is_file() else "points nowhere"
+    return (f"{path}: warning: {SCHEMA_DIRECTIVE} {target} {why} from this file's folder; editors find the "
+            f"schema with {SCHEMA_DIRECTIVE} {os.path.relpath(SCHEMA_PATH.resolve(), path.parent.resolve())}")
+
+
 def _describe(error: ValidationError) -> list[str]:
     path = _dotted(error.absolute_path)
     if error.context:  # `[apad]` or `[[apad]]`: the error of the form that came closest, or neither form
@@ -209,7 +232,10 @@ def _describe(error: ValidationError) -> list[str]:
         path = _dotted(error.absolute_path)
     if error.validator == "additionalProperties":
         known = error.schema.get("properties", {})
-        return [f"{_dotted([*error.absolute_path, k])}: unknown field" for k in error.instance if k not in known]
+        table = _dotted(error.absolute_path)
+        prefix = f"{table}." if table else ""
+        return [f"{prefix}{k}: unknown field{did_you_mean(k, list(known), prefix)}"
+                for k in error.instance if k not in known]
     if error.validator == "required":
         return [f"{_dotted([*error.absolute_path, k])}: missing" for k in error.validator_value
                 if k not in error.instance]

@@ -34,7 +34,7 @@ from __future__ import annotations
 import itertools
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -73,6 +73,11 @@ class SweepSpec:
 
     def fail(self, what: str) -> SpecError:
         return SpecError(f"{self.path}: {what}")
+
+    def first_seeds(self, n: int) -> SweepSpec:
+        """The same sweep on its first `n` seeds only (`vil sweep --seeds N`): each cell is the whole
+        spec's cell, so a later sweep of every seed into the same folder keeps them."""
+        return replace(self, seeds=self.seeds[:n])
 
 
 def load_spec(path: str | Path) -> SweepSpec:

@@ -90,6 +90,10 @@ REGISTRY: dict[str, Entry] = {
                          why="A, B: the two recorded runs",
                          long_only="two reports and their comparison, 6 s of CPU; the comparison page is "
                                    "tests/tui/test_report.py's, in the default run"),
+    swp.QUICK_SWEEP: Entry("sweeps", swp.run_quick_sweep,
+                           long_only="a local Dask cluster and 15 missions of 40 minutes (30 s of CPU); the spec's "
+                                     "shape is tests/sweep/test_spec.py's, a sweep on a cluster "
+                                     "tests/sweep/test_sweep_run.py's, in the default run"),
     swp.STRATEGIES_SWEEP: Entry("sweeps", swp.run_strategies_sweep, long_only=SWEEP_LONG),
     # README: Stock MAVLink tools
     lnk.MAVPROXY: Entry("links", lnk.run_mavproxy),
@@ -144,6 +148,10 @@ REGISTRY: dict[str, Entry] = {
                                "each, once, print the same rows"),
     tls.STARTUP: Entry("tools", tls.run_startup, ci=tls.STARTUP + " --repeat 1",
                        why="best of 5 fresh processes each; one shows the same rows"),
+    # README: Long missions
+    run.SLEEP_DAY: Entry("runs", run.run_sleep_day, ci="vil run missions/bay120-sleep.toml --duration 6m",
+                         why="the day is 5 minutes of CPU: 6 minutes show the flag over the file's 40 and a fleet "
+                             "asleep (the long run runs the day and checks every aMussel alive at its end)"),
     # README: A scenario of your own
     run.COPY: Entry("runs", run.run_own_scenario),
     run.SED: Entry("runs", run.run_own_scenario),
@@ -165,6 +173,9 @@ REGISTRY: dict[str, Entry] = {
                           ci="vil run bay24 --strategy lookahead --seeds 2 --json bay24-lookahead.json --duration 2m",
                           why="as pool12's"),
     # docs/sweeps.md
+    swp.STRATEGIES_SEEDS2: Entry("sweeps", swp.run_strategies_sweep,
+                                 long_only=SWEEP_LONG + "; --seeds N against the whole spec is "
+                                           "tests/sweep/test_sweep_run.py's"),
     swp.KEEP_RUNS: Entry("sweeps", swp.run_keep_runs, full=False, ci=f"vil sweep {swp.ONE_SPEC} --out kept --keep-runs",
                          why="SPEC.toml: one 2-minute mission; DIR: kept", long_only=SWEEP_LONG),
     swp.REPORT: Entry("sweeps", swp.run_strategies_sweep, ci="vil sweep report sweeps/strategies", full=False,

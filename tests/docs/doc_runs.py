@@ -26,6 +26,7 @@ RESUME = "vil run pool12 --resume"
 COPY = "cp missions/pool12.toml mine.toml"
 SED = """sed -i 's#"areas/#"missions/areas/#; s#"starts/#"missions/starts/#' mine.toml"""
 MINE = "vil run mine.toml --strategy greedy"
+SLEEP_DAY = "vil run missions/bay120-sleep.toml --duration 24h"
 SLACK_RUN = "vil run pool12 --strategy docs/examples/slack_first.py:slack_first,cautious"
 POOL12_NAME = "vil run pool12 --strategy NAME --seeds 20 --json pool12-NAME.json"
 BAY24_NAME = "vil run bay24 --strategy NAME --seeds 20 --json bay24-NAME.json"
@@ -197,16 +198,31 @@ def _kill_then_resume(w: Work, start: str, resume: str, scenario: str) -> None:
     assert result(w, folder.name)["end_reason"] == "mission time" and not (folder / CHECKPOINT).exists()
 
 
+def run_sleep_day(w: Work) -> None:
+    """bay120-sleep's day: its file says 40 minutes, the flag runs the duration given; 24 h at theta 30 are
+    30 simulated days (a row per day kept), every aMussel alive at the end, none ever depleted."""
+    line = w.line(SLEEP_DAY)
+    duration_s = {"24h": 86400.0, "6m": 360.0}[line.split("--duration ")[1].split()[0]]
+    w.sh(line, timeout_s=7200)
+    r = result(w)
+    assert r["scenario"] == "bay120-sleep" and r["duration_s"] == duration_s and r["theta"] == 30
+    assert "duration = \"40m\"" in (w.path / "missions/bay120-sleep.toml").read_text()
+    assert len(r["mussels"]) == 120 and all(m["first_depleted_s"] is None for m in r["mussels"])
+    if w.full:
+        assert len(r["days"]) == 30
+
+
 def run_own_scenario(w: Work) -> None:
     """A copy of pool12 elsewhere: as copied, its paths are taken from its own folder (one line says
-    so, exit 2); the sed line points them back at the shipped files, and it runs as pool12 does."""
+    so, exit 2); the sed line points them back at the shipped files, and it runs as pool12 does, under its
+    own name (its runs are not pool12's)."""
     w.sh(w.line(COPY))
     refused = w.sh(w.line(MINE), expect=2)
     assert refused.stderr.count("\n") == 1 and "relative to the scenario file's folder" in refused.stderr
     assert str(w.path.resolve()) in refused.stderr
     w.sh(w.line(SED))
     done = w.sh(w.line(MINE))
-    assert "pool12-greedy-seed1-run1/" in words(done.stdout)
+    assert "mine-greedy-seed1-run1/" in words(done.stdout) and not list((w.path / "runs").glob("pool12-*"))
     assert result(w)["strategy"] == "greedy" and len(result(w)["mussels"]) == 12
 
 

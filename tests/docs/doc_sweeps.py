@@ -12,6 +12,8 @@ from pathlib import Path
 from doc_harness import Work, ports_held, words
 
 STRATEGIES_SWEEP = "vil sweep missions/sweeps/strategies.toml --out sweeps/strategies"
+STRATEGIES_SEEDS2 = "vil sweep missions/sweeps/strategies.toml --out sweeps/strategies --seeds 2"
+QUICK_SWEEP = "vil sweep missions/sweeps/quick.toml --out sweeps/quick"
 KEEP_RUNS = "vil sweep SPEC.toml --out DIR --keep-runs"
 REPORT = "vil sweep report DIR"
 ON_CLUSTER = "vil sweep SPEC.toml --out DIR --scheduler tcp://HOST:8786"
@@ -46,14 +48,20 @@ def check_shipped_spec(root: Path) -> int:
 
 
 def run_strategies_sweep(w: Work) -> None:
-    """The shipped spec's sweep leaves one row per mission (360: every strategy, pool12 and bay24, seeds
-    1-20), and `vil sweep report DIR` on it writes the tables and plots again."""
+    """The shipped spec on its first 2 seeds (--seeds 2: every strategy, pool12 and bay24, seeds 1-2), then
+    the whole spec into the same folder runs only the rest: one row per mission (360: seeds 1-20), and
+    `vil sweep report DIR` on it writes the tables and plots again."""
     import pandas as pd
 
     n = check_shipped_spec(w.path)
+    first = w.sh(w.line(STRATEGIES_SEEDS2), timeout_s=3600).stdout
     sweep = w.line(STRATEGIES_SWEEP)
     out = w.path / sweep.split("--out ")[1].split()[0]
-    w.sh(sweep, timeout_s=3600)
+    two = pd.read_parquet(out / "results.parquet")
+    assert set(two["seed"]) == {1, 2} and len(two) == n // 10, first
+    assert f"{n // 10} missions, 0 already in" in words(first)
+    again = w.sh(sweep, timeout_s=3600).stdout
+    assert f"{n} missions, {n // 10} already in" in words(again), again
     rows = pd.read_parquet(out / "results.parquet")
     assert len(rows) == n and len(set(zip(rows["scenario"], rows["strategy"], rows["seed"], strict=True))) == n
 
@@ -63,6 +71,21 @@ def run_strategies_sweep(w: Work) -> None:
     printed = words(w.sh(report, timeout_s=600).stdout)
     assert all((out / "report" / name).stat().st_size for name in REPORT_FILES)
     assert "means with 95 % intervals" in printed and "lookahead" in printed
+
+
+def run_quick_sweep(w: Work) -> None:
+    """The first sweep both docs point at: the paper's three strategies on pool12, fleets of seeds 1-5, 40
+    minutes: 15 rows, and the report's table of the three configurations."""
+    import pandas as pd
+
+    line = w.line(QUICK_SWEEP)
+    printed = words(w.sh(line, timeout_s=1200).stdout)
+    rows = pd.read_parquet(w.path / line.split("--out ")[1].split()[0] / "results.parquet")
+    assert len(rows) == 15 and set(rows["strategy"]) == {"cautious", "greedy", "none"} and set(rows["seed"]) == {
+        1, 2, 3, 4, 5}
+    assert (rows["duration_s"] == 2400).all() and set(rows["scenario"]) == {"pool12"}
+    assert "quick: means with 95 % intervals" in printed
+    assert all(f"pool12 {s} 5 " in printed for s in ("cautious", "greedy", "none")), printed
 
 
 def run_keep_runs(w: Work) -> None:

@@ -54,7 +54,7 @@ def test_a_scenario_names_a_strategy_file_from_its_own_folder(tmp_path: Path) ->
     (tmp_path / "site" / "mine.toml").write_text(text)
     done = vil(tmp_path, "run", "site/mine.toml", "--duration", "1m")
     assert done.returncode == 0, done.stderr
-    assert (tmp_path / "runs" / "pool12-slack_first-seed1-run1" / "result.json").is_file()
+    assert (tmp_path / "runs" / "mine-slack_first-seed1-run1" / "result.json").is_file()  # a copy: its own name
 
 
 SPEC = """

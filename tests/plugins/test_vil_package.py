@@ -40,7 +40,10 @@ def test_vil_run_gives_the_figures_vil_run_prints_for_the_same_scenario_strategy
 
 
 def test_bad_input_is_a_vil_error_of_one_line(tmp_path: Path) -> None:
-    for call, words in ((lambda: vil.scenario("pool12", fields={"mission.thetta": 60}), "mission.thetta: unknown"),
+    for call, words in ((lambda: vil.scenario("pool12", fields={"mission.thetta": 60}),
+                         "mission.thetta: unknown field (did you mean mission.theta?)"),
+                        (lambda: vil.scenario("pool12", fields={"misson.theta": 60}), "(did you mean mission?)"),
+                        (lambda: vil.scenario("Pool12"), "did you mean pool12?"),
                         (lambda: vil.scenario("nowhere"), "no such scenario"),
                         (lambda: vil.run("pool12", strategy="cautios", out=tmp_path), "did you mean cautious?"),
                         (lambda: vil.run("pool12", duration="forever", out=tmp_path), "forever"),
@@ -62,3 +65,29 @@ def test_the_example_notebook_runs_from_top_to_bottom(tmp_path: Path, monkeypatc
     assert "uptime" in text and "mission.thetta: unknown field" in text
     assert any("image/png" in o.get("data", {}) for o in outputs)  # the active-count figure
     assert (tmp_path / "sweeps" / "small" / "results.parquet").is_file()
+
+
+SMALL = '[sweep]\nscenarios = ["pool12"]\nstrategies = ["none"]\nseeds = [1]\n[set]\nmission.duration = "1m"\n'
+
+
+def _script(folder: Path, body: str) -> subprocess.CompletedProcess[str]:
+    (folder / "script.py").write_text(body)
+    return subprocess.run([sys.executable, "script.py"], cwd=folder, capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "PYTHONPATH": str(ROOT)})
+
+
+def test_vil_sweep_at_a_scripts_top_level_is_one_line_saying_to_guard_it(tmp_path: Path) -> None:
+    """Unguarded, each spawned worker imports the script again and runs the sweep again: four Dask tracebacks
+    ("Nanny failed to start") before; now `vil.Error` with the advice, before any process starts."""
+    (tmp_path / "small.toml").write_text(SMALL)
+    done = _script(tmp_path, 'import vil\n\nrows = vil.sweep("small.toml", out="sw", workers=2)\n')
+    assert done.returncode == 1 and "Nanny" not in done.stderr and "RuntimeError" not in done.stderr
+    assert done.stderr.splitlines()[-1] == (
+        'vil.api.Error: vil.sweep starts worker processes that import this script again: call it under '
+        f'if __name__ == "__main__": (line 3 of {tmp_path / "script.py"} runs it at the top level)')
+    assert not (tmp_path / "sw").exists()
+    # Guarded, the call goes on to the spec (here one that names no scenario there is: its own error, no cluster).
+    (tmp_path / "small.toml").write_text(SMALL.replace('"pool12"', '"pool99"'))
+    guarded = _script(tmp_path, 'import vil\n\nif __name__ == "__main__":\n'
+                                '    vil.sweep("small.toml", out="sw", workers=2)\n')
+    assert guarded.returncode == 1 and "sweep.scenarios: pool99: no such scenario file" in guarded.stderr

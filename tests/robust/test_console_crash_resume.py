@@ -48,7 +48,8 @@ END_S = 1200.0
 
 def short(name: str, folder: Path) -> list[str]:
     """--scenario for missions/NAME.toml ended at END_S (its name, so its run folder, unchanged)."""
-    path = scenario_variant(name, folder / f"{name}-short.toml", {'duration = "40m"': f'duration = "{END_S:.0f}s"'})
+    (folder / "short").mkdir(exist_ok=True)  # the file keeps the shipped one's name: a copy runs under its file's
+    path = scenario_variant(name, folder / "short" / f"{name}.toml", {'duration = "40m"': f'duration = "{END_S:.0f}s"'})
     return ["--scenario", str(path)]
 
 

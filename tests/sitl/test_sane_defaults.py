@@ -63,7 +63,8 @@ def test_a_scenario_found_nowhere_is_one_line_naming_the_shipped_ones(tmp_path: 
     code = main([str(run) if a == "RUN" else a for a in argv])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1, err
-    assert err == f"vil {argv[0]}: pool13: no such scenario file, here or in {MISSIONS_DIR} (shipped: {SHIPPED})\n"
+    assert err == (f"vil {argv[0]}: pool13: no such scenario file, here or in {MISSIONS_DIR}; did you mean pool12? "
+                   f"(shipped: {SHIPPED})\n")
     assert not (tmp_path / "runs").exists()
 
 

@@ -121,6 +121,24 @@ def test_bad_specs_get_one_line(tmp_path: Path, text: str, message: str) -> None
     assert str(err.value).startswith(str(tmp_path))
 
 
+def test_first_seeds_are_the_whole_specs_cells_for_those_seeds() -> None:
+    spec = load_spec(MISSIONS / "sweeps" / "strategies.toml")
+    whole = {(c.scenario.name, c.strategy, c.seed): c.key for c in make_cells(spec)}
+    cut = make_cells(spec.first_seeds(2))
+    assert {c.seed for c in cut} == {1, 2} and len(cut) == 2 * len(shipped_names()) * 2
+    assert all(whole[(c.scenario.name, c.strategy, c.seed)] == c.key for c in cut)  # the same missions, kept later
+    assert spec.first_seeds(50).seeds == spec.seeds
+
+
+def test_the_quick_spec_is_small_and_a_first_try() -> None:
+    """missions/sweeps/quick.toml, the docs' first sweep: the paper's three strategies on pool12, 5 drawn fleets,
+    the paper's 40 minutes: 15 missions (strategies.toml's smallest is 360; capacity's are hours each)."""
+    cells = make_cells(load_spec(MISSIONS / "sweeps" / "quick.toml"))
+    assert len(cells) == 15 and {c.scenario.name for c in cells} == {"pool12"}
+    assert {c.strategy for c in cells} == {"cautious", "greedy", "none"}
+    assert {c.scenario.mission.duration_s for c in cells} == {2400.0} and {c.seed for c in cells} == set(range(1, 6))
+
+
 def test_the_shipped_strategies_sweep_is_valid() -> None:
     spec = load_spec(MISSIONS / "sweeps" / "strategies.toml")
     cells = make_cells(spec)

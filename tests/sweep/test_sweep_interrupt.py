@@ -54,3 +54,19 @@ def test_ctrl_c_of_a_sweep_is_one_line_and_running_it_again_finishes(tmp_path: P
     assert again.returncode == 0, again.stderr
     assert f"{kept} already in out" in again.stdout
     assert len(list((tmp_path / "out" / "cells").glob("*.json"))) == 6
+
+
+def test_the_message_after_an_interruption_starts_a_line_of_its_own() -> None:
+    """Output to a file: a progress line cut short by Ctrl-C is ended before the message (stderr, the same file)."""
+    import io
+
+    from gcs.cli.sweep import LineEnds
+
+    both = io.StringIO()
+    lines = LineEnds(both)
+    lines.write("sweep ━━━━━━━━━━ 1/6 missions 0:00:03")
+    lines.end_line()
+    both.write("vil sweep: interrupted; ...\n")
+    assert both.getvalue().splitlines() == ["sweep ━━━━━━━━━━ 1/6 missions 0:00:03", "vil sweep: interrupted; ..."]
+    lines.end_line()  # a line already ended: nothing added
+    assert both.getvalue().endswith("interrupted; ...\n")

@@ -112,6 +112,34 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path: Path, capsys: pytest.Capture
     assert "not a sweep folder" in capsys.readouterr().err
     assert main(["sweep", str(spec)]) == 2
     assert "--out DIR is required" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as refused:
+        main(["sweep", str(spec), "--out", str(tmp_path / "out"), "--seeds", "0"])
+    assert refused.value.code == 2 and "argument --seeds: 0 is outside" in capsys.readouterr().err
+
+
+def test_the_usage_shows_out_as_required(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        main(["sweep", "--help"])
+    usage = capsys.readouterr().out.split("\n\n")[0]
+    assert usage.splitlines() == ["usage: vil sweep SPEC.toml --out DIR [--seeds N] [options]",
+                                  "       vil sweep report DIR"]
+
+
+def test_seeds_n_runs_the_specs_first_n_seeds_and_the_whole_spec_keeps_them(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str],
+) -> None:
+    spec = tmp_path / "three.toml"
+    spec.write_text('[sweep]\nscenarios = ["pool12"]\nstrategies = ["none"]\nseeds = "4-6"\n'
+                    '[set]\nmission.duration = "1m"\n')
+    out = tmp_path / "out"
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=":0") as cluster:
+        args = ["sweep", str(spec), "--out", str(out), "--scheduler", cluster.scheduler_address, "--no-report"]
+        assert main([*args, "--seeds", "2"]) == 0
+        assert "2 missions, 0 already" in capsys.readouterr().out
+        assert list(pd.read_parquet(out / "results.parquet")["seed"]) == [4, 5]
+        assert main(args) == 0
+        assert "3 missions, 2 already" in capsys.readouterr().out
+    assert list(pd.read_parquet(out / "results.parquet")["seed"]) == [4, 5, 6]
 
 
 def test_a_failed_mission_is_listed_not_written_and_tried_again(tmp_path: Path) -> None:

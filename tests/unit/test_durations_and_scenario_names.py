@@ -99,8 +99,44 @@ def test_a_scenario_found_nowhere_is_one_line_listing_the_shipped_ones(in_tmp: P
     with pytest.raises(ScenarioError) as exc:
         load_scenario("pool13")
     message = str(exc.value)
-    assert message.startswith(f"pool13: no such scenario file, here or in {MISSIONS_DIR} (shipped: ")
+    assert message.startswith(f"pool13: no such scenario file, here or in {MISSIONS_DIR}; did you mean pool12? "
+                              "(shipped: ")
     assert "bay24, bay24-acoustic, pool12, pool12-acoustic, pool12x2" in message and "\n" not in message
+    with pytest.raises(ScenarioError) as far:
+        load_scenario("lagoon")
+    assert str(far.value).startswith(f"lagoon: no such scenario file, here or in {MISSIONS_DIR} (shipped: ")
+
+
+@pytest.mark.parametrize("given, meant", [("Pool12", "pool12"), ("pool21", "pool12"), ("missions/Bay24.toml", "bay24"),
+                                          ("bay120-slep", "bay120-sleep")])
+def test_a_misspelt_scenario_name_gets_the_closest_shipped_one(in_tmp: Path, given: str, meant: str) -> None:
+    with pytest.raises(ScenarioError, match=f"; did you mean {meant}\\? \\(shipped: "):
+        load_scenario(given)
+
+
+def test_a_copy_of_a_shipped_scenario_runs_under_its_own_file_name(in_tmp: Path) -> None:
+    """`cp missions/pool12.toml mine.toml`: the copy's `name = "pool12"` came along with the rest; its runs
+    are not pool12's (run folders, --resume). A name of one's own, and the shipped file itself, keep theirs."""
+    copied = scenario_variant("pool12", in_tmp / "mine.toml", {})
+    assert 'name = "pool12"' in copied.read_text()
+    assert load_scenario("mine.toml").name == "mine"
+    assert load_scenario("pool12").name == "pool12" and load_scenario(MISSIONS_DIR / "pool12.toml").name == "pool12"
+    assert load_scenario(local_variant(in_tmp, "lagoon")).name == "lagoon"  # name = "lagoon": its own
+    own = scenario_variant("pool12", in_tmp / "trial.toml", {'name = "pool12"': 'name = "pool12-night"'})
+    assert load_scenario(own).name == "pool12-night"  # not a shipped name: kept
+    (in_tmp / "elsewhere").mkdir()
+    same_stem = scenario_variant("pool12", in_tmp / "elsewhere" / "pool12.toml", {})
+    assert load_scenario(same_stem).name == "pool12"  # the file says pool12 and is called so
+
+
+def test_vil_run_help_lists_every_shipped_scenario(capsys: pytest.CaptureFixture[str]) -> None:
+    from gcs.cli.main import main
+
+    with pytest.raises(SystemExit):
+        main(["run", "--help"])
+    text = "".join(capsys.readouterr().out.split())  # argparse wraps lines, at hyphens too
+    shipped = sorted(p.stem for p in MISSIONS_DIR.glob("*.toml"))
+    assert len(shipped) >= 10 and f"({','.join(shipped)})" in text
 
 
 def test_the_seed_notice_says_exactly_what_a_seed_changes_over_a_saved_fleet() -> None:

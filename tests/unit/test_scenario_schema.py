@@ -5,6 +5,7 @@ schema can say so; `vil scenario check` and `new` in one line each (in process: 
 from __future__ import annotations
 
 import json
+import os
 import tomllib
 from pathlib import Path
 from typing import Any
@@ -60,10 +61,10 @@ def _pool12() -> dict[str, Any]:
 def test_a_misspelt_field_is_refused_by_the_schema_by_its_name() -> None:
     data = _pool12()
     data["fleet"]["cuont"] = data["fleet"].pop("count")
-    assert schema_problems(data) == ["fleet.cuont: unknown field", "fleet.count: missing"]
+    assert schema_problems(data) == ["fleet.cuont: unknown field (did you mean fleet.count?)", "fleet.count: missing"]
     data = _pool12()
     data["apad"] = [data["apad"], {"home": [43.94, 15.44], "speeed_mps": 1.0}]
-    assert schema_problems(data) == ["apad[1].speeed_mps: unknown field"]
+    assert schema_problems(data) == ["apad[1].speeed_mps: unknown field (did you mean apad[1].speed_mps?)"]
 
 
 def _fields() -> list[tuple[str, str, dict[str, Any]]]:
@@ -133,9 +134,34 @@ def test_check_names_a_misspelt_field_in_one_line(tmp_path: Path, capsys: pytest
                    .replace('"starts/', f'"{MISSIONS}/starts/'))
     assert main(["scenario", "check", str(bad)]) == 2
     out = capsys.readouterr()
-    assert out.err.splitlines() == [f"{bad}: fleet.cuont: unknown field", f"{bad}: fleet.count: missing"]
+    assert out.err.splitlines() == [f"{bad}: fleet.cuont: unknown field (did you mean fleet.count?)",
+                                    f"{bad}: fleet.count: missing"]
     assert main(["scenario", "check", "pool12", str(bad)]) == 2  # every file is checked; the worst status
     assert capsys.readouterr().out.splitlines() == [f"{POOL12}: ok: pool12, 12 aMussels, 1 aPad, 40 min"]
+
+
+def test_check_warns_when_a_copys_schema_line_points_nowhere(tmp_path: Path,
+                                                           capsys: pytest.CaptureFixture[str]) -> None:
+    """`cp missions/pool12.toml mine.toml`: the copy runs, but its `#:schema ../gcs/...` leads an editor nowhere;
+    check says ok and warns in one line with the line to write. Fixed, or pointing at the schema, no warning."""
+    text = POOL12.read_text().replace('"areas/', f'"{MISSIONS}/areas/').replace('"starts/', f'"{MISSIONS}/starts/')
+    mine = tmp_path / "mine.toml"
+    mine.write_text(text)
+    assert main(["scenario", "check", str(mine)]) == 0
+    out = capsys.readouterr()
+    assert out.out.splitlines() == [f"{mine}: ok: mine, 12 aMussels, 1 aPad, 40 min"]
+    (warning,) = out.err.splitlines()
+    fix = f"#:schema {Path(os.path.relpath(SCHEMA_PATH, tmp_path.resolve()))}"
+    assert warning == (f"{mine}: warning: #:schema ../gcs/scenario/scenario.schema.json points nowhere from this "
+                       f"file's folder; editors find the schema with {fix}")
+    mine.write_text(text.replace("#:schema ../gcs/scenario/scenario.schema.json", fix))
+    assert main(["scenario", "check", str(mine)]) == 0 and capsys.readouterr().err == ""
+    (tmp_path / "old.schema.json").write_text("{}")
+    mine.write_text(text.replace("../gcs/scenario/scenario.schema.json", "old.schema.json"))
+    assert main(["scenario", "check", str(mine)]) == 0
+    assert "#:schema old.schema.json is not the shipped schema" in capsys.readouterr().err
+    mine.write_text(text.replace("#:schema ../gcs/scenario/scenario.schema.json", "# mine"))
+    assert main(["scenario", "check", str(mine), "pool12"]) == 0 and capsys.readouterr().err == ""  # none: no word
 
 
 def test_check_runs_the_reader_for_what_the_schema_cannot_say(tmp_path: Path,
