@@ -17,6 +17,7 @@ import numpy as np
 from apad_sitl.vocabulary import Latch
 from gcs.loop.control import Phase
 from gcs.loop.crew import Crew
+from gcs.loop.failed_docking import after_failed_docking
 from gcs.loop.fleet_knowledge import FleetKnowledge
 from gcs.loop.trip_energy import needs_home
 from gcs.results.accounting import SURFACE_DEPTH_M
@@ -116,7 +117,7 @@ def collect(crew: Crew, route: list[int]) -> None:
     """Fetch each aMussel of the route in turn: go to it, call it up, close in, dock it."""
     knows, act, status, api = crew.knows, crew.act, crew.status, crew.knows.api
     act.set_phase(Phase.COLLECT)
-    route = list(route)
+    route, fetched = list(route), set[int]()
     while route:
         act.check_end()  # between aMussels nothing is half done: an operator stop ends here
         act.wait_for_link()  # and nothing is lost by waiting here as long as the mission lasts
@@ -174,6 +175,8 @@ def collect(crew: Crew, route: list[int]) -> None:
         else:
             act.sink(mussel_id)
             crew.log("skip", mussel=mussel_id, why="docking failed")
+            if after_failed_docking(crew, mussel_id, fetched):  # settled off its position: fetch it again
+                route.insert(0, mussel_id)
     status.target_mussel = 0
 
 
