@@ -28,6 +28,8 @@ def after_failed_docking(crew: Crew, mussel_id: int, fetched: set[int]) -> bool:
     """After a failed docking and its sink: whether the collection should fetch `mussel_id` again now
     (`fetched`: those it fetched again already, at most once each)."""
     knows, status = crew.knows, crew.status
+    failed_s = knows.clock.time()
+    knows.note_home(mussel_id)  # one with no position known (a real one first heard up there): here
     # It goes down where it is: where it will settle is known as it starts to sink.
     there, home = knows.api.get_location(mussel_id), knows.homes[mussel_id]
     off_m = pair_distance_m(there.lat, there.lon, home.lat, home.lon)
@@ -44,14 +46,15 @@ def after_failed_docking(crew: Crew, mussel_id: int, fetched: set[int]) -> bool:
     status.failed_dockings[outcome] = status.failed_dockings.get(outcome, 0) + 1
     crew.log("failed_docking", mussel=mussel_id, outcome=outcome, off_m=round(off_m, 2),
              **({"why": why} if why is not None else {}))
-    if why is not None:
-        status.off_position[mussel_id] = f"docking failed at {knows.clock.time():.0f} s, {why}"
+    if outcome == ON_POSITION:
+        status.off_position.pop(mussel_id, None)
         return False
-    status.off_position.pop(mussel_id, None)
-    if outcome == FETCHED_AGAIN:
-        fetched.add(mussel_id)
-        return True
-    return False
+    # Said beside it if it ends off its position: also when the fetch it is due does not come to pass.
+    status.off_position[mussel_id] = f"docking failed at {failed_s:.0f} s, {why or 'fetched again'}"
+    if why is not None:
+        return False
+    fetched.add(mussel_id)
+    return True
 
 
 def _cannot_fetch(crew: Crew, mussel_id: int, fetched: set[int]) -> str | None:
