@@ -1,13 +1,16 @@
-"""A called-up aMussel whose docking failed: seen back on its position, fetched again, or reported.
+"""A called-up aMussel whose docking failed: docked at a second try, seen back on its position,
+fetched again, or reported.
 
-A latch that opens while closing lets its aMussel go where it was put, which is where it floated, or,
-in the simulated fleet, where the aPad was last heard. The collection sends it down (`ApadActions.sink`);
-then `after_failed_docking` measures where it goes down (it sinks straight) against its position.
-Within `HOME_TOLERANCE_M` it is back where it works. Farther, the collection fetches it once more while
-the aPad is there: called up where it settled once on the seabed, docked, and put back on its position by the
-redeployment, like any other. If that cannot be done (fetched once already, too late in the mission,
+One still floating beside the aPad (the dock command lost on the way, all its sends; a refusal) is
+docked once more at once (`dock_again`), closing in first. A latch that opens while closing lets its
+aMussel go where it was put, which is where it floated, or, in the simulated fleet, where the aPad
+was last heard: the collection sends it down (`ApadActions.sink`), and `after_failed_docking`
+measures where it goes down (it sinks straight) against its position. Within `HOME_TOLERANCE_M` it
+is back where it works. Farther, the collection fetches it once more while the aPad is there:
+called up where it settled once on the seabed, docked, and put back on its position by the
+redeployment like any other. If that cannot be done (fetched once already, too late in the mission,
 depleted, another aPad's now), it is reported with its metres and the reason, which the run's
-whereabouts repeat. Each outcome is a `failed_docking` event and a count in
+whereabouts repeat. Each failure's last outcome is a `failed_docking` event and a count in
 `LoopStatus.failed_dockings` (result.json `happened`).
 """
 
@@ -18,10 +21,26 @@ from gcs.results.accounting import HOME_TOLERANCE_M
 from mussel_sim.geo import pair_distance_m
 from mussel_sim.vocabulary import MusselState
 
+DOCKED_AGAIN = "docked at the second try"
 ON_POSITION = "back on its position"
 FETCHED_AGAIN = "fetched again"
 OFF_POSITION = "left off its position"
 SETTLED = (MusselState.ACTIVE, MusselState.DEPLETED)
+
+
+def dock_again(crew: Crew, slot: int, mussel_id: int) -> bool:
+    """A docking that failed with the aMussel still floating beside the aPad (the command lost on the
+    way, every send of it; a refusal): close in and dock once more while the aPad is there."""
+    knows, act = crew.knows, crew.act
+    if knows.state(mussel_id) != MusselState.FLOATING or slot not in knows.free_slots() or knows.taken_over(mussel_id):
+        return False  # gone down (a latch that reopened lets it sink), or no longer this aPad's
+    if knows.distance_to(mussel_id) > 0.8 * crew.settings.dock_reach_m:
+        act.go_to(knows.api.get_location(mussel_id), interruptible=False)
+    if not act.dock(slot, mussel_id):
+        return False  # sent down: `after_failed_docking` says where
+    _count(crew, DOCKED_AGAIN)
+    crew.log("failed_docking", mussel=mussel_id, outcome=DOCKED_AGAIN)
+    return True
 
 
 def after_failed_docking(crew: Crew, mussel_id: int, fetched: set[int]) -> bool:
@@ -43,7 +62,7 @@ def after_failed_docking(crew: Crew, mussel_id: int, fetched: set[int]) -> bool:
                             interruptible=False)
         why = _cannot_fetch(crew, mussel_id, fetched)
         outcome = FETCHED_AGAIN if why is None else OFF_POSITION
-    status.failed_dockings[outcome] = status.failed_dockings.get(outcome, 0) + 1
+    _count(crew, outcome)
     crew.log("failed_docking", mussel=mussel_id, outcome=outcome, off_m=round(off_m, 2),
              **({"why": why} if why is not None else {}))
     if outcome == ON_POSITION:
@@ -70,3 +89,8 @@ def _cannot_fetch(crew: Crew, mussel_id: int, fetched: set[int]) -> str | None:
     if not knows.serves(mussel_id):
         return "another aPad's since the fleet was re-shared"
     return None
+
+
+def _count(crew: Crew, outcome: str) -> None:
+    counts = crew.status.failed_dockings
+    counts[outcome] = counts.get(outcome, 0) + 1

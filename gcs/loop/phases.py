@@ -17,7 +17,7 @@ import numpy as np
 from apad_sitl.vocabulary import Latch
 from gcs.loop.control import Phase
 from gcs.loop.crew import Crew
-from gcs.loop.failed_docking import after_failed_docking
+from gcs.loop.failed_docking import after_failed_docking, dock_again
 from gcs.loop.fleet_knowledge import FleetKnowledge
 from gcs.loop.trip_energy import needs_home
 from gcs.results.accounting import SURFACE_DEPTH_M
@@ -169,7 +169,7 @@ def collect(crew: Crew, route: list[int]) -> None:
             act.go_to(api.get_location(mussel_id), interruptible=False)
         if knows.taken_over(mussel_id):
             continue
-        if act.dock(free[0], mussel_id):
+        if act.dock(free[0], mussel_id) or dock_again(crew, free[0], mussel_id):
             crew.log("docked", mussel=mussel_id, slot=free[0])
             status.dockings.append((knows.clock.time(), mussel_id))
         else:

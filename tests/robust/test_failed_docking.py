@@ -16,6 +16,7 @@ from testkit import read_jsonl
 from gcs.link.faultproxy import LinkFaults
 from gcs.loop.phases import charge_and_redeploy, collect
 from gcs.loop.telemetry_pace import MISSION_TELEMETRY_HZ
+from gcs.mission.headless import run_mission
 from gcs.mission.world import LinkOptions, lockstep_world
 from gcs.results.accounting import HOME_TOLERANCE_M, account
 from gcs.scenario.reader import load_scenario
@@ -81,3 +82,17 @@ def test_an_amussel_whose_docking_failed_where_it_floated_is_sent_down_on_its_po
     assert [(e["mussel"], e["outcome"]) for e in failed] == [(3, "back on its position")]
     assert failed[0]["off_m"] < 1.0 and loop.status.failed_dockings == {"back on its position": 1}
     assert next(a for a in end if a.mussel_id == 3).where == "seabed"
+
+
+def test_a_dock_command_lost_at_40pc_loss_is_sent_again_while_the_amussel_floats(tmp_path: Path) -> None:
+    """`vil run pool12 --loss 0.4 --latency 200ms --seed 13`: every send of a Dock was lost at 545 s. The
+    aMussel floated beside the aPad until the latch wait gave out, and used to be sent down undocked."""
+    s = load_scenario("pool12").with_overrides(seed=13, duration_s=900.0)
+    r = run_mission(s, tmp_path, options=LinkOptions(faults=LinkFaults(loss_frac=0.4, latency_s=0.2, seed=13)))
+    events = read_jsonl(tmp_path / "events.jsonl")
+    lost = [e for e in events if e["event"] == "command_failed" and e["what"].startswith("aPad 1: dock failed: no ans")]
+    again = [e for e in events if e["event"] == "failed_docking"]
+    assert lost and [e["outcome"] for e in again] == ["docked at the second try"]
+    mussel = again[0]["mussel"]
+    assert [e["t_s"] for e in events if e["event"] == "docked" and e["mussel"] == mussel] == [again[0]["t_s"]]
+    assert r.happened["failed_dockings"] == {"docked at the second try": 1} and r.misplaced == []
