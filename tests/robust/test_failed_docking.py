@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 from testkit import read_jsonl
 
+from gcs.cli.tables import happened_lines
 from gcs.link.faultproxy import LinkFaults
 from gcs.loop.phases import charge_and_redeploy, collect
 from gcs.loop.telemetry_pace import MISSION_TELEMETRY_HZ
@@ -96,3 +97,5 @@ def test_a_dock_command_lost_at_40pc_loss_is_sent_again_while_the_amussel_floats
     mussel = again[0]["mussel"]
     assert [e["t_s"] for e in events if e["event"] == "docked" and e["mussel"] == mussel] == [again[0]["t_s"]]
     assert r.happened["failed_dockings"] == {"docked at the second try": 1} and r.misplaced == []
+    (line,) = happened_lines([r])  # vil run's summary says so
+    assert "docking failed x1 (docked at the second try 1)" in line
