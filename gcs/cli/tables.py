@@ -74,6 +74,9 @@ def happened_lines(results: list[RunResult]) -> list[str]:
                            ("strategy_failures", "planning step the strategy failed (cautious planned it)")):
             if h.get(key):
                 parts.append(f"{words} x{h[key]}")
+        if h.get("failed_dockings"):  # by what became of the aMussel
+            by = h["failed_dockings"]
+            parts.append(f"docking failed x{sum(by.values())} (" + ", ".join(f"{k} {n}" for k, n in by.items()) + ")")
         if r.acoustic:
             parts.append(acoustic_words(r.acoustic))
         if parts:

@@ -74,6 +74,10 @@ class LoopStatus:
     strategy_failures: int = 0  # planning steps the strategy failed (cautious planned them instead)
     home_charges: int = 0  # times the aPad went home and charged (gcs.loop.home_charge)
     orders: OrdersSent = field(default_factory=OrdersSent)  # the sleep orders sent (FleetKnowledge plans on them)
+    # Failed dockings by what became of the aMussel (gcs.loop.failed_docking), and the reason of each one
+    # it left off its position (the run's whereabouts repeat it)
+    failed_dockings: dict[str, int] = field(default_factory=dict)
+    off_position: dict[int, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

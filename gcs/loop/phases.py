@@ -18,6 +18,7 @@ import numpy as np
 from gcs.loop.book import charging_pool
 from gcs.loop.control import Phase
 from gcs.loop.crew import Crew
+from gcs.loop.failed_docking import after_failed_docking, dock_again
 from gcs.loop.fleet_knowledge import FleetKnowledge
 from gcs.loop.trip_energy import needs_home
 from gcs.loop.wake_times import all_charged_look_by, pool_look_by
@@ -117,7 +118,7 @@ def collect(crew: Crew, route: list[int]) -> None:
     """Fetch each aMussel of the route in turn: go to it, call it up, close in, dock it."""
     knows, act, status = crew.knows, crew.act, crew.status
     act.set_phase(Phase.COLLECT)
-    route = list(route)
+    route, fetched = list(route), set[int]()
     while route:
         act.check_end()  # between aMussels nothing is half done: an operator stop ends here
         act.wait_for_link()  # and nothing is lost by waiting here as long as the mission lasts
@@ -168,12 +169,14 @@ def collect(crew: Crew, route: list[int]) -> None:
             act.go_to(knows.location(mussel_id), interruptible=False)
         if taken_over(crew, mussel_id):
             continue
-        if act.dock(free[0], mussel_id):
+        if act.dock(free[0], mussel_id) or dock_again(crew, free[0], mussel_id):
             crew.log("docked", mussel=mussel_id, slot=free[0])
             status.dockings.append((knows.clock.time(), mussel_id))
         else:
             sink(crew, mussel_id)
             crew.log("skip", mussel=mussel_id, why="docking failed")
+            if after_failed_docking(crew, mussel_id, fetched):  # settled off its position: fetch it again
+                route.insert(0, mussel_id)
     status.target_mussel = 0
 
 

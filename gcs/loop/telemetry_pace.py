@@ -53,29 +53,42 @@ PACE_WORTH_S = 60.0
 class TelemetryPace:
     """One aPad's telemetry rates by activity; it starts as the world asked, moving. The loop's actions
     call `hold` when a wait in a holding phase begins (not at once: an idle wait the pool already
-    satisfies asks nothing) and `move` when a phase that acts begins."""
+    satisfies asks nothing) and `move` when a phase that acts begins.
+
+    Each message's rate is believed in force only once the aPad acknowledged it: a request that went
+    unanswered (its ACK or itself lost) leaves that message unknown, asked again at the next `hold` or
+    `move`. One granted and one not is not a change made: a position left at the holding rate while
+    the aPad sails is what a docking is judged by (issue 39: 20 s stale at 40 % loss)."""
 
     def __init__(self, api: ApadApi, apad_id: int, log: LoopLog) -> None:
         self._api = api
         self._apad_id = apad_id
         self._log = log
-        self.holding = False
+        self._granted: dict[int, float] = dict(MOVING_TELEMETRY_HZ)  # message id -> rate the aPad acknowledged
         self.requests = 0  # SET_MESSAGE_INTERVAL requests sent for pacing (each message id counts)
 
+    @property
+    def holding(self) -> bool:
+        """Whether any message is not known to be at its moving rate (slow, or its request unanswered)."""
+        return any(self._granted.get(m) != hz for m, hz in MOVING_TELEMETRY_HZ.items())
+
     def hold(self) -> None:
-        if not self.holding:
-            self._ask(HOLDING_TELEMETRY_HZ, holding=True)
+        self._ask(HOLDING_TELEMETRY_HZ)
 
     def move(self) -> None:
-        if self.holding:
-            self._ask(MOVING_TELEMETRY_HZ, holding=False)
+        self._ask(MOVING_TELEMETRY_HZ)
 
-    def _ask(self, rates_hz: dict[int, float], holding: bool) -> None:
-        failed = self._api.set_telemetry_rates(rates_hz, self._apad_id, retries=PACE_RETRIES)
-        self.requests += len(rates_hz)
-        for msg_id, exc in failed.items():
+    def _ask(self, rates_hz: dict[int, float]) -> None:
+        wanted = {m: hz for m, hz in rates_hz.items() if self._granted.get(m) != hz}
+        if not wanted:
+            return
+        failed = self._api.set_telemetry_rates(wanted, self._apad_id, retries=PACE_RETRIES)
+        self.requests += len(wanted)
+        for msg_id, hz in wanted.items():
+            exc = failed.get(msg_id)
+            if exc is None:
+                self._granted[msg_id] = hz
+                continue
+            self._granted.pop(msg_id, None)  # it may have arrived and only its ACK was lost: unknown
             known = mavlink.mavlink_map.get(msg_id)
             self._log("telemetry_rate_failed", message=known.msgname if known else msg_id, what=str(exc))
-        # Believed changed unless every request failed: the next change asks again either way.
-        if len(failed) < len(rates_hz):
-            self.holding = holding

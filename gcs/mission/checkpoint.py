@@ -66,7 +66,7 @@ if TYPE_CHECKING:
 # of wall at a real-time factor of 500, and a day's mission saves 1,440 times, not 8,640.
 CHECKPOINT_PERIOD_S = 10.0
 LOCKSTEP_CHECKPOINT_PERIOD_S = 60.0
-FORMAT_VERSION = 8  # 8: the loops keep the sleep orders they sent (LoopStatus.orders)
+FORMAT_VERSION = 9  # 9: the loops count their failed dockings (LoopStatus.failed_dockings, off_position)
 RESTORE_SLACK_US = 30_000_000  # a wall clock started at the checkpoint's time runs on while the world is built
 STEPS_SUFFIX = ".steps"  # side files beside the checkpoint
 TRACES_SUFFIX = ".traces"

@@ -77,9 +77,11 @@ def collect_result(world: World, outcome: Outcome, wall_s: float) -> RunResult:
     travelled = sum(v.state.distance_travelled_m for v in world.vehicles.values())
     stats = world.link.codec.stats
     homes = {m: (h.lat, h.lon) for m, h in world.homes.items()}
+    reported = {m: why for loop in loops.values() for m, why in loop.status.off_position.items()}
     whereabouts = [
         {"id": a.mussel_id, "where": a.where, "detail": a.detail}
-        for a in account(world.fleet.state, world.frame, homes, world.link.vehicles, world.fleet.params.seabed_depth_m)
+        for a in account(world.fleet.state, world.frame, homes, world.link.vehicles, world.fleet.params.seabed_depth_m,
+                         reported)
     ]
     vehicles = list(world.vehicles.values())  # the aPads' counters are summed over the swarm
     messages = {"gcs_sent": stats.sent, "fleet_sent": world.fleet.codec.stats.sent,
@@ -140,8 +142,8 @@ def happenings(world: World, outcome: Outcome) -> dict[str, Any]:
     """What happened that a user would want to know besides the figures, from the run's own records:
     the link faults injected and aPads failed on purpose, the aPads' failsafe holds (embedded SITL
     aPads: a real one's are on the aPad), the loop's link losses, Go Tos the failsafe preempted,
-    steps given up at a bound, planning steps a strategy failed, aPads lost to the swarm and the
-    re-shares. Zeros are left out."""
+    steps given up at a bound, failed dockings by what became of the aMussel, planning steps a
+    strategy failed, aPads lost to the swarm and the re-shares. Zeros are left out."""
     counts = world.events.counts
     options = world.options
     happened: dict[str, Any] = {}
@@ -157,6 +159,10 @@ def happenings(world: World, outcome: Outcome) -> dict[str, Any]:
     for kind, name in (("link_lost", "link_losses"), ("goto_resumed", "gotos_resumed"), ("gave_up", "gave_up")):
         happened[name] = counts.get(kind, 0)
     happened["strategy_failures"] = sum(loop.status.strategy_failures for loop in outcome.loops.values())
+    failed: Counter[str] = Counter()
+    for loop in outcome.loops.values():
+        failed.update(loop.status.failed_dockings)
+    happened["failed_dockings"] = dict(sorted(failed.items()))  # by what became of the aMussel
     shares = outcome.shares
     if shares is not None:
         happened["reshares"] = max(shares.reshares - 1, 0)  # the first sharing is not a re-share

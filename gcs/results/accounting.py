@@ -8,6 +8,7 @@ stays where that happened: at the surface, or in the water on its way up; it is 
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,10 +37,12 @@ class MusselAccount:
 
 def account(
     fleet: FleetState, frame: LocalFrame, homes_deg: dict[int, tuple[float, float]], apads: dict[int, VehicleView],
-    seabed_depth_m: float | None = None,
+    seabed_depth_m: float | None = None, reported: Mapping[int, str] | None = None,
 ) -> list[MusselAccount]:
     """One entry per aMussel, from the fleet's own state and the aPads' slot reports. With
-    `seabed_depth_m` a depleted aMussel above the seabed is told apart ("water") from one on it."""
+    `seabed_depth_m` a depleted aMussel above the seabed is told apart ("water") from one on it;
+    `reported`: why the loop left an aMussel off its position, said beside it if it ends there."""
+    reported = reported or {}
     ids = [int(i) for i in fleet.ids]
     home_lat = np.array([homes_deg[i][0] for i in ids])
     home_lon = np.array([homes_deg[i][1] for i in ids])
@@ -65,7 +68,8 @@ def account(
                 what = {"surface": "depleted at the surface", "water": f"depleted {fleet.depth_m[k]:.1f} m deep",
                         "seabed": "depleted"}[where]
             if off_m > HOME_TOLERANCE_M:
-                out.append(MusselAccount(mussel_id, "lost", f"{what} {off_m:.1f} m from its position"))
+                why = f" ({reported[mussel_id]})" if mussel_id in reported else ""
+                out.append(MusselAccount(mussel_id, "lost", f"{what} {off_m:.1f} m from its position{why}"))
             else:
                 out.append(MusselAccount(mussel_id, where, f"{what}, {off_m:.2f} m from its position"))
     return out

@@ -12,13 +12,20 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from testkit import scenario_variant
+from testkit import read_jsonl, scenario_variant
 
+from gcs.link.faultproxy import LinkFaults
 from gcs.link.telemetry import GCS_SYSTEM_ID
-from gcs.loop.control import Phase
-from gcs.loop.telemetry_pace import HOLDING_PHASES, HOLDING_TELEMETRY_HZ, MOVING_TELEMETRY_HZ, PLANNING_PHASES
+from gcs.loop.control import LoopLog, Phase
+from gcs.loop.telemetry_pace import (
+    HOLDING_PHASES,
+    HOLDING_TELEMETRY_HZ,
+    MOVING_TELEMETRY_HZ,
+    PLANNING_PHASES,
+    TelemetryPace,
+)
 from gcs.mission.headless import run_mission
-from gcs.mission.world import LOCKSTEP_EPOCH_US
+from gcs.mission.world import LOCKSTEP_EPOCH_US, LinkOptions, lockstep_world
 from gcs.records.run_folder import RunFolder
 from gcs.scenario.reader import load_scenario
 from mavlink_dialect import Codec, mavlink, tlog
@@ -136,3 +143,32 @@ def test_a_strategy_that_takes_nobody_leaves_the_apad_reporting_slowly(tmp_path:
                  if m.get_type() == "GLOBAL_POSITION_INT" and m.get_srcSystem() == 1 and t > asked[1][0] + 5.0]
     assert len(positions) >= 50
     assert all(round(b - a, 6) == 1 / HOLDING_TELEMETRY_HZ[GPI] for a, b in pairwise(positions))
+
+
+def test_a_rate_request_lost_on_the_link_is_asked_again_at_the_next_change(tmp_path: Path) -> None:
+    """Issue 39: of the two requests for moving telemetry the position's was lost (both sends in an
+    outage) and the primitive's taken. The aPad then sailed a collection reporting its position every
+    5 s while the loop believed 2 Hz: at 40 % loss the GCS and the fleet heard it 20 s late, and a
+    docking failed. The lost one must not count as made: the next change asks for it again."""
+    out = tmp_path / "run"
+    faults = LinkFaults(outages_s=((20.0, 22.4),))  # the position's two sends (20 s, 21 s), not the primitive's
+    world = lockstep_world(load_scenario("pool12"), out, LinkOptions(faults=faults))
+    try:
+        world.api.wait_apad(timeout_s=10.0)
+        pace = TelemetryPace(world.api, world.scenario.apad.system_id, LoopLog(world.events, world.clock))
+        world.clock.sleep(10.0 - world.clock.time())
+        pace.hold()
+        assert pace.holding
+        world.clock.sleep(20.0 - world.clock.time())
+        pace.move()
+        assert pace.holding  # the position is not known to be fast again
+        world.clock.sleep(25.0 - world.clock.time())
+        pace.move()  # the loop's next command that moves the aPad
+        assert not pace.holding
+        world.clock.sleep(40.0 - world.clock.time())
+    finally:
+        world.close()
+    failed = [e for e in read_jsonl(RunFolder(out).events) if e["event"] == "telemetry_rate_failed"]
+    assert [e["message"] for e in failed] == ["GLOBAL_POSITION_INT"]
+    heard = [t for t, m in decoded(RunFolder(out).gcs_tlog) if m.get_type() == "GLOBAL_POSITION_INT"]
+    assert len([t for t in heard if 30.0 <= t < 40.0]) >= 18  # 2 Hz, not one every 5 s
