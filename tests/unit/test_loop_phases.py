@@ -161,8 +161,10 @@ def test_collect_sinks_one_whose_dock_failed(b: Bench) -> None:
     b.mussel(3, 10.0, 0.0, 0.3)
     b.act.fail("dock", 3)
     phases.collect(b.crew, [3])
-    assert b.act.names() == [*COLLECT_ONE, "dock", "sink"]
+    assert b.act.names() == [*COLLECT_ONE, "dock", "dock", "sink"]  # still floating beside it: once more
     assert b.logged("skip") == [("skip", {"mussel": 3, "why": "docking failed"})]
+    assert b.logged("failed_docking") == [("failed_docking", {"mussel": 3, "outcome": "back on its position",
+                                                               "off_m": 0.0})]
     assert b.status.dockings == []
     assert b.world.states[3] == SINKING
 
