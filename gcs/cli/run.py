@@ -13,7 +13,8 @@ Every run gets a new folder, OUT/SCENARIO-STRATEGY-seedN-runK (K one past the hi
 OUT/latest points at the last one started; `--resume` continues the newest folder of the same
 scenario, strategy and seed that holds a checkpoint, and writes each event once.
 
-Exit status: 0 every run finished with every aMussel where it should be; 2 bad input (one line
+Exit status: 0 every run finished with every aMussel where it should be (aMussels that ran flat on
+their positions are a result, not a fault: the summary says how many and when); 2 bad input (one line
 on stderr); 3 the runs finished but some aMussel is not where it should be (left at the surface,
 off its position, or on a slot the GCS does not know): a red table says who is where; 130
 interrupted (Ctrl-C): one line says where the checkpoint is and the exact command that resumes it.

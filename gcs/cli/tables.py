@@ -77,12 +77,30 @@ def happened_lines(results: list[RunResult]) -> list[str]:
         if h.get("failed_dockings"):  # by what became of the aMussel
             by = h["failed_dockings"]
             parts.append(f"docking failed x{sum(by.values())} (" + ", ".join(f"{k} {n}" for k, n in by.items()) + ")")
+        parts += home_charge_words(r) + depletion_words(r)
         if r.acoustic:
             parts.append(acoustic_words(r.acoustic))
         if parts:
             lines.append(f"{r.scenario} {r.strategy} s{r.seed}: " + "; ".join(parts))
     return lines
 
+
+
+def home_charge_words(r: RunResult) -> list[str]:
+    """Each aPad that went home to charge: how often, and its hours at the charger (its `home charge` phase)."""
+    return [f"aPad {a['sysid']} charged at home x{a['home_charges']} "
+            f"({hms(a.get('phase_s', {}).get('home charge', 0.0))} at the charger)"
+            for a in r.apads if a.get("home_charges")]
+
+
+def depletion_words(r: RunResult) -> list[str]:
+    """How many aMussels ran flat, and when the first and the last did (a result, not a fault: exit 0)."""
+    flat = sorted(m.first_depleted_s for m in r.mussels if m.first_depleted_s is not None)
+    if not flat:
+        return []
+    who = "every aMussel" if len(flat) == len(r.mussels) else f"{len(flat)} of {len(r.mussels)} aMussels"
+    when = f"at {hms(flat[0])}" if len(flat) == 1 else f"the first at {hms(flat[0])}, the last at {hms(flat[-1])}"
+    return [f"{who} ran flat ({when})"]
 
 
 def acoustic_words(a: dict[str, Any]) -> str:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -61,15 +62,16 @@ def plan_collection(crew: Crew) -> list[int]:
     crew.act.set_phase(Phase.PLAN_COLLECT)
     take_strategy_switch(crew)
     orphaned = knows.orphans()[:len(knows.free_slots())]
-    route = orphaned + collection_route(crew, len(orphaned))
+    planned = collection_route(crew, len(orphaned))
+    route = orphaned + planned.route
     if route or status.route:  # one event for a run of empty plans (a strategy waiting)
-        crew.log("plan_collection", strategy=status.strategy, route=route,
+        crew.log("plan_collection", strategy=planned.by, route=route, **planned.failed(status.strategy),
                  **({"orphans": orphaned} if orphaned else {}))
     status.route = route
     return route
 
 
-def collection_route(crew: Crew, reserved: int = 0) -> list[int]:
+def collection_route(crew: Crew, reserved: int = 0) -> Planned:
     """The strategy's route over the charging pool for the free slots but `reserved`."""
     knows = crew.knows
     inp = collection_input(crew, charging_pool(knows, crew.book), len(knows.free_slots()) - reserved)
@@ -79,21 +81,32 @@ def collection_route(crew: Crew, reserved: int = 0) -> list[int]:
 FALLBACK = CollectStrategy.CAUTIOUS  # plans the step a strategy failed (docs/strategies.md)
 
 
-def strategy_route(crew: Crew, inp: PlanInput) -> list[int]:
+class Planned(NamedTuple):
+    """A route and the strategy that planned it (the loop's, or `FALLBACK` for a step it failed)."""
+
+    route: list[int]
+    by: str
+
+    def failed(self, strategy: str) -> dict[str, str]:
+        """The event's word for a step the loop's strategy failed and the fallback planned, or nothing."""
+        return {} if self.by == strategy else {"failed": strategy}
+
+
+def strategy_route(crew: Crew, inp: PlanInput) -> Planned:
     """The strategy's route for this aPad. A strategy that raises or plans what the loop cannot act
     on (an aMussel that is not a candidate, one twice, more than the free slots) is logged
     (`strategy_failed`, with why) and the paper's cautious plans this step instead: the mission goes
     on, and the strategy is asked again at the next step. The event is logged at the 1st, 10th, 100th, ...
     failure (with the count): a strategy that always fails cannot flood the log."""
     try:
-        return plan(crew.status.strategy, inp, crew.weights).get(crew.knows.apad_id, [])
+        return Planned(plan(crew.status.strategy, inp, crew.weights).get(crew.knows.apad_id, []), crew.status.strategy)
     except StrategyError as exc:
         crew.status.strategy_failures += 1
         failures = crew.status.strategy_failures
         if failures in (1, 10) or (failures >= 100 and math.log10(failures).is_integer()):  # a bounded log
             crew.log("strategy_failed", strategy=crew.status.strategy, why=str(exc), instead=str(FALLBACK),
                      failures=failures)
-        return plan(FALLBACK, inp, crew.weights)[crew.knows.apad_id]
+        return Planned(plan(FALLBACK, inp, crew.weights)[crew.knows.apad_id], str(FALLBACK))
 
 
 def collection_input(crew: Crew, ids: list[int], capacity: int) -> PlanInput:
@@ -198,11 +211,12 @@ def recheck_route(crew: Crew, route: list[int]) -> list[int]:
     floating = [m for m in keep if knows.floating(m)]
     rest = [m for m in keep if m not in floating]
     inp = collection_input(crew, rest, len(rest))
-    new = floating + strategy_route(crew, inp) if rest else floating
+    planned = strategy_route(crew, inp) if rest else Planned([], crew.status.strategy)
+    new = floating + planned.route
     if sorted(new) != sorted(keep):  # a strategy that would not take them all: keep the planned order
         new = keep
     crew.status.route = new
-    crew.log("replan_collection", strategy=crew.status.strategy, route=new)
+    crew.log("replan_collection", strategy=planned.by, route=new, **planned.failed(crew.status.strategy))
     return new
 
 

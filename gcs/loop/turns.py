@@ -67,7 +67,7 @@ def rolling(crew: Crew) -> None:
         if knows.clock.time() < next_look_s or not knows.free_slots() or knows.too_late_to_call_up():
             return False
         next_look_s = knows.clock.time() + LOOK_S
-        return bool(act.link_up() and (knows.orphans() or collection_route(crew)))
+        return bool(act.link_up() and (knows.orphans() or collection_route(crew).route))
 
     def look_by() -> float | None:  # a charge done, or the next look for a free slot
         looks = [next_look_s] if knows.free_slots() else []

@@ -125,6 +125,9 @@ def test_a_strategy_that_raises_is_logged_and_cautious_plans_the_step(b: Bench, 
     assert b.logged("strategy_failed") == [("strategy_failed", {
         "strategy": "broken", "why": "strategy broken raised RuntimeError: no plan today", "instead": "cautious",
         "failures": 1})]
+    # The plan is labelled with the strategy that made it, and the one that failed.
+    assert b.logged("plan_collection") == [("plan_collection", {"strategy": "cautious", "route": [4, 2, 3, 1],
+                                                                "failed": "broken"})]
 
 
 COLLECT_ONE = ["set_phase", "check_end", "wait_for_link", "call_up_if_in_range", "go_to", "wait_until"]
