@@ -79,6 +79,32 @@ def sigint_as_in_a_terminal() -> Iterator[None]:
         signal.signal(signal.SIGINT, before)
 
 
+def ctrl_c_after_checkpoint(argv: list[str], cwd: Path, env: dict[str, str], checkpoint: Path, past_s: float,
+                            timeout_s: float) -> tuple[int, str]:
+    """Start `argv` as a terminal's job would, Ctrl-C it once its checkpoint is past `past_s` of mission
+    time, and return its exit status and stderr (it must still be running until then)."""
+    from gcs.mission.checkpoint import CheckpointError, load
+
+    with sigint_as_in_a_terminal():
+        proc = subprocess.Popen(argv, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        deadline = time.monotonic() + timeout_s
+        while True:
+            assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+            try:
+                if checkpoint.exists() and load(checkpoint).time_us > past_s * 1e6:
+                    break
+            except CheckpointError:  # caught mid-write
+                pass
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=timeout_s)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    return proc.returncode, err
+
+
 DASK = Path(sys.executable).parent / "dask"
 DASK_START_TIMEOUT_S = 60.0
 

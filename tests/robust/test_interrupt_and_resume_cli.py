@@ -15,9 +15,8 @@ import time
 from pathlib import Path
 
 import pytest
-from testkit import sigint_as_in_a_terminal
+from testkit import ctrl_c_after_checkpoint, sigint_as_in_a_terminal
 
-from gcs.mission.checkpoint import CheckpointError, load
 from gcs.records.run_folder import RunFolder
 
 pytestmark = [pytest.mark.sitl, pytest.mark.slow]
@@ -36,25 +35,9 @@ def test_ctrl_c_of_vil_run_is_one_line_with_the_command_that_resumes_it(tmp_path
     # 40 minutes: a run lasts a second or so, so the signal lands in it on a loaded machine too.
     args = ["run", "pool12", "--strategy", "greedy", "--duration", "40min", "--out", "out"]
     folder = RunFolder(tmp_path / "out" / "pool12-greedy-seed1-run1")
-    with sigint_as_in_a_terminal():  # a suite started in the background would have its children ignore it
-        proc = subprocess.Popen([*VIL, *args], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                text=True, env={**os.environ, "PYTHONPATH": str(ROOT)})
-    try:
-        deadline = time.monotonic() + WALL_TIMEOUT_S
-        while True:  # well into the mission: a checkpoint to keep
-            assert proc.poll() is None and time.monotonic() < deadline
-            try:
-                if folder.checkpoint.exists() and load(folder.checkpoint).time_us > 300e6:
-                    break
-            except CheckpointError:  # caught mid-write
-                pass
-            time.sleep(0.05)
-        proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate(timeout=WALL_TIMEOUT_S)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    assert proc.returncode == 130, err
+    code, err = ctrl_c_after_checkpoint([*VIL, *args], tmp_path, {**os.environ, "PYTHONPATH": str(ROOT)},
+                                        folder.checkpoint, 300.0, WALL_TIMEOUT_S)  # well into the mission
+    assert code == 130, err
     assert "Traceback" not in err and err.count("\n") == 1, err
     assert f"checkpoint kept in {Path('out') / folder.path.name}" in err
     command = err.split("resume with: ")[1].strip()

@@ -7,19 +7,16 @@ from __future__ import annotations
 import json
 import os
 import re
-import signal
 import subprocess
 import sys
-import time
 from dataclasses import replace
 from pathlib import Path
 
 import pytest
 from rich.console import Console
-from testkit import sigint_as_in_a_terminal
+from testkit import ctrl_c_after_checkpoint
 
 from gcs.cli.tables import results_table
-from gcs.mission.checkpoint import CheckpointError, load
 from gcs.records.run_folder import RunFolder
 from gcs.results.run_result import RunResult
 from missiontime.durations import hms
@@ -79,25 +76,9 @@ def test_the_paper_row_stands_only_beside_a_run_made_as_the_papers() -> None:
 @pytest.mark.sitl
 def test_ctrl_c_past_an_hour_says_the_mission_time_in_hours_and_the_summary_too(tmp_path: Path) -> None:
     folder = RunFolder(tmp_path / "out" / "pool12-cautious-seed1-run1")
-    with sigint_as_in_a_terminal():
-        proc = subprocess.Popen([*VIL, "pool12", "--duration", "90min", "--out", "out"], cwd=tmp_path,
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
-    try:
-        deadline = time.monotonic() + WALL_TIMEOUT_S
-        while True:  # past the first hour
-            assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
-            try:
-                if folder.checkpoint.exists() and load(folder.checkpoint).time_us > 3660e6:
-                    break
-            except CheckpointError:  # caught mid-write
-                pass
-            time.sleep(0.05)
-        proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate(timeout=WALL_TIMEOUT_S)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    assert proc.returncode == 130, err
+    code, err = ctrl_c_after_checkpoint([*VIL, "pool12", "--duration", "90min", "--out", "out"], tmp_path, ENV,
+                                        folder.checkpoint, 3660.0, WALL_TIMEOUT_S)  # past the first hour
+    assert code == 130, err
     at = re.search(r"\(mission time ([^)]*)\)", err)
     assert at is not None and re.fullmatch(r"1:\d\d:\d\d", at.group(1)), err  # e.g. 1:01:00, not 61:00
     done = subprocess.run([*VIL, "pool12", "--duration", "90min", "--out", "out", "--resume"], cwd=tmp_path,
