@@ -86,12 +86,15 @@ def run(
 
 def _command(s: Scenario, given: dict[str, Any], signing_key: str | Path | None, out: str | Path) -> str:
     """The call that made a run, for its command.txt (what resumes it, with resume=True): the
-    arguments given other than their defaults; a passphrase stays out of it (give it again)."""
+    arguments given other than their defaults; a passphrase stays out of it (give it again). A scenario
+    changed in Python (`scenario(..., fields=...)`) is no file a call can name: the line says so, and
+    resuming asks for the same scenario object and options."""
     defaults = {k: p.default for k, p in inspect.signature(run).parameters.items()}
     args = [f"{k}={v!r}" for k, v in given.items() if v != defaults[k] and v != ()]
     args += [f"signing_key=Path({str(signing_key)!r})"] if isinstance(signing_key, Path) else []
     args += [f"out={str(out)!r}"] if Path(out) != RUNS else []
-    return f"vil.run({', '.join([json.dumps(str(s.path)), *args])})"
+    call = f"vil.run({', '.join([json.dumps(str(s.path)), *args])})"
+    return call if s == load_scenario(s.path) else f"# {call} with the scenario changed in Python"
 
 
 def _say(line: str) -> None:

@@ -22,10 +22,14 @@ ADVICE = ('vil.sweep starts worker processes that import this script again: call
 def unguarded_call() -> tuple[str, int] | None:
     """(script, line) of the main script's top-level statement that is calling, when that statement is
     outside an `if __name__ == "__main__":` block and workers are spawned; None otherwise (a notebook, an
-    interactive session, `python -c`, a guarded call, workers forked)."""
+    interactive session, `python -c`, a package's `__main__`, a guarded call, workers forked)."""
     if dask.config.get("distributed.worker.multiprocessing-method", "spawn") == "fork":
         return None
-    script = getattr(sys.modules.get("__main__"), "__file__", None)
+    main = sys.modules.get("__main__")
+    spec_name = getattr(getattr(main, "__spec__", None), "name", "") or ""
+    if spec_name == "__main__" or spec_name.endswith(".__main__"):
+        return None  # `python -m pkg`: spawn does not run a package's __main__ again (multiprocessing.spawn)
+    script = getattr(main, "__file__", None)
     frame = inspect.currentframe()
     while frame is not None and not (frame.f_code.co_name == "<module>"
                                      and frame.f_globals.get("__name__") == "__main__"):

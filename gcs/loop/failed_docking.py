@@ -25,6 +25,7 @@ DOCKED_AGAIN = "docked at the second try"
 ON_POSITION = "back on its position"
 FETCHED_AGAIN = "fetched again"
 OFF_POSITION = "left off its position"
+AT_SURFACE = "left at the surface"  # the sink went unanswered: floating, unclaimed (an orphan to fetch)
 SETTLED = (MusselState.ACTIVE, MusselState.DEPLETED)
 
 
@@ -53,7 +54,10 @@ def after_failed_docking(crew: Crew, mussel_id: int, fetched: set[int]) -> bool:
     there, home = knows.location(mussel_id), knows.homes[mussel_id]
     off_m = pair_distance_m(there.lat, there.lon, home.lat, home.lon)
     why = None
-    if off_m <= HOME_TOLERANCE_M:
+    if knows.state(mussel_id) in (MusselState.FLOATING, MusselState.SURFACING):  # the sink went unanswered
+        why = "it did not answer the sink command"
+        outcome = AT_SURFACE
+    elif off_m <= HOME_TOLERANCE_M:
         outcome = ON_POSITION
     else:
         # A call-up needs it on the seabed: it sinks for the fleet's sinking time (and may have been

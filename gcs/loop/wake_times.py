@@ -42,7 +42,7 @@ def pool_look_by(knows: FleetKnowledge) -> float | None:
         if knows.acoustic is not None and knows.simulated(m):
             heard_s = knows.api.mussels[m].time_us / US_PER_S
             times.append(heard_s + MAX_REPORT_AGE_S)
-            if drain > 0:
+            if drain > 0 and battery > 0:  # believed empty already: time changes nothing more
                 times.append(now_s + battery / drain - STEP_SLACK_S)
     if knows.shares is not None:
         times += [lost_us / US_PER_S + CLAIM_GRACE_S for lost_us in knows.shares.lost_since_us.values()]

@@ -30,14 +30,16 @@ class Placement:
     finished: RunResult | None = None  # resuming several: this one had ended, its result is kept
 
 
-def place(runs: Sequence[tuple[Scenario, Path, bool]], command: str, say: Callable[[str], None]) -> list[Placement]:
-    """The folder of each run (scenario, root of its folders, whether to resume it); see the module's
-    docstring. `command` is what a new folder keeps (the command line without --resume: what resumes
-    it). `CheckpointError` (one line) if a run to resume has none, or one of another run."""
-    found = [RunFolder.newest_resumable(root, run_stem(s)) if resume else None for s, root, resume in runs]
+def place(runs: Sequence[tuple[Scenario, Path, bool, str]], command: str,
+          say: Callable[[str], None]) -> list[Placement]:
+    """The folder of each run (scenario, root of its folders, whether to resume it, the digest of how it
+    is started: `checkpoint.setup_digest`); see the module's docstring. `command` is what a new folder
+    keeps (the command line without --resume: what resumes it). `CheckpointError` (one line) if a run to
+    resume has none, one of another run, or one started with other settings."""
+    found = [RunFolder.newest_resumable(root, run_stem(s)) if resume else None for s, root, resume, _ in runs]
     some = len(runs) > 1 and any(found)  # several runs, some of them stopped mid-mission: resume those
     placed = []
-    for (scenario, root, resume), folder in zip(runs, found, strict=True):
+    for (scenario, root, resume, setup), folder in zip(runs, found, strict=True):
         stem = run_stem(scenario)
         if resume and folder is None and some:
             done = _finished(root, stem, command)
@@ -54,6 +56,7 @@ def place(runs: Sequence[tuple[Scenario, Path, bool]], command: str, say: Callab
             key = checkpoint.scenario_key(scenario)
             if saved.run_key != key:
                 raise CheckpointError(f"{folder.checkpoint} is of run {saved.run_key}, not {key}")
+            checkpoint.check_setup(saved, setup)  # here, before anything runs: not a traceback mid-start
             placed.append(Placement(folder.path, resume_from_s=saved.time_us / 1e6))
             continue
         made = RunFolder.new(root, stem)

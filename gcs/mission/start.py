@@ -21,6 +21,7 @@ from pathlib import Path
 
 from acoustic import per
 from gcs.link.faultproxy import LinkFaults
+from gcs.mission.checkpoint import setup_digest
 from gcs.mission.headless import ProgressFn, run_mission
 from gcs.mission.placement import place
 from gcs.mission.world import LinkOptions
@@ -190,7 +191,7 @@ def prepare_runs(requests: Sequence[tuple[Scenario, RunOptions]], command: str, 
             check_strategy(s)
             planned.add((id(base), name))
         runs.append((s, options))
-    placed = place([(s, o.out, o.resume) for s, o in runs], command, say)
+    placed = place([(s, o.out, o.resume, setup_digest(s, link_options(o))) for s, o in runs], command, say)
     prepared = [PreparedRun(s, p.out_dir, link_options(o), p.resume_from_s, p.finished,
                             source_of(s.mission.collect_strategy))
                 for (s, o), p in zip(runs, placed, strict=True)]

@@ -147,6 +147,8 @@ class RunFolder:
             line = self.command.read_text(encoding="utf-8").strip()
         except OSError:
             return None
+        if line.startswith("#"):  # kept to be read, not run (a scenario changed in Python)
+            return None
         if line.startswith("vil.run(") and line.endswith(")"):
             return line if "resume=True" in line else f"{line[:-1]}, resume=True)"
         return line if "--resume" in line.split() else f"{line} --resume" if line else None

@@ -14,6 +14,7 @@ import pytest
 from nbclient import NotebookClient
 
 import vil
+from gcs.records.run_folder import RunFolder
 
 ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOK = ROOT / "docs" / "examples" / "vil-notebook.ipynb"
@@ -91,3 +92,29 @@ def test_vil_sweep_at_a_scripts_top_level_is_one_line_saying_to_guard_it(tmp_pat
     guarded = _script(tmp_path, 'import vil\n\nif __name__ == "__main__":\n'
                                 '    vil.sweep("small.toml", out="sw", workers=2)\n')
     assert guarded.returncode == 1 and "sweep.scenarios: pool99: no such scenario file" in guarded.stderr
+
+
+def test_a_packages_main_module_calling_vil_sweep_unguarded_is_let_through(tmp_path: Path) -> None:
+    """`python -m pkg`: spawned workers do not run a package's `__main__` again (multiprocessing.spawn), so
+    the guard has nothing to say; the call goes on to the spec (one naming no scenario: its own error)."""
+    (tmp_path / "small.toml").write_text(SMALL.replace('"pool12"', '"pool99"'))
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "__init__.py").write_text("")
+    (tmp_path / "pkg" / "__main__.py").write_text('import vil\n\nvil.sweep("small.toml", out="sw", workers=2)\n')
+    done = subprocess.run([sys.executable, "-m", "pkg"], cwd=tmp_path, capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{tmp_path}"})
+    assert done.returncode == 1 and "sweep.scenarios: pool99: no such scenario file" in done.stderr, done.stderr
+    assert "if __name__" not in done.stderr
+
+
+def test_a_run_of_a_scenario_changed_in_python_keeps_its_call_to_read_not_to_resume(tmp_path: Path) -> None:
+    """Its fields are no file a call can name: command.txt says so, and nothing offers to resume it with
+    a call that would run another mission."""
+    changed = vil.scenario("pool12", fields={"mission.duration": "2m", "mission.pool_threshold": 0.7})
+    result = vil.run(changed, out=tmp_path)
+    command = (result.folder / "command.txt").read_text(encoding="utf-8")
+    assert command.startswith("# vil.run(") and "changed in Python" in command
+    assert RunFolder(result.folder).resume_command() is None
+    plain = vil.run("pool12", duration="2m", out=tmp_path)
+    assert RunFolder(plain.folder).resume_command() == f"vil.run({json.dumps(str(changed.path))}, duration='2m', " \
+                                                       f"out={str(tmp_path)!r}, resume=True)"

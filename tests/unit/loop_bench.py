@@ -134,6 +134,8 @@ class RecordingActions:
 
     def sink(self, mussel_id: int) -> None:
         self._call("sink", mussel_id)
+        if self._fails("sink", mussel_id):  # it does not answer: still floating
+            return
         self._world.states[mussel_id] = MusselState.SINKING
         self._world.surfaced.discard(mussel_id)
 

@@ -172,6 +172,16 @@ def test_collect_sinks_one_whose_dock_failed(b: Bench) -> None:
     assert b.world.states[3] == SINKING
 
 
+def test_a_failed_dock_whose_sink_goes_unanswered_is_reported_at_the_surface_not_on_its_position(b: Bench) -> None:
+    b.mussel(3, 10.0, 0.0, 0.3)
+    b.act.fail("dock", 3)
+    b.act.fail("sink", 3)
+    phases.collect(b.crew, [3])
+    assert b.logged("failed_docking") == [("failed_docking", {
+        "mussel": 3, "outcome": "left at the surface", "off_m": 0.0, "why": "it did not answer the sink command"})]
+    assert b.status.off_position == {3: "docking failed at 0 s, it did not answer the sink command"}
+
+
 def test_collect_sends_down_one_that_did_not_surface_and_goes_on(b: Bench) -> None:
     b.mussel(3, 10.0, 0.0, 0.3)
     b.mussel(4, 20.0, 0.0, 0.3)
