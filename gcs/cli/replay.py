@@ -36,7 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from gcs.console.app import ReplayConsole
-    from gcs.records.replay import ReplayError, load_replay
+    from gcs.records.playback import ReplayError, load_replay
 
     try:
         replay = load_replay(args.run, args.scenario)

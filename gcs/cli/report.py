@@ -28,7 +28,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from gcs.cli import flags
-from gcs.records.replay import ReplayError
+from gcs.records.playback import ReplayError
 from gcs.records.run_folder import RunFolder
 from gcs.report import figures as figs
 from gcs.report import maps

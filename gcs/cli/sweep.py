@@ -123,7 +123,7 @@ class LineEnds:
 def _report(folder: str | None, console: Console) -> int:
     if folder is None:
         return _bad("report needs the sweep folder: vil sweep report DIR")
-    from gcs.sweep.report import ReportError, write_report  # matplotlib only when reporting
+    from gcs.sweep.findings import ReportError, write_report  # matplotlib only when reporting
 
     try:
         written = write_report(Path(folder), console)

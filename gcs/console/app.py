@@ -26,7 +26,7 @@ from gcs.console.help import HelpScreen
 from gcs.console.linkbar import LinkBar
 from gcs.console.runner import ConsoleRunner, DockMussel, GoToMussel, Hold, UndockMussel
 from gcs.console.widgets import LEGEND, Chart, ConsoleFooter, EventPanel, FleetTable, MapView, StatusPanel
-from gcs.records.replay import Replay
+from gcs.records.playback import Replay
 from gcs.strategies import strategy_names
 from gcs.view.snapshot import Snapshot
 from mussel_sim.vocabulary import MusselState

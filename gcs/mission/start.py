@@ -8,7 +8,7 @@ Every front end starts its runs here: `vil run` (its flags parsed into `RunOptio
 `vil gcs` (the variant and the checks; the console keeps its own folder and resume). What it does,
 in order: the variant scenario (`variant`: the fleet drawn from the seed if asked, then strategy,
 seed, duration, theta), the checks before anything runs (`check_start`, `check_strategy`), the link's
-options (faults, failing aPads, signing: `link_options`), and the folder (`gcs.mission.placement`:
+options (faults, failing aPads, signing: `link_options`), and the folder (`gcs.mission.run_placement`:
 a new one keeping the command, or the one to resume, its checkpoint checked), with `latest` pointing
 at the last. Bad input is one line: `ScenarioError`, `CheckpointError`, or `OSError` from the folder.
 """
@@ -23,7 +23,7 @@ from acoustic import per
 from gcs.link.faultproxy import LinkFaults
 from gcs.mission.checkpoint import setup_digest
 from gcs.mission.headless import ProgressFn, run_mission
-from gcs.mission.placement import place
+from gcs.mission.run_placement import place
 from gcs.mission.world import LinkOptions
 from gcs.records.run_folder import RunFolder
 from gcs.results.run_result import RunResult

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from gcs.records.replay import find_scenario, run_files
+from gcs.records.playback import find_scenario, run_files
 from gcs.report.run_data import RunData, check_result, load_replayed_run
 from gcs.report.traces import read_traces, traced_run
 

@@ -1,7 +1,7 @@
 """What a report reads from one recorded run, gathered once: the indices, per-second history,
 each aMussel's figures, each aPad's track, the area, the origin of the metre axes, the events.
 
-The history comes from the GCS log replayed through the console's model (`gcs.records.replay`),
+The history comes from the GCS log replayed through the console's model (`gcs.records.playback`),
 sampled once per second of mission time; the indices and the per-aMussel facts from result.json
 when the run wrote one (headless runs), else from the same replay. A run whose traces.npz holds
 what a report draws is read from it instead, at a cost that does not grow with the mission
@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gcs.records.events import Event
-from gcs.records.replay import ReplayError, find_scenario, load_replay, read_events, run_files
+from gcs.records.playback import ReplayError, find_scenario, load_replay, read_events, run_files
 from gcs.scenario.reader import Scenario
 from gcs.view.snapshot import Snapshot
 from mavlink_dialect import tlog

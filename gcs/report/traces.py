@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gcs.records.events import Event
-from gcs.records.replay import ReplayError, RunFiles, read_events
+from gcs.records.playback import ReplayError, RunFiles, read_events
 from gcs.report.run_data import (
     ApadTrack,
     Indices,

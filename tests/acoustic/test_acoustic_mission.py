@@ -27,7 +27,7 @@ from gcs.link.faultproxy import LinkFaults
 from gcs.mission import checkpoint
 from gcs.mission.headless import run_mission
 from gcs.mission.world import LinkOptions
-from gcs.records.replay import read_events, read_tlog
+from gcs.records.playback import read_events, read_tlog
 from gcs.records.run_folder import RunFolder
 from gcs.results.run_result import RunResult
 from gcs.scenario.reader import Scenario, load_scenario

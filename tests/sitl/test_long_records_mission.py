@@ -16,7 +16,7 @@ from rich.console import Console
 import vil
 from gcs.cli.tables import time_table
 from gcs.mission.headless import run_mission
-from gcs.records import replay
+from gcs.records import playback
 from gcs.report.load import load_run
 from gcs.report.run_data import load_replayed_run
 from gcs.results.run_result import RunResult
@@ -119,11 +119,11 @@ def test_a_report_from_traces_shows_what_the_replay_shows(run: tuple[RunResult, 
 def test_a_replay_keeps_a_bounded_number_of_snapshots(run: tuple[RunResult, Path],
                                                       monkeypatch: pytest.MonkeyPatch) -> None:
     _, out = run
-    assert [replay.sample_period_s(s) for s in (600.0, 20_000.0, 20_001.0, 7 * 86_400.0)] == [1.0, 1.0, 2.0, 31.0]
-    whole = replay.load_replay(out)
+    assert [playback.sample_period_s(s) for s in (600.0, 20_000.0, 20_001.0, 7 * 86_400.0)] == [1.0, 1.0, 2.0, 31.0]
+    whole = playback.load_replay(out)
     assert len(whole.frames) == 602  # one a second from 0 to 600 s, and the end
-    monkeypatch.setattr(replay, "MAX_FRAMES", 100)  # as a week's run would be sampled: coarser, bounded
-    thin = replay.load_replay(out)
+    monkeypatch.setattr(playback, "MAX_FRAMES", 100)  # as a week's run would be sampled: coarser, bounded
+    thin = playback.load_replay(out)
     times = np.array([f.t_s for f in thin.frames[:-1]])
     assert len(thin.frames) <= 102 and np.all(np.diff(times) == 6.0)
     for f in thin.frames[:-1:10]:  # each snapshot is the whole replay's at the same instant

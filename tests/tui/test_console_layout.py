@@ -17,7 +17,7 @@ from tui_helpers import screen_text, wait_for
 
 from gcs.console.app import ConsoleApp, LiveConsole, ReplayConsole
 from gcs.console.runner import ConsoleConfig, ConsoleRunner
-from gcs.records.replay import load_replay
+from gcs.records.playback import load_replay
 from gcs.scenario.reader import load_scenario
 
 pytestmark = pytest.mark.tui

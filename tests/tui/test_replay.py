@@ -11,7 +11,7 @@ from tui_helpers import screen_text, wait_for
 
 from gcs.cli.main import main
 from gcs.console.app import ReplayConsole
-from gcs.records.replay import ReplayError, load_replay, read_tlog
+from gcs.records.playback import ReplayError, load_replay, read_tlog
 from mussel_sim.vocabulary import MusselState
 
 pytestmark = pytest.mark.tui

@@ -16,7 +16,7 @@ from tui_helpers import screen_text, wait_for
 
 from gcs.console.app import ReplayConsole
 from gcs.console.widgets import APAD, GREEN, PURPLE, RED
-from gcs.records.replay import load_replay
+from gcs.records.playback import load_replay
 
 pytestmark = pytest.mark.tui
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from gcs.records import run_folder
-from gcs.records.replay import run_files
+from gcs.records.playback import run_files
 from gcs.records.run_folder import RunFolder
 
 
