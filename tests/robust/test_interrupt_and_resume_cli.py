@@ -82,7 +82,11 @@ def test_ctrl_c_of_several_runs_to_the_process_group_then_the_printed_command_fi
     out = tmp_path / "out"
     try:
         deadline = time.monotonic() + WALL_TIMEOUT_S
-        while not (list(out.glob("*/result.json")) and list(out.glob("*/checkpoint.pkl"))):
+        def caught() -> bool:  # a run finished, and another holds a checkpoint: not the finished one's, which
+            finished = {p.parent for p in out.glob("*/result.json")}  # it keeps a moment after its result
+            return bool(finished) and any(p.parent not in finished for p in out.glob("*/checkpoint.pkl"))
+
+        while not caught():
             assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
             time.sleep(0.05)
         os.killpg(proc.pid, signal.SIGINT)
