@@ -109,6 +109,11 @@ class LoopSettings:
     energy: EnergyBudget | None = None
     home: tuple[float, float] | None = None  # (lat, lon)
 
+    def call_up_wait_s(self, duty: Duty) -> float:
+        """How long a call-up may take to float an aMussel on `duty`: the loop's bound, or its longest wake
+        gap and twice its rise (a sleep order given during the mission may sleep longer than the profiles)."""
+        return max(self.surfacing_timeout_s, duty.longest_wait_s(self.mission.theta) + 2 * self.mussel_surfacing_s)
+
 
 @dataclass(frozen=True)
 class LoopLog:

@@ -239,8 +239,7 @@ class FleetKnowledge:
     def call_up_wait_s(self, mussel_id: int) -> float:
         """How long a call-up may take to float it: the loop's bound, or its longest wake gap and twice
         its rise (a sleep order given during the mission may sleep longer than the scenario's profiles)."""
-        gap_s = self.duty(mussel_id).longest_wait_s(self.settings.mission.theta)
-        return max(self.settings.surfacing_timeout_s, gap_s + 2 * self.settings.mussel_surfacing_s)
+        return self.settings.call_up_wait_s(self.duty(mussel_id))
 
     # --- slots and aMussels ---------------------------------------------------------------------
 

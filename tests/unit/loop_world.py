@@ -138,8 +138,7 @@ class ScriptedKnowledge:
         return self.wake_in_s(mussel_id) > 0
 
     def call_up_wait_s(self, mussel_id: int) -> float:
-        gap_s = self.duty(mussel_id).longest_wait_s(self.settings.mission.theta)
-        return max(self.settings.surfacing_timeout_s, gap_s + 2 * self.settings.mussel_surfacing_s)
+        return self.settings.call_up_wait_s(self.duty(mussel_id))
 
     # --- slots and aMussels
 
