@@ -222,9 +222,12 @@ class Clock(Protocol):
 
     def sleep(self, dt_s: float) -> None: ...
 
-    def sleep_until(self, look: Callable[[], T | None], period_s: float) -> T:
+    def sleep_until(self, look: Callable[[], T | None], period_s: float,
+                    wake_at: Callable[[], float | None] | None = None) -> T:
         """Sleep `period_s` at a time until `look()`, called after each sleep, answers (not None);
-        return the answer. What `look` raises is raised here."""
+        return the answer. What `look` raises is raised here. `wake_at`: the first mission second time
+        alone could make `look` answer (None: only news can); a clock that jumps from event to event
+        looks only then and after news (`missiontime.event_clock`), the others at every period."""
         ...
 
 
@@ -254,22 +257,30 @@ class VirtualClock:
     def sleep(self, dt_s: float) -> None:
         self.advance_to(self._now_us + seconds_to_us(max(dt_s, 0.0)))
 
-    def sleep_until(self, look: Callable[[], T | None], period_s: float) -> T:
+    def sleep_until(self, look: Callable[[], T | None], period_s: float,
+                    wake_at: Callable[[], float | None] | None = None) -> T:
         return sleep_until(self, look, period_s)
 
     def advance_to(self, target_us: int) -> None:
         sched = self.scheduler
         sched.now_us = self._now_us
         sched.drain()
-        while True:
-            due = sched.next_due_us()
-            if due is None or due > target_us:
-                break
-            # Tasks already overdue (added with an old start) run now; time never goes back.
-            self._now_us = max(self._now_us, due)
-            sched.run_due(self._now_us)
+        while self.run_next(target_us):
+            pass
         self._now_us = sched.now_us = max(self._now_us, target_us)
         sched.drain()
+
+    def run_next(self, target_us: int | None) -> bool:
+        """Run the next instant with a task due, if it is not after `target_us` (None: whenever it is);
+        False if there is none."""
+        sched = self.scheduler
+        due = sched.next_due_us()
+        if due is None or (target_us is not None and due > target_us):
+            return False
+        # Tasks already overdue (added with an old start) run now; time never goes back.
+        self._now_us = max(self._now_us, due)
+        sched.run_due(self._now_us)
+        return True
 
 
 class WallClock:
@@ -326,7 +337,8 @@ class WallClock:
             else:
                 self._wait(timeout_s)
 
-    def sleep_until(self, look: Callable[[], T | None], period_s: float) -> T:
+    def sleep_until(self, look: Callable[[], T | None], period_s: float,
+                    wake_at: Callable[[], float | None] | None = None) -> T:
         return sleep_until(self, look, period_s)
 
 

@@ -49,10 +49,12 @@ from dataclasses import dataclass, field
 from typing import Generic, TypeVar
 
 from missiontime.clocks import Clock, Scheduler, seconds_to_us, us_to_s
+from missiontime.event_clock import EventClock, WakeFn, grid_at_or_after
 
 T = TypeVar("T")
 
 HOME_LOOK_S = 0.1  # `run` looks for the baton's return this often (wall time), running signal handlers between
+NEVER_US = 2**63 - 1  # queued there: a script that only news can wake (event platform)
 
 
 class ProcessStopped(BaseException):
@@ -78,10 +80,11 @@ class ProcessClock:
     def sleep(self, dt_s: float) -> None:
         self._coordinator.park(self._process, self.now_us + seconds_to_us(max(dt_s, 0.0)))
 
-    def sleep_until(self, look: Callable[[], T | None], period_s: float) -> T:
+    def sleep_until(self, look: Callable[[], T | None], period_s: float, wake_at: WakeFn | None = None) -> T:
         """Looked at by whichever thread holds the baton when the script's time comes: a look that
-        does not answer sleeps the script again without waking its thread (no hand-over)."""
-        return self._coordinator.park_until(self._process, look, seconds_to_us(max(period_s, 0.0)))
+        does not answer sleeps the script again without waking its thread (no hand-over). On an
+        `EventClock` its time comes after news and at `wake_at`, as the clock's own waits look."""
+        return self._coordinator.park_until(self._process, look, seconds_to_us(max(period_s, 0.0)), wake_at)
 
 
 def _held_lock() -> threading.Lock:
@@ -146,6 +149,9 @@ class _Process:
     # and what the look answered or raised, for the script to take when it wakes.
     look: Callable[[], object] | None = None
     period_us: int = 0
+    wake_at: WakeFn | None = None  # event platform: when time alone could answer the look
+    start_us: int = 0  # when the look's wait began: its grid of looks
+    entry: int = -1  # the sequence number of its queue entry; older entries are stale
     answer: object = None
     raised: BaseException | None = None
 
@@ -210,15 +216,18 @@ class Processes:
         if process.stop:
             raise ProcessStopped(process.name)
 
-    def park_until(self, process: _Process, look: Callable[[], T | None], period_us: int) -> T:
+    def park_until(self, process: _Process, look: Callable[[], T | None], period_us: int,
+                   wake_at: WakeFn | None = None) -> T:
         """Called from the running script: sleep `period_us` at a time until `look()` answers; the look
         runs in the thread holding the baton at each wake time, in the order the script's own sleeps
-        would have woken it, and only an answer (or an exception, re-raised here) wakes its thread."""
-        process.look, process.period_us = look, period_us
+        would have woken it, and only an answer (or an exception, re-raised here) wakes its thread.
+        On an `EventClock` the wake times are the news and `wake_at` (`_next_look_us`)."""
+        process.look, process.period_us, process.wake_at = look, max(period_us, 1), wake_at
+        process.start_us = self.clock.now_us
         try:
-            self.park(process, self.clock.now_us + period_us)
+            self.park(process, self._next_look_us(process))
         finally:
-            process.look = None
+            process.look = process.wake_at = None
         answer, raised = process.answer, process.raised
         process.answer = process.raised = None
         if raised is not None:
@@ -226,8 +235,31 @@ class Processes:
         return answer  # type: ignore[return-value]  # a look's answer, never None here
 
     def _push(self, process: _Process, wake_us: int) -> None:
+        process.entry = self._sequence
         heapq.heappush(self._queue, (wake_us, self._sequence, process))
         self._sequence += 1
+
+    def _next_look_us(self, process: _Process) -> int:
+        """When a sleeping script looks next by time alone: a period on (lockstep), or its wake time on
+        its grid (`EventClock`; never, when only news can answer it)."""
+        clock = self.clock
+        if not isinstance(clock, EventClock):
+            return clock.now_us + process.period_us
+        wake = clock.wake_us(process.start_us, process.period_us, process.wake_at)
+        return NEVER_US if wake is None else wake
+
+    def _until_news(self, clock: EventClock, wake_us: int) -> bool:
+        """Run the world towards `wake_us`, stopping at news: then every looking script looks at its next
+        grid instant, if that comes first (True: the queue changed)."""
+        if not clock.advance_until_news(None if wake_us == NEVER_US else wake_us):
+            return False
+        now = clock.now_us
+        for wake, seq, process in list(self._queue):
+            if seq == process.entry and process.look is not None:
+                at = grid_at_or_after(process.start_us, process.period_us, now)
+                if at < wake:
+                    self._push(process, at)
+        return True
 
     def _fail(self, exc: BaseException) -> None:
         if self._error is None:
@@ -237,9 +269,18 @@ class Processes:
         """Run the world to the earliest wake time and return that script, marked stopped if
         anything failed; None when no script is left (the baton goes back to `run`). A sleeper has
         just queued itself, so it gets a script."""
+        clock = self.clock
         while self._queue:
-            wake_us, _, process = heapq.heappop(self._queue)
-            if process.thread is None:  # never started (`run` failed while starting the threads)
+            wake_us, seq, process = self._queue[0]
+            if seq == process.entry and process.thread is not None and self._error is None \
+                    and isinstance(clock, EventClock):
+                try:
+                    if self._until_news(clock, wake_us):
+                        continue
+                except BaseException as exc:  # the world failed: stop every script, then raise it in `run`
+                    self._fail(exc)
+            heapq.heappop(self._queue)
+            if seq != process.entry or process.thread is None:  # stale, or never started (`run` failed)
                 continue
             if self._error is None:
                 try:  # a zero sleep too delivers what is due now, as the clock's own sleep(0) does
@@ -247,7 +288,7 @@ class Processes:
                 except BaseException as exc:  # the world failed: stop every script, then raise it in `run`
                     self._fail(exc)
             if process.look is not None and self._error is None and not self._looked(process):
-                self._push(process, self.clock.now_us + process.period_us)  # as its own sleep would have
+                self._push(process, self._next_look_us(process))  # as its own sleep would have
                 continue
             process.stop = self._error is not None
             return process

@@ -15,6 +15,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TypeVar
 
+from gcs.mission.platform import Platform, platform_of
 from gcs.scenario.reader import MAX_DURATION_S, out_of_range
 from missiontime.durations import parse_duration_s
 
@@ -69,6 +70,14 @@ def mission_time(text: str) -> float:
 def _seconds(text: str, max_s: float, allow_zero: bool) -> float:
     try:
         return parse_duration_s(text, max_s, allow_zero=allow_zero)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def platform(text: str) -> Platform:
+    """lockstep or event (`gcs.mission.platform`)."""
+    try:
+        return platform_of(text)
     except ValueError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
 

@@ -1,4 +1,4 @@
-"""`vil run`: headless missions in lockstep, the paper's Table II by default.
+"""`vil run`: headless missions, in lockstep (the reference) or on the event platform; Table II by default.
 
     vil run                                    # Table II: pool12 cautious/greedy/none, bay24 greedy
     vil run missions/pool12.toml --strategy greedy --seed 3 --json out.json
@@ -7,6 +7,7 @@
     vil run pool12 --loss 0.2 --latency 200ms --duplicate 0.05 # aPad link over UDP through a fault proxy
     VIL_SIGNING_KEY=secret vil run pool12      # MAVLink 2 signing on the aPad link (or --signing-key FILE)
     vil run pool12 --resume                    # continue the run in its folder after a crash (kill -9)
+    vil run bay120-sleep --duration 24h --platform event   # discrete events over an ideal link: seconds
     vil run pool12 --strategy mine.py:slack_first,cautious   # a strategy of your own beside a shipped one
 
 Every run gets a new folder, OUT/SCENARIO-STRATEGY-seedN-runK (K one past the highest there), and
@@ -48,6 +49,7 @@ from gcs.cli.tables import (
 )
 from gcs.mission import checkpoint
 from gcs.mission.checkpoint import CheckpointError
+from gcs.mission.platform import DEFAULT_PLATFORM, PLATFORM_HELP, Platform, platform_title
 from gcs.mission.start import MAX_DELAY_S, PreparedRun, RunOptions, prepare_runs, run_prepared
 from gcs.records.run_folder import RunFolder
 from gcs.results.run_result import RunResult, seed_stats
@@ -89,6 +91,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--theta", type=flags.number_in(*THETA_RANGE),
                         help=f"aMussel time scale in [{THETA_RANGE[0]:g}, {THETA_RANGE[1]:g}] "
                              "(default: the scenario's, 30)")
+    parser.add_argument("--platform", type=flags.platform, default=DEFAULT_PLATFORM, metavar="NAME",
+                        help=PLATFORM_HELP)
     parser.add_argument("--json", type=flags.writable_file, metavar="FILE", help="write the result(s) as JSON")
     parser.add_argument("--out", type=flags.writable_dir, default="runs", metavar="DIR",
                         help="output folder; each run leaves a new DIR/SCENARIO-STRATEGY-seedN-runK/ and "
@@ -147,7 +151,7 @@ def _requests(args: argparse.Namespace) -> list[tuple[Scenario, RunOptions]]:
         duration_s=args.duration, theta=args.theta, draw_fleet=bool(args.seeds or args.draw_fleet),
         loss_frac=args.loss, latency_s=args.latency, jitter_s=args.jitter, duplicate_frac=args.duplicate,
         outages_s=tuple(args.outage), fail_apads=tuple(args.fail_apad), proxy=args.proxy,
-        signing_key=load_key(args.signing_key), resume=args.resume, out=args.out,
+        signing_key=load_key(args.signing_key), resume=args.resume, out=args.out, platform=args.platform,
     )
     scenarios: dict[str, Scenario] = {}
     requests = []
@@ -223,7 +227,8 @@ def _print_results(results: list[RunResult], args: argparse.Namespace, console: 
         console.print(seed_stats_table(seed_stats(results), title))
         console.print(shape_table(results))
     else:
-        title = "Table II reproduction (lockstep SITL)" if not args.scenario else "Mission result"
+        title = f"Table II reproduction ({platform_title(args.platform)})" if not args.scenario else \
+            f"Mission result ({platform_title(args.platform)})"
         console.print(results_table(results, title))
         for table in (apads_table(results), time_table(results),
                       days_table([(f"{r.scenario} {r.strategy} s{r.seed}", r.days) for r in results])):
@@ -235,9 +240,11 @@ def _print_results(results: list[RunResult], args: argparse.Namespace, console: 
     run_s = sum(r.wall_s for r in results)
     each_s = mission_s / len(results)
     length = f"{each_s / 60:.0f} mission minutes" if each_s < 3600 else f"{hms(each_s)} mission time"
-    console.print(f"{len(results)} run(s) of {length}, "
+    logs = "logs, .tlog and traces" if args.platform is Platform.LOCKSTEP else \
+        "logs and traces (no .tlog: the event platform's link carries no bytes)"
+    console.print(f"{len(results)} run(s) of {length} on the {args.platform} platform, "
                   f"{run_s / len(results):.1f} s each (real-time factor {mission_s / run_s:.0f}); "
-                  f"logs, .tlog and traces in {_folders(results)}")
+                  f"{logs} in {_folders(results)}")
     misplaced = misplaced_table(results)
     if misplaced is not None:
         console.print(misplaced)

@@ -100,10 +100,13 @@ class VehicleView:
 class VehicleRegistry:
     """One `VehicleView` per aPad system id (created by its first heartbeat) and one `MusselTable`."""
 
-    def __init__(self, gcs_system_id: int = GCS_SYSTEM_ID, apad_ids: Collection[int] | None = None) -> None:
+    def __init__(self, gcs_system_id: int = GCS_SYSTEM_ID, apad_ids: Collection[int] | None = None,
+                 ideal: bool = False) -> None:
         """`gcs_system_id`: our own system; only its Go Tos count towards the movement cost.
-        `apad_ids`: the aPads expected (only their heartbeats make vehicles); None: any vehicle."""
+        `apad_ids`: the aPads expected (only their heartbeats make vehicles); None: any vehicle.
+        `ideal`: over the event platform's ideal link, which loses nobody and carries no heartbeats."""
         self.gcs_system_id = gcs_system_id
+        self.ideal = ideal
         self.apad_ids = None if apad_ids is None else frozenset(apad_ids)
         self.vehicles: dict[int, VehicleView] = {}
         self.mussels = MusselTable()
@@ -115,6 +118,15 @@ class VehicleRegistry:
         self.fleet_heard_us = -1  # when (our clock) the fleet last spoke (a status, its node's heartbeat); -1: never
         self._seq: dict[tuple[int, int], int] = {}  # (system, component) -> the last sequence number taken
         self.version = 0  # bumped on every change a screen could show
+
+    def silent_us(self, view: VehicleView, now_us: int) -> int:
+        """How long the aPad of `view` has been silent: since its last heartbeat; 0 over the ideal link,
+        which needs none to know the aPad is there (ns-3's ideal protocol: state without signalling)."""
+        return 0 if self.ideal else now_us - view.last_heartbeat_us
+
+    def lapses_us(self, view: VehicleView, silent_us: int) -> int | None:
+        """When the aPad of `view`, heard now, would first have been silent `silent_us`; None: never (ideal)."""
+        return None if self.ideal else view.last_heartbeat_us + silent_us
 
     def believes(self, system_id: int, record: Record) -> bool:
         """Whether a record that came over a transport from `system_id` may be folded in: an aMussel's

@@ -159,12 +159,15 @@ class Link:
         tlog_epoch_us: int = 0,
         append: bool = False,
         apad_ids: Collection[int] | None = None,
+        ideal: bool = False,
     ) -> None:
         """`append` continues an existing .tlog (a resumed mission). `apad_ids`: the aPads this GCS
-        expects (their telemetry alone is believed); None: whatever vehicle is heard."""
+        expects (their telemetry alone is believed); None: whatever vehicle is heard. `ideal`: the event
+        platform's ideal link (gcs.mission.platform), which needs no heartbeat to know who is there: the GCS
+        sends none, and an aPad once heard stays heard (`VehicleRegistry.silent_us`)."""
         self.clock = clock
         self.codec = Codec(system_id, component_id)
-        self.registry = VehicleRegistry(system_id, apad_ids)
+        self.registry = VehicleRegistry(system_id, apad_ids, ideal)
         self.commands = CommandClient(self.send, clock)
         self.params = ParamClient(self.send, self.registry, clock)
         self.dropped: Counter[str] = Counter()  # received messages refused by validation, by reason
@@ -181,8 +184,9 @@ class Link:
         self._heartbeat = mavlink.MAVLink_heartbeat_message(
             mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, mavlink.MAV_STATE_ACTIVE, 3
         )
-        clock.scheduler.every(HEARTBEAT_PERIOD_S, lambda now_us: self.send(self._heartbeat), "gcs.heartbeat",
-                              clock.now_us)
+        if not ideal:
+            clock.scheduler.every(HEARTBEAT_PERIOD_S, lambda now_us: self.send(self._heartbeat), "gcs.heartbeat",
+                                  clock.now_us)
 
     @property
     def vehicles(self) -> dict[int, VehicleView]:

@@ -236,7 +236,7 @@ class ApadActions:
         """Wait until the aPad is heard again (events `link_lost`, `link_back`); False at the bound."""
         if self.link_up():
             return True
-        silent_us = self.clock.now_us - self.api.apad(self.apad_id).last_heartbeat_us
+        silent_us = self.api.link.registry.silent_us(self.api.apad(self.apad_id), self.clock.now_us)
         self._log("link_lost", silent_s=round(us_to_s(silent_us), 1))
         if self.wait_until(self.link_up, timeout_s, interruptible):
             self._log("link_back")
@@ -279,10 +279,15 @@ class ApadActions:
                 return _Looked.YOURS
             return settled()
 
+        def wake_at() -> float | None:  # the first instant time alone could settle it (an event platform's look)
+            times = [t for t in (look_by() if look_by is not None else None, deadline,
+                                 self.settings.mission.duration_s if interruptible else None) if t is not None]
+            return min(times) if times else None
+
         while (looked := settled()) is None:
             if self.control.before_wait is not None:  # the console's hook sees every sleep
                 self._wait(poll_s)
-            elif (looked := self.clock.sleep_until(look, poll_s)) is not _Looked.YOURS:
+            elif (looked := self.clock.sleep_until(look, poll_s, wake_at)) is not _Looked.YOURS:
                 break
             while self.control.paused and not self.control.stop:
                 self._wait(poll_s)

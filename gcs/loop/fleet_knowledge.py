@@ -329,7 +329,8 @@ class FleetKnowledge:
 
     def link_up(self) -> bool:
         """The aPad heard within `LINK_LOST_S`."""
-        return self.clock.now_us - self.api.apad(self.apad_id).last_heartbeat_us <= seconds_to_us(LINK_LOST_S)
+        registry = self.api.link.registry
+        return registry.silent_us(self.api.apad(self.apad_id), self.clock.now_us) <= seconds_to_us(LINK_LOST_S)
 
     def battery_v(self) -> float | None:
         """The aPad's battery, volts, as last heard (None: not heard yet)."""

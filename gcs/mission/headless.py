@@ -1,8 +1,9 @@
-"""Headless mission runs: one scenario in lockstep, a `RunResult` and a run folder out.
+"""Headless mission runs: one scenario on a platform (lockstep or event), a `RunResult` and a run folder out.
 
-The world on a virtual clock (`lockstep_world`), the mission's lifecycle in a `MissionSession`; the
-run folder (`gcs.records.run_folder`) gets the logs as the mission runs, its checkpoint every 10 s,
-and result.json and traces.npz at the end.
+The world on a virtual clock (`headless_world`), the mission's lifecycle in a `MissionSession`; the
+run folder (`gcs.records.run_folder`) gets the logs as the mission runs, its checkpoint every 10 s
+(lockstep: the event platform runs a mission in seconds and keeps none), and result.json and
+traces.npz at the end.
 """
 
 from __future__ import annotations
@@ -13,8 +14,9 @@ from pathlib import Path
 
 from gcs.mission import checkpoint
 from gcs.mission.outcome import write_endpoints, write_outputs
+from gcs.mission.platform import Platform
 from gcs.mission.session import MissionSession
-from gcs.mission.world import LinkOptions, World, lockstep_world
+from gcs.mission.world import LinkOptions, World, headless_world
 from gcs.records.run_folder import RunFolder
 from gcs.results.run_result import RunResult
 from gcs.scenario.reader import Scenario
@@ -33,9 +35,9 @@ def run_stem(scenario: Scenario) -> str:
 def run_mission(
     scenario: Scenario, out_dir: Path | None = None, progress: ProgressFn | None = None,
     options: LinkOptions | None = None,
-    resume: bool = False, on_end: WorldFn | None = None,
+    resume: bool = False, on_end: WorldFn | None = None, platform: Platform = Platform.LOCKSTEP,
 ) -> RunResult:
-    """Run one mission (one aPad or several) in lockstep to its end; write its folder if `out_dir` is given.
+    """Run one mission (one aPad or several) on `platform` to its end; write its folder if `out_dir` is given.
 
     `options` route the aPad link through a fault proxy over UDP and/or sign it. With `out_dir` the
     run checkpoints itself there; `resume` continues from that checkpoint after a crash, by replaying
@@ -43,7 +45,8 @@ def run_mission(
     """
     wall_start = time.perf_counter()
     folder = RunFolder(out_dir) if out_dir is not None else None
-    files = checkpoint.CheckpointFiles(folder.checkpoint) if folder is not None else None
+    keeps = folder is not None and platform is Platform.LOCKSTEP
+    files = checkpoint.CheckpointFiles(folder.checkpoint) if keeps and folder is not None else None
     saved = None
     setup = checkpoint.setup_digest(scenario, options)
     if resume:
@@ -52,7 +55,8 @@ def run_mission(
         saved = files.read()
         checkpoint.check_setup(saved, setup)  # before anything is cut
         checkpoint.cut_logs(folder, saved)  # the stretch after it is simulated again
-    world = lockstep_world(scenario, out_dir, options, append_logs=saved is not None, muted_logs=saved is not None)
+    world = headless_world(scenario, out_dir, options, append_logs=saved is not None, muted_logs=saved is not None,
+                           platform=platform)
     if folder is not None:
         write_endpoints(world, folder)
     session = MissionSession(world, files, saved, replay=True, setup=setup,

@@ -120,6 +120,7 @@ def collect_result(world: World, outcome: Outcome, wall_s: float) -> RunResult:
         happened=happenings(world, outcome),
         **per_day(world, outcome),
         acoustic=world.acoustic.summary() if world.acoustic is not None else {},
+        platform=str(world.platform),
     )
 
 

@@ -36,6 +36,7 @@ from gcs.mission.world import World
 from gcs.results.run_result import RunResult
 from gcs.swarm.shares import FleetShares, SwarmWatch
 from missiontime import Clock, Task, seconds_to_us
+from missiontime.event_clock import EventClock
 from missiontime.processes import Processes
 
 APAD_WAIT_S = 10.0  # lockstep: an embedded aPad is heard at once; this bounds a broken one
@@ -156,6 +157,8 @@ class MissionSession:
             world.events, world.clock, seed=world.scenario.seed, fleet_size=world.scenario.fleet.count)
         if restored is not None:
             watch.retired |= restored.retired
+        if isinstance(world.clock, EventClock):  # a new share is news to a loop waiting on its own
+            world.clock.hears(lambda: shares.version)
         watch.check(world.clock.now_us)
         watch.register(world.clock.now_us + seconds_to_us(1.0))
 

@@ -23,6 +23,7 @@ from acoustic import per
 from gcs.link.faultproxy import LinkFaults
 from gcs.mission.checkpoint import setup_digest
 from gcs.mission.headless import ProgressFn, run_mission
+from gcs.mission.platform import DEFAULT_PLATFORM, NO_CHECKPOINT, WIRE, Platform, wire_only_problem
 from gcs.mission.run_placement import place
 from gcs.mission.world import LinkOptions
 from gcs.records.run_folder import RunFolder
@@ -61,6 +62,7 @@ class RunOptions:
     signing_key: bytes | None = None  # MAVLink 2 signing (the key, sha256 of the passphrase)
     resume: bool = False  # continue the newest folder of this run holding a checkpoint
     out: Path = field(default=RUNS)  # runs go in out/SCENARIO-STRATEGY-seedN-runK
+    platform: Platform = DEFAULT_PLATFORM  # lockstep (the reference) or event (gcs.mission.platform)
 
     def __post_init__(self) -> None:
         problem = _problem(self)
@@ -82,6 +84,9 @@ def _problem(o: RunOptions) -> str | None:
             return f"{name}: {why}"
     if o.duration_s == 0:
         return "duration: must be more than 0 s"
+    wire = wire_only_problem(o.platform, wire_options(o))
+    if wire:
+        return wire
     for name, value in (("loss", o.loss_frac), ("duplicate", o.duplicate_frac)):
         if value >= 1:
             return f"{name}: must be a fraction below 1, got {value:g}"
@@ -95,6 +100,14 @@ def _problem(o: RunOptions) -> str | None:
     return None
 
 
+def wire_options(o: RunOptions) -> list[tuple[str, str]]:
+    """(option, why) for each option given that only lockstep honours, in the order --help lists them."""
+    given = [("loss", o.loss_frac > 0), ("latency", o.latency_s > 0), ("jitter", o.jitter_s > 0),
+             ("duplicate", o.duplicate_frac > 0), ("outage", bool(o.outages_s)), ("fail-apad", bool(o.fail_apads)),
+             ("proxy", o.proxy), ("signing key (--signing-key or $VIL_SIGNING_KEY)", o.signing_key is not None)]
+    return [(name, WIRE) for name, asked in given if asked] + ([("resume", NO_CHECKPOINT)] if o.resume else [])
+
+
 @dataclass(frozen=True)
 class PreparedRun:
     """A run ready to go: its scenario as run, its folder, how its link is made, whether it resumes."""
@@ -105,6 +118,7 @@ class PreparedRun:
     resume_from_s: float | None = None  # resuming: the mission time of its checkpoint
     finished: RunResult | None = None  # several resumed at once: this one had ended, its result is kept
     strategy_source: str = ""  # what loads the strategy in another process (one from outside the package)
+    platform: Platform = DEFAULT_PLATFORM
 
     @property
     def resume(self) -> bool:
@@ -193,7 +207,7 @@ def prepare_runs(requests: Sequence[tuple[Scenario, RunOptions]], command: str, 
         runs.append((s, options))
     placed = place([(s, o.out, o.resume, setup_digest(s, link_options(o))) for s, o in runs], command, say)
     prepared = [PreparedRun(s, p.out_dir, link_options(o), p.resume_from_s, p.finished,
-                            source_of(s.mission.collect_strategy))
+                            source_of(s.mission.collect_strategy), o.platform)
                 for (s, o), p in zip(runs, placed, strict=True)]
     RunFolder(prepared[-1].out_dir).point_latest()
     for run in prepared:
@@ -216,4 +230,5 @@ def run_prepared(run: PreparedRun, progress: ProgressFn | None = None) -> RunRes
     load_strategy(run.strategy_source or run.scenario.mission.collect_strategy)
     if run.scenario.acoustic.enabled:
         per.load()  # the channel's curve imports scipy.special at first use: here, not in the run's wall time
-    return run_mission(run.scenario, run.out_dir, progress=progress, options=run.link, resume=run.resume)
+    return run_mission(run.scenario, run.out_dir, progress=progress, options=run.link, resume=run.resume,
+                       platform=run.platform)

@@ -1,9 +1,11 @@
 """The one builder of a mission's world: the aMussel fleet, the GCS link and API, and the aPad.
 
-Headless runs (`lockstep_world`) put the SITL aPad, the fleet and the GCS on one virtual clock;
-the aPad is reached over an in-memory pair (or localhost UDP, or a fault proxy) with real MAVLink
-bytes both ways. The console builds the same world on its own clock, with the embedded SITL
-aPad or a real one at an address.
+Headless runs (`headless_world`) put the SITL aPad, the fleet and the GCS on one virtual clock, on
+either platform (`gcs.mission.platform`): lockstep, the aPad reached over an in-memory pair (or
+localhost UDP, or a fault proxy) with real MAVLink bytes both ways; or the event platform, the same
+parts on an `EventClock` over the ideal link (no heartbeats, no .tlog, reports by exception, the
+fleet stepped only when it changes). The console builds the same world on its own clock, with the
+embedded SITL aPad or a real one at an address.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from gcs.link.router import Link
 from gcs.loop.control import LoopControl, LoopSettings, LoopStatus
 from gcs.loop.energy_sharing import EnergySharingLoop
 from gcs.loop.telemetry_pace import MISSION_TELEMETRY_HZ
+from gcs.mission.platform import Platform
 from gcs.records.events import EventLog
 from gcs.records.run_folder import RunFolder
 from gcs.scenario.model_params import (
@@ -44,6 +47,7 @@ from gcs.swarm.shares import FleetShares
 from mavlink_dialect import Codec, Transport, mavlink, memory_pair, open_transport, signing
 from mavlink_dialect.transport import UdpTransport
 from missiontime import Clock, VirtualClock, seconds_to_us
+from missiontime.event_clock import EventClock
 from mussel_sim.battery import charge_profile, discharge_profile
 from mussel_sim.comms import FLEET_COMPONENT_ID, FLEET_SYSTEM_ID, CommsConfig, FleetRunner
 from mussel_sim.day_ledger import day_us
@@ -109,6 +113,7 @@ class World:
     folder: RunFolder | None = None  # where the logs go; None: no logs
     options: LinkOptions = field(default_factory=lambda: LinkOptions())  # how the aPads are reached
     acoustic: AcousticNetwork | None = None  # [acoustic] enabled: the channel, the modems, belief vs truth
+    platform: Platform = Platform.LOCKSTEP  # what it runs on: every byte on the wire, or discrete events
 
     @property
     def vehicle(self) -> SitlVehicle | None:
@@ -188,10 +193,11 @@ def build_world(
     mission_start_us: int | None = None,
     append_logs: bool = False,
     muted_logs: bool = False,
+    platform: Platform = Platform.LOCKSTEP,
 ) -> World:
     """The one builder of a mission's world on `clock`: the simulated fleet, the GCS link and API,
     and the aPad, embedded (SITL) or reached at `options.connect`. Used by `vil run`, `vil gcs`
-    and the tests.
+    and the tests. `platform` EVENT (on an `EventClock`): the same parts over the ideal link.
 
     `epoch_us` is the Unix time of mission time 0 in the logs (lockstep: a fixed date, so logs
     repeat). `mission_start_us` is when the mission began (default: now; a resumed mission began
@@ -199,6 +205,7 @@ def build_world(
     writes nothing to them from the start (a lockstep resume replays what they hold: `World.mute_logs`).
     """
     options = options or LinkOptions()
+    event = platform is Platform.EVENT
     rng = np.random.default_rng(scenario.seed)
     start_us = clock.now_us if mission_start_us is None else mission_start_us
     area = load_area(scenario.fleet.area)
@@ -208,8 +215,8 @@ def build_world(
     if folder is not None:
         folder.path.mkdir(parents=True, exist_ok=True)
     apad_ids = frozenset(a.system_id for a in scenario.apads)  # only their telemetry is believed
-    link = Link(clock, tlog_path=folder.gcs_tlog if folder else None, tlog_epoch_us=epoch_us,
-                append=append_logs, apad_ids=apad_ids)
+    link = Link(clock, tlog_path=folder.gcs_tlog if folder and not event else None, tlog_epoch_us=epoch_us,
+                append=append_logs, apad_ids=apad_ids, ideal=event)
     events = EventLog(folder.events if folder else None, append=append_logs)
     port = link.attach(None, forward=APAD_HEARS_FROM_FLEET, system_id=FLEET_SYSTEM_ID, hears=HEARD_MESSAGES)
     state = initial_state(config, frame, params, clock.now_us)
@@ -234,7 +241,10 @@ def build_world(
         for i, lat, lon in zip(config.ids, config.lat_deg, config.lon_deg, strict=True)
     }
     world = World(scenario, clock, link, api, fleet, frame, config, homes, events, geofence_deg=fence, folder=folder,
-                  options=options)
+                  options=options, platform=platform)
+    if isinstance(clock, EventClock):  # its waits look when the GCS hears anything
+        clock.hears(lambda: link.registry.version)
+        clock.hears(lambda: link.registry.mussels.version)
     world.mute_logs(muted_logs)
     if scenario.acoustic.enabled:
         world.acoustic = AcousticNetwork.build(
@@ -337,13 +347,15 @@ def _apad_modem(world: World, a: ApadConfig) -> tuple[BytePort, Callable[[], Non
     return modem.modem_end, lambda: network.place_apad_unit(a.system_id, world.vehicles[a.system_id].position_deg)
 
 
-def lockstep_world(
+def headless_world(
     scenario: Scenario, out_dir: Path | None = None, options: LinkOptions | None = None,
-    append_logs: bool = False, muted_logs: bool = False,
+    append_logs: bool = False, muted_logs: bool = False, platform: Platform = Platform.LOCKSTEP,
 ) -> World:
-    """Everything on one virtual clock from mission time 0, run at CPU speed."""
-    return build_world(scenario, VirtualClock(), out_dir, options, mission_start_us=0, append_logs=append_logs,
-                       muted_logs=muted_logs)
+    """Everything on one virtual clock from mission time 0, run at CPU speed: lockstep's, or the event
+    platform's `EventClock`."""
+    clock = EventClock() if platform is Platform.EVENT else VirtualClock()
+    return build_world(scenario, clock, out_dir, options, mission_start_us=0, append_logs=append_logs,
+                       muted_logs=muted_logs, platform=platform)
 
 
 def loop_settings(s: Scenario, a: ApadConfig, ids: list[int]) -> LoopSettings:

@@ -73,6 +73,8 @@ class RunResult:
     # An acoustic scenario's channel: the TDMA frame and slot table, reports sent and heard, call-ups,
     # drops by reason, and belief against truth (`gcs.acoustic_net.network.AcousticNetwork.summary`); {}: WiFi only
     acoustic: dict[str, Any] = field(default_factory=dict)
+    # What it ran on (gcs.mission.platform): "lockstep" (every byte on the wire) or "event" (discrete events)
+    platform: str = "lockstep"
 
     def to_json(self) -> dict[str, Any]:
         return asdict(self)

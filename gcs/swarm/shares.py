@@ -144,7 +144,7 @@ class SwarmWatch:
             view = self.registry.vehicles.get(sysid)
             if view is None or view.lat_deg is None or view.lon_deg is None:
                 continue
-            if now_us - view.last_heartbeat_us > seconds_to_us(APAD_LOST_S):
+            if self.registry.silent_us(view, now_us) > seconds_to_us(APAD_LOST_S):
                 continue
             if view.battery_v is not None and view.battery_v <= end_v:
                 continue
@@ -232,7 +232,7 @@ def route_conflicts(api: ApadApi, apad: int, target: Location, separation_m: flo
             continue
         points = [(view.lat_deg, view.lon_deg)]  # a silent aPad is still an obstacle where last seen
         going = view.expected
-        heard = now_us - view.last_heartbeat_us <= seconds_to_us(APAD_LOST_S)
+        heard = api.link.registry.silent_us(view, now_us) <= seconds_to_us(APAD_LOST_S)
         if (heard and going is not None and going.kind == Primitive.GOTO and going.matches(view.primitive)
                 and view.primitive.progress == Progress.IN_PROGRESS):
             points.append((going.a / DEG_E7, going.b / DEG_E7))
@@ -248,7 +248,8 @@ def others_lapse_s(api: ApadApi, apad: int) -> float | None:
     """When another aPad heard now could first count as silent (`route_conflicts` then no longer counts
     where its Go To is taking it), mission s; None if none is heard."""
     now_us = api.clock.now_us
-    times = [view.last_heartbeat_us + seconds_to_us(APAD_LOST_S) for sysid, view in api.link.vehicles.items()
+    registry = api.link.registry
+    times = [registry.lapses_us(view, seconds_to_us(APAD_LOST_S)) for sysid, view in api.link.vehicles.items()
              if sysid != apad]
-    ahead = [t for t in times if t >= now_us]
+    ahead = [t for t in times if t is not None and t >= now_us]
     return min(ahead) / US_PER_S if ahead else None

@@ -201,16 +201,16 @@ GCS_ORDERS = frozenset({"COMMAND_LONG", "COMMAND_INT", "SET_MODE", "PARAM_SET"})
 
 
 class FuzzWorld:
-    """A mission's world (`gcs.mission.world.lockstep_world`: the fleet as the link's local party, the
+    """A mission's world (`gcs.mission.world.headless_world`: the fleet as the link's local party, the
     SITL aPad on an in-memory pair) with a door into each receive path: `to_gcs` lands frames in the
     GCS link's transport as if the aPad sent them, `to_apad` in the aPad's as if a GCS did."""
 
     def __init__(self, seed: int, scenario: str = "pool12", senders_ids: Sequence[tuple[int, int]] = GCS_SENDERS,
                  hostile_share: float = 0.5, classes: Sequence[type[Any]] = MESSAGE_CLASSES) -> None:
-        from gcs.mission.world import lockstep_world
+        from gcs.mission.world import headless_world
         from gcs.scenario.reader import load_scenario
 
-        self.world = lockstep_world(load_scenario(scenario))
+        self.world = headless_world(load_scenario(scenario))
         self.world.clock.sleep(1.0)  # heartbeats exchanged: the aPad is a known vehicle
         vehicle = self.world.vehicle
         assert vehicle is not None

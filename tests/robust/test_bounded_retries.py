@@ -18,7 +18,7 @@ from testkit import read_jsonl, scenario_variant
 
 from gcs.link.faultproxy import LinkFaults
 from gcs.mission.headless import run_mission
-from gcs.mission.world import LinkOptions, lockstep_world
+from gcs.mission.world import LinkOptions, headless_world
 from gcs.scenario.reader import load_scenario
 from mavlink_dialect import mavlink
 
@@ -95,7 +95,7 @@ def test_a_link_that_dies_for_good_stops_new_work_and_the_mission_still_ends(tmp
 
 
 def test_telemetry_rates_the_apad_refuses_are_logged_not_fatal(tmp_path: Path) -> None:
-    world = lockstep_world(load_scenario("pool12"), tmp_path)
+    world = headless_world(load_scenario("pool12"), tmp_path)
     try:
         world.api.wait_apad(timeout_s=10.0)
         refused = world.api.set_telemetry_rates({mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: 2.0, 54321: 1.0})

@@ -18,7 +18,7 @@ from gcs.link.faultproxy import LinkFaults
 from gcs.loop.phases import charge_and_redeploy, collect
 from gcs.loop.telemetry_pace import MISSION_TELEMETRY_HZ
 from gcs.mission.headless import run_mission
-from gcs.mission.world import LinkOptions, lockstep_world
+from gcs.mission.world import LinkOptions, headless_world
 from gcs.results.accounting import HOME_TOLERANCE_M, account
 from gcs.scenario.reader import load_scenario
 from mavlink_dialect import mavlink
@@ -30,7 +30,7 @@ pytestmark = pytest.mark.sitl
 
 def test_an_amussel_whose_docking_failed_off_its_position_is_fetched_again_and_put_back(tmp_path: Path) -> None:
     faults = LinkFaults(loss_frac=0.2, latency_s=0.2, seed=1)
-    world = lockstep_world(load_scenario("pool12"), tmp_path, LinkOptions(faults=faults))
+    world = headless_world(load_scenario("pool12"), tmp_path, LinkOptions(faults=faults))
     try:
         api = world.api
         api.wait_apad(timeout_s=10.0)
@@ -67,7 +67,7 @@ def test_an_amussel_whose_docking_failed_where_it_floated_is_sent_down_on_its_po
     """The aPad refuses the docking (its reach set to 10 cm over the link: it never comes that close):
     the aMussel floated above its position, goes down there, and the outcome is counted."""
     faults = LinkFaults(loss_frac=0.2, latency_s=0.2, seed=1)
-    world = lockstep_world(load_scenario("pool12"), tmp_path, LinkOptions(faults=faults))
+    world = headless_world(load_scenario("pool12"), tmp_path, LinkOptions(faults=faults))
     try:
         world.api.wait_apad(timeout_s=10.0)
         world.request_telemetry()

@@ -15,7 +15,7 @@ from robust_helpers import FRAME, SYSID, latlon_e7, sitl_pair
 from apad_sitl.vocabulary import Latch
 from gcs.link.apad_api import GeofenceError
 from gcs.mission.headless import run_mission
-from gcs.mission.world import lockstep_world
+from gcs.mission.world import headless_world
 from gcs.scenario.reader import load_scenario
 from mavlink_dialect import MAV_CMD_APAD_DOCK, MAV_CMD_APAD_UNDOCK, mavlink
 from mussel_sim.fleet import step
@@ -62,7 +62,7 @@ def test_sitl_refuses_go_to_outside_the_geofence_and_undocking_over_land() -> No
 
 
 def test_gcs_refuses_to_send_a_go_to_outside_the_geofence() -> None:
-    world = lockstep_world(load_scenario("pool12"))
+    world = headless_world(load_scenario("pool12"))
     try:
         world.api.wait_apad()
         sent = world.link.codec.stats.sent
@@ -87,7 +87,7 @@ def test_the_loop_calls_up_only_with_the_apad_within_acoustic_range(tmp_path: Pa
 
 
 def test_the_fleet_itself_refuses_to_surface_out_of_range() -> None:
-    world = lockstep_world(load_scenario("bay24"))
+    world = headless_world(load_scenario("bay24"))
     try:
         fleet = world.fleet
         first = int(fleet.state.ids[0])

@@ -11,7 +11,7 @@ import pytest
 from testkit import read_jsonl, scenario_variant
 
 from gcs.mission.headless import run_mission
-from gcs.mission.world import lockstep_world
+from gcs.mission.world import headless_world
 from gcs.scenario.reader import load_scenario
 from mussel_sim.battery import DISCHARGE_ACTIVE_PER_MIN
 from mussel_sim.behaviour import duty_cycle_rate_per_min
@@ -23,7 +23,7 @@ pytestmark = pytest.mark.sitl
 
 
 def test_a_sleep_order_from_the_api_changes_discharge_and_status_and_holds_a_call_up() -> None:
-    world = lockstep_world(load_scenario("pool12"))
+    world = headless_world(load_scenario("pool12"))
     try:
         api, clock, fleet = world.api, world.clock, world.fleet
         api.wait_apad(timeout_s=10.0)

@@ -13,7 +13,7 @@ from apad_sitl.vocabulary import Latch
 from gcs.link.apad_api import Location
 from gcs.link.telemetry import SlotView
 from gcs.mission.headless import run_mission
-from gcs.mission.world import LinkOptions, lockstep_world
+from gcs.mission.world import LinkOptions, headless_world
 from gcs.scenario.reader import load_scenario
 from gcs.swarm.shares import FleetShares, SwarmWatch, route_conflicts
 from missiontime import US_PER_S
@@ -78,7 +78,7 @@ def test_a_failed_apad_is_noticed_its_share_is_taken_over_and_nothing_is_lost(tm
 
 
 def test_an_apad_whose_loop_ended_is_retired_and_its_share_goes_to_the_others() -> None:
-    world = lockstep_world(load_scenario("pool12x2"))
+    world = headless_world(load_scenario("pool12x2"))
     try:
         for sysid in (1, 2):
             world.api.wait_apad(timeout_s=10.0, apad_id=sysid)
@@ -95,7 +95,7 @@ def test_an_apad_whose_loop_ended_is_retired_and_its_share_goes_to_the_others() 
 
 
 def test_a_leg_passing_another_apad_is_a_conflict_and_one_clear_of_it_is_not() -> None:
-    world = lockstep_world(load_scenario("pool12x2"))
+    world = headless_world(load_scenario("pool12x2"))
     try:
         for sysid in (1, 2):
             world.api.wait_apad(timeout_s=10.0, apad_id=sysid)
@@ -115,7 +115,7 @@ def test_a_leg_passing_another_apad_is_a_conflict_and_one_clear_of_it_is_not() -
 def test_each_apad_waits_for_its_shares_part_of_the_pool_not_the_whole_fleets() -> None:
     """docs/strategies.md, pool12x2: with min_pool 4 of a fleet of 12, an aPad with a share of 6 waits
     for 2 candidates (it waited for 4 of its 6 and set off late); one aPad waits for 4 as ever."""
-    world = lockstep_world(load_scenario("pool12x2"))
+    world = headless_world(load_scenario("pool12x2"))
     try:
         shares = FleetShares(owner={m: 1 if m <= 6 else 2 for m in range(1, 13)})
         assert world.mission_loop(apad_id=1, shares=shares).knows.pool_needed(4) == 2
@@ -130,7 +130,7 @@ def test_each_apad_waits_for_its_shares_part_of_the_pool_not_the_whole_fleets() 
 def test_an_amussel_docked_on_another_apad_is_believed_charging_until_a_slot_lets_it_go() -> None:
     """The GCS runs a docked aMussel's last report forward charging (`foresight`) until an aPad says a slot
     let go of it: also when the slot is another aPad's (aPad 1 believed one on aPad 2's slot draining)."""
-    world = lockstep_world(load_scenario("pool12x2"))
+    world = headless_world(load_scenario("pool12x2"))
     try:
         for sysid in (1, 2):
             world.api.wait_apad(timeout_s=10.0, apad_id=sysid)

@@ -25,7 +25,7 @@ from gcs.loop.telemetry_pace import (
     TelemetryPace,
 )
 from gcs.mission.headless import run_mission
-from gcs.mission.world import LOCKSTEP_EPOCH_US, LinkOptions, lockstep_world
+from gcs.mission.world import LOCKSTEP_EPOCH_US, LinkOptions, headless_world
 from gcs.records.run_folder import RunFolder
 from gcs.scenario.reader import load_scenario
 from mavlink_dialect import Codec, mavlink, tlog
@@ -152,7 +152,7 @@ def test_a_rate_request_lost_on_the_link_is_asked_again_at_the_next_change(tmp_p
     docking failed. The lost one must not count as made: the next change asks for it again."""
     out = tmp_path / "run"
     faults = LinkFaults(outages_s=((20.0, 22.4),))  # the position's two sends (20 s, 21 s), not the primitive's
-    world = lockstep_world(load_scenario("pool12"), out, LinkOptions(faults=faults))
+    world = headless_world(load_scenario("pool12"), out, LinkOptions(faults=faults))
     try:
         world.api.wait_apad(timeout_s=10.0)
         pace = TelemetryPace(world.api, world.scenario.apad.system_id, LoopLog(world.events, world.clock))

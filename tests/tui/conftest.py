@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from gcs.loop.energy_sharing import LoopControl
-from gcs.mission.world import MISSION_TELEMETRY_HZ, lockstep_world
+from gcs.mission.world import MISSION_TELEMETRY_HZ, headless_world
 from gcs.scenario.reader import load_scenario
 
 MISSIONS = Path(__file__).resolve().parents[2] / "missions"
@@ -20,7 +20,7 @@ STOP_AT_S = 240.0
 
 def record_run(out_dir: Path, stop_at_s: float = STOP_AT_S) -> Path:
     scenario = load_scenario(MISSIONS / "pool12.toml")
-    world = lockstep_world(scenario, out_dir)
+    world = headless_world(scenario, out_dir)
     control = LoopControl()
     try:
         world.clock.scheduler.every(stop_at_s, lambda now_us: setattr(control, "stop", True), "stop",

@@ -23,7 +23,7 @@ from shapely.geometry import LinearRing
 from gcs.cli.main import main
 from gcs.loop.energy_sharing import LoopControl
 from gcs.mission.headless import run_mission
-from gcs.mission.world import MISSION_TELEMETRY_HZ, LinkOptions, lockstep_world
+from gcs.mission.world import MISSION_TELEMETRY_HZ, LinkOptions, headless_world
 from gcs.report.load import load_run
 from gcs.scenario.reader import load_scenario
 
@@ -188,7 +188,7 @@ def test_a_strategy_switch_and_a_docking_the_loop_did_not_list_are_reported(tmp_
     """Issue 23: a console session read "strategy -" (it was cautious, then weighted) and an aMussel
     "docked" yet "never collected, 0 dockings" (docked by the operator, so not in the loop's list)."""
     run = tmp_path / "switched"
-    world = lockstep_world(load_scenario("pool12"), run)
+    world = headless_world(load_scenario("pool12"), run)
     control = LoopControl()
     try:
         world.clock.scheduler.every(60.0, lambda now_us: setattr(control, "strategy", "weighted"), "switch", 60_000_000)

@@ -1,0 +1,91 @@
+"""Discrete-event time: the event platform's clock (gcs.mission.platform).
+
+On the event platform the world's tasks are sparse (no heartbeats, no periodic streams, models stepped
+only when they change), so moving the clock is already a jump from one task to the next, as in
+lockstep's `VirtualClock`. What differs is waiting. A lockstep wait looks at every poll period (the
+field's sleep loop, the reference); here a wait looks only where its answer could have changed:
+
+- after news: an instant at which the GCS heard something (`news`: counters the world hands in with
+  `hears`, a table's version, a share's), and
+- at its wake time: the first instant time alone could settle it (the wait's own declaration,
+  `gcs.loop.wake_times`, its deadline, the mission's end).
+
+Both are put on the wait's own poll grid (start + k period, the instants lockstep would look at), so a
+wait ends at the instant lockstep's would whenever both see the same news: the event platform skips the
+looks that could not have answered, it does not move the others. A wake time already past (a belief
+that cannot say) falls back to the next grid instant: lockstep's polling, never a missed answer.
+
+Bounded: a wait with nothing left to wake it (no task due, no wake time) is a bug, raised as
+`StalledWait`, not a hang.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TypeVar
+
+from missiontime.clocks import Scheduler, VirtualClock, seconds_to_us
+
+T = TypeVar("T")
+
+WakeFn = Callable[[], float | None]  # the first mission second time alone could settle a wait; None: only news
+
+
+class StalledWait(RuntimeError):
+    """A wait that nothing can end: no task is due and it named no wake time."""
+
+
+def grid_at_or_after(start_us: int, period_us: int, t_us: int) -> int:
+    """The first instant start + k period (k >= 1) at or after `t_us`: where a lockstep wait would look."""
+    k = max(-(-(t_us - start_us) // period_us), 1)
+    return start_us + k * period_us
+
+
+class EventClock(VirtualClock):
+    """`VirtualClock` whose waits look at news and at their wake time (module docstring)."""
+
+    def __init__(self, scheduler: Scheduler | None = None, start_us: int = 0) -> None:
+        super().__init__(scheduler, start_us)
+        self._sources: list[Callable[[], int]] = []
+        self.looks = 0  # looks taken by waits (bench/platforms.py: what skipping them saved)
+
+    def hears(self, source: Callable[[], int]) -> None:
+        """Count `source` (a counter that only grows) as news: it moves when the GCS learns something."""
+        self._sources.append(source)
+
+    def news(self) -> int:
+        return sum(source() for source in self._sources)
+
+    def advance_until_news(self, target_us: int | None) -> bool:
+        """Run the world instant by instant up to `target_us` (None: unbounded), stopping after the first
+        instant that brought news; True if one did (the clock is then at it), else the clock is at `target_us`."""
+        sched, mark = self.scheduler, self.news()
+        sched.now_us = self.now_us
+        sched.drain()
+        if self.news() != mark:
+            return True
+        while self.run_next(target_us):
+            if self.news() != mark:
+                return True
+        if target_us is None:
+            raise StalledWait("event platform: a wait with nothing left to happen and no wake time")
+        self.advance_to(target_us)
+        return self.news() != mark
+
+    def wake_us(self, start_us: int, period_us: int, wake_at: WakeFn | None) -> int | None:
+        """Where a wait started at `start_us` looks next by time alone: its wake time on its grid (at least
+        the next grid instant after now), or None when only news can end it."""
+        wake_s = wake_at() if wake_at is not None else None
+        if wake_s is None:
+            return None
+        return grid_at_or_after(start_us, period_us, max(seconds_to_us(wake_s), self.now_us + 1))
+
+    def sleep_until(self, look: Callable[[], T | None], period_s: float, wake_at: WakeFn | None = None) -> T:
+        start_us, period_us = self.now_us, max(seconds_to_us(period_s), 1)
+        while True:
+            if self.advance_until_news(self.wake_us(start_us, period_us, wake_at)):
+                self.advance_to(grid_at_or_after(start_us, period_us, self.now_us))  # news: seen at the next look
+            self.looks += 1
+            answer = look()
+            if answer is not None:
+                return answer
