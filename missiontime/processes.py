@@ -184,6 +184,7 @@ class Processes:
         self._steering: _Steering | None = None  # made by `run` (Linux)
         self.current: str | None = None
         self.hand_overs = 0
+        self._seen_news: int | None = None  # EventClock: the news the looking scripts were last woken for
 
     def spawn(self, name: str, script: Callable[[Clock], T]) -> Handle[T]:
         """Add a script; it starts at `run`, at the clock's time then, with its own `ProcessClock`."""
@@ -249,10 +250,11 @@ class Processes:
         return NEVER_US if wake is None else wake
 
     def _until_news(self, clock: EventClock, wake_us: int) -> bool:
-        """Run the world towards `wake_us`, stopping at news: then every looking script looks at its next
-        grid instant, if that comes first (True: the queue changed)."""
-        if not clock.advance_until_news(None if wake_us == NEVER_US else wake_us):
+        """Run the world towards `wake_us`, stopping at news (the world's, or a script's since the last
+        look): then every looking script looks at its next grid instant, if that comes first. True: news."""
+        if clock.news() == self._seen_news and not clock.advance_until_news(None if wake_us == NEVER_US else wake_us):
             return False
+        self._seen_news = clock.news()
         now = clock.now_us
         for wake, seq, process in list(self._queue):
             if seq == process.entry and process.look is not None:

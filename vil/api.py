@@ -52,8 +52,9 @@ def run(
     loss: float = 0.0, latency: Seconds = 0.0, jitter: Seconds = 0.0, duplicate: float = 0.0,
     outages: Iterable[Window] = (), fail_apads: Iterable[ApadAt] = (), proxy: bool = False,
     signing_key: str | Path | None = None, resume: bool = False, out: str | Path = RUNS,
+    platform: str = "lockstep",
 ) -> Result:
-    """One mission in lockstep, as `vil run` runs it with the same flags (same figures), in a new folder
+    """One mission, as `vil run` runs it with the same flags (same figures), in a new folder
     `out/SCENARIO-STRATEGY-seedN-runK` (`latest` points at it). Lengths of time are seconds or strings
     with their unit ("40m", "24h", "200ms").
 
@@ -62,13 +63,15 @@ def run(
     (92, 112)), `fail_apads` aPads silent for good from a time ("3:10min" or (3, 600)); `proxy` routes
     through it with no faults. `signing_key` signs the link: a passphrase (str) or a key file (Path);
     None: $VIL_SIGNING_KEY if set, as `vil run`. `resume`: continue the newest folder of this run that
-    holds a checkpoint (after a crash), with the options it was started with.
+    holds a checkpoint (after a crash), with the options it was started with. `platform`: "lockstep"
+    (every MAVLink byte on the wire, the reference) or "event" (discrete events over an ideal link, tens of
+    times faster; the wire's options are refused there: docs/platforms.md).
     """
     base = of if isinstance(of, Scenario) else scenario(of)
     given: dict[str, Any] = dict(
         strategy=strategy, seed=seed, duration=duration, theta=theta, draw_fleet=draw_fleet, loss=loss,
         latency=latency, jitter=jitter, duplicate=duplicate, outages=tuple(outages), fail_apads=tuple(fail_apads),
-        proxy=proxy,
+        proxy=proxy, platform=platform,
     )
     try:
         options = run_options(**given, signing_key=signing_key, resume=resume, out=out)

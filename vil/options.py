@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import TypeVar
 
 from gcs.cli import flags
+from gcs.mission.platform import Platform, platform_of
 from gcs.mission.start import MAX_DELAY_S, RUNS, RunOptions
 from gcs.scenario.fields import out_of_range
 from gcs.strategies import load_strategy
@@ -26,6 +27,7 @@ def run_options(
     *, strategy: str | None, seed: int | None, duration: Seconds | None, theta: float | None, draw_fleet: bool,
     loss: float, latency: Seconds, jitter: Seconds, duplicate: float, outages: Iterable[Window],
     fail_apads: Iterable[ApadAt], proxy: bool, signing_key: str | Path | None, resume: bool, out: str | Path | None,
+    platform: str = "lockstep",
 ) -> RunOptions:
     """The options of one run. `signing_key`: a passphrase (str) or a key file (Path); None: as `vil run`,
     $VIL_SIGNING_KEY if set. `ScenarioError`, `StrategyError`, `SigningKeyError` or `ValueError`: one line."""
@@ -39,7 +41,17 @@ def run_options(
         outages_s=tuple(_window(w) for w in outages), fail_apads=tuple(_apad_at(a) for a in fail_apads),
         proxy=bool(proxy), signing_key=key_from_passphrase(signing_key) if isinstance(signing_key, str)
         else load_key(signing_key), resume=bool(resume), out=RUNS if out is None else Path(out),
+        platform=_platform(platform),
     )
+
+
+def _platform(value: object) -> Platform:
+    if not isinstance(value, str):
+        raise ValueError(f"platform: expected \"lockstep\" or \"event\", got {value!r}")
+    try:
+        return platform_of(value)
+    except ValueError as exc:
+        raise ValueError(f"platform: {exc}") from None
 
 
 def seconds(name: str, value: Seconds, max_s: float = MAX_MISSION_S, allow_zero: bool = False) -> float:

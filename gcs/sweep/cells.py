@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gcs.mission.headless import run_mission, run_stem
+from gcs.mission.platform import DEFAULT_PLATFORM, Platform
 from gcs.mission.start import RunOptions, check_start, check_strategy, variant
 from gcs.mission.world import World
 from gcs.scenario.reader import Scenario, ScenarioError, load_scenario, scenario_from_data
@@ -41,6 +42,7 @@ class Cell:
     strategy: str
     seed: int
     strategy_source: str = ""  # what loads a strategy from outside the package on a worker (`load_strategy`)
+    platform: Platform = DEFAULT_PLATFORM
 
     @property
     def label(self) -> str:
@@ -73,10 +75,11 @@ def make_cells(spec: SweepSpec) -> list[Cell]:
                 raise spec.fail(f"{ref}" + (f" with {given}" if given else "") + f": {exc}") from None
             for strategy in strategies:
                 for seed in spec.seeds:
-                    key = cell_key(base.name, data, strategy, seed, spec.draw_fleet, fingerprint(strategy))
+                    key = cell_key(base.name, data, strategy, seed, spec.draw_fleet, fingerprint(strategy),
+                                   spec.platform)
                     scenario = variant(base, replace(fleet, strategy=strategy, seed=seed))
                     cells.append(Cell(len(cells), key, scenario, dict(point), strategy, seed,
-                                      source_of(strategy)))
+                                      source_of(strategy), spec.platform))
     seen: dict[str, Cell] = {}
     for cell in cells:
         if cell.key in seen:
@@ -107,17 +110,20 @@ def patched(raw: dict[str, Any], fields: dict[str, Value]) -> dict[str, Any]:
     return data
 
 
-def cell_key(name: str, data: dict[str, Any], strategy: str, seed: int, draw_fleet: bool, code: str = "") -> str:
+def cell_key(name: str, data: dict[str, Any], strategy: str, seed: int, draw_fleet: bool, code: str = "",
+             platform: Platform = DEFAULT_PLATFORM) -> str:
     """`code`: a strategy from outside the package, its file's digest (an edited file: new cells)."""
     inputs = {"scenario": name, "fields": data, "strategy": strategy, "seed": seed, "draw_fleet": draw_fleet}
     if code:  # shipped strategies' keys stay what they were
         inputs["code"] = code
+    if platform is not Platform.LOCKSTEP:  # lockstep cells' keys stay what they were
+        inputs["platform"] = str(platform)
     text = json.dumps(inputs, sort_keys=True, separators=(",", ":"), default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 def run_cell(cell: Cell, runs_dir: str | None = None) -> dict[str, Any]:
-    """On a worker: one mission in lockstep; its result.json and active-count series as plain data.
+    """On a worker: one mission on the cell's platform; its result.json and active-count series as plain data.
 
     `runs_dir`: keep the run's folder there (.tlog, logs, traces); without it the run writes nothing.
     """
@@ -129,7 +135,7 @@ def run_cell(cell: Cell, runs_dir: str | None = None) -> dict[str, Any]:
         series.update(active_series(rec.step_time_us(), rec.active_count(), world.scenario.mission.duration_s))
 
     out = Path(runs_dir) / f"{run_stem(cell.scenario)}-{cell.key}" if runs_dir is not None else None
-    result = run_mission(cell.scenario, out, on_end=keep_series)
+    result = run_mission(cell.scenario, out, on_end=keep_series, platform=cell.platform)
     return {"result": result.to_json(), "series": series}
 
 

@@ -5,6 +5,7 @@
     strategies = "all"                # or a list; "all" = every collect strategy registered now
     seeds = "1-20"                    # a range "A-B", or a list of integers
     draw_fleet = true                 # each seed draws its fleet (as `vil run --seeds`); false: the saved start
+    platform = "event"                # or "lockstep" (the default): what every cell runs on (docs/platforms.md)
 
     [set]                             # the same in every cell
     mission.duration = "20m"
@@ -40,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from gcs.mission.platform import DEFAULT_PLATFORM, Platform, platform_of
 from gcs.scenario.reader import SEED_MAX, read_toml
 
 MAX_CELLS = 100_000  # more is a typo in a range, not a sweep this machine should start
@@ -70,6 +72,7 @@ class SweepSpec:
     fixed: dict[str, Value]  # [set]: field -> value
     swept: tuple[str, ...]  # the fields that vary, grid first, then sample
     points: tuple[dict[str, Value], ...]  # one dict of swept values per point (one empty point if none)
+    platform: Platform = DEFAULT_PLATFORM
 
     def fail(self, what: str) -> SpecError:
         return SpecError(f"{self.path}: {what}")
@@ -92,7 +95,7 @@ def load_spec(path: str | Path) -> SweepSpec:
     if unknown:
         raise fail(f"[{unknown[0]}]: unknown table (known: [sweep], [set], [grid], [sample])")
     top = _table(data, "sweep", fail)
-    for key in sorted(set(top) - {"name", "scenarios", "strategies", "seeds", "draw_fleet"}):
+    for key in sorted(set(top) - {"name", "scenarios", "strategies", "seeds", "draw_fleet", "platform"}):
         raise fail(f"sweep.{key}: unknown field")
     name = top.get("name", path.stem)
     if not isinstance(name, str) or not name:
@@ -107,6 +110,10 @@ def load_spec(path: str | Path) -> SweepSpec:
     draw_fleet = top.get("draw_fleet", True)
     if not isinstance(draw_fleet, bool):
         raise fail(f"sweep.draw_fleet: expected true or false, got {draw_fleet!r}")
+    try:
+        platform = platform_of(top.get("platform", str(DEFAULT_PLATFORM)))
+    except (ValueError, TypeError) as exc:
+        raise fail(f"sweep.platform: {exc}") from None
 
     fixed = _fields(_table(data, "set", fail), "set", fail)
     blocks = _grids(data.get("grid", {}), fail)
@@ -127,7 +134,7 @@ def load_spec(path: str | Path) -> SweepSpec:
     if n_cells > MAX_CELLS:
         raise fail(f"{n_cells} missions is more than {MAX_CELLS}; narrow the grid or the seeds")
     return SweepSpec(path.resolve(), name, tuple(scenarios), strategies, seeds, draw_fleet, fixed, swept,
-                     tuple(points))
+                     tuple(points), platform)
 
 
 def _table(data: dict[str, Any], key: str, fail: Any) -> dict[str, Any]:
