@@ -15,6 +15,10 @@ wait ends at the instant lockstep's would whenever both see the same news: the e
 looks that could not have answered, it does not move the others. A wake time already past (a belief
 that cannot say) falls back to the next grid instant: lockstep's polling, never a missed answer.
 
+What lockstep samples every second (where an aPad's time went, its track) is a piecewise-constant
+function of what the GCS knows, which changes only at instants: here it is integrated when time moves
+on (`on_time`), over the stretch since, at no cost in between.
+
 Bounded: a wait with nothing left to wake it (no task due, no wake time) is a bug, raised as
 `StalledWait`, not a hang.
 """
@@ -47,7 +51,34 @@ class EventClock(VirtualClock):
     def __init__(self, scheduler: Scheduler | None = None, start_us: int = 0) -> None:
         super().__init__(scheduler, start_us)
         self._sources: list[Callable[[], int]] = []
+        self._on_time: list[Callable[[int], None]] = []
         self.looks = 0  # looks taken by waits (bench/platforms.py: what skipping them saved)
+
+    def on_time(self, hook: Callable[[int], None]) -> None:
+        """Call `hook(t_us)` whenever time moves on to `t_us`, before anything at `t_us` runs: what held
+        since the last move held all along (nothing changes between instants)."""
+        self._on_time.append(hook)
+
+    def _moving_to(self, t_us: int) -> None:
+        if t_us > self.now_us:
+            for hook in self._on_time:
+                hook(t_us)
+
+    def run_next(self, target_us: int | None) -> bool:
+        due = self.scheduler.next_due_us()
+        if due is None or (target_us is not None and due > target_us):
+            return False
+        self._moving_to(due)
+        return super().run_next(target_us)
+
+    def advance_to(self, target_us: int) -> None:
+        sched = self.scheduler
+        sched.now_us = self.now_us
+        sched.drain()
+        while self.run_next(target_us):
+            pass
+        self._moving_to(target_us)
+        super().advance_to(target_us)  # nothing due by now: moves the time and delivers what is left
 
     def hears(self, source: Callable[[], int]) -> None:
         """Count `source` (a counter that only grows) as news: it moves when the GCS learns something."""

@@ -13,6 +13,7 @@ left out of result.json) for the days up to the first boundary after it.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -20,7 +21,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gcs.results.days import ENERGY_KEYS
-from missiontime import US_PER_S
+from missiontime import US_PER_S, seconds_to_us
+from missiontime.event_clock import EventClock
 
 if TYPE_CHECKING:
     from gcs.mission.world import World
@@ -77,6 +79,20 @@ class ApadRecord:
         self._track.offer(self._k, [t_s, *lat, *lon, *cost_m])
         self._k += 1
 
+    def stretch(self, upto_k: int, t_s: Callable[[int], float], lat: list[float], lon: list[float],
+                cost_m: list[float]) -> None:
+        """The samples not yet offered up to index `upto_k`, all of the same position and cost (the event
+        platform: nothing heard changed meanwhile); only those the track keeps are made (the stride's multiples)."""
+        k = self._k
+        while True:
+            stride = self._track.stride  # it may double on the way
+            k = -(-k // stride) * stride
+            if k > upto_k:
+                break
+            self._track.offer(k, [t_s(k), *lat, *lon, *cost_m])
+            k += 1
+        self._k = max(self._k, upto_k + 1)
+
     def track(self) -> dict[str, NDArray[np.float64]]:
         """apad_t_s `(k,)` (mission seconds), apad_lat_deg, apad_lon_deg, apad_cost_m `(k, m)`."""
         a, m = self._track.array(), len(self.apad_ids)
@@ -110,20 +126,33 @@ def start(world: World, complete: bool = True) -> ApadRecord:
     origin_us = days.start_us if days is not None else clock.now_us
     record = ApadRecord(ids, origin_us, complete=complete)
 
+    def heard() -> tuple[list[float], list[float], list[float]]:
+        views = [world.link.vehicles.get(a) for a in ids]
+        return ([np.nan if v is None or v.lat_deg is None else v.lat_deg for v in views],
+                [np.nan if v is None or v.lon_deg is None else v.lon_deg for v in views],
+                [0.0 if v is None else v.goto_cost_m for v in views])
+
     def sample(now_us: int) -> None:
         if fleet.end_us is not None and now_us > fleet.end_us:
             return
-        views = [world.link.vehicles.get(a) for a in ids]
-        record.sample((now_us - origin_us) / US_PER_S,
-                      [np.nan if v is None or v.lat_deg is None else v.lat_deg for v in views],
-                      [np.nan if v is None or v.lon_deg is None else v.lon_deg for v in views],
-                      [0.0 if v is None else v.goto_cost_m for v in views])
+        record.sample((now_us - origin_us) / US_PER_S, *heard())
+
+    period_us = seconds_to_us(TRACK_PERIOD_S)
+    first_us = clock.now_us
+
+    def stretch(now_us: int) -> None:  # event platform: the samples before now, of what was heard all along
+        upto_us = now_us - 1 if fleet.end_us is None else min(now_us - 1, fleet.end_us)
+        record.stretch((upto_us - first_us) // period_us, lambda k: (first_us + k * period_us - origin_us) / US_PER_S,
+                       *heard())
 
     def day_end(now_us: int) -> None:
         if fleet.end_us is None or now_us <= fleet.end_us:
             record.day_energy.append(energy_now(world, ids))
 
-    clock.scheduler.every(TRACK_PERIOD_S, sample, "apad-track", clock.now_us)
+    if isinstance(clock, EventClock):
+        clock.on_time(stretch)
+    else:
+        clock.scheduler.every(TRACK_PERIOD_S, sample, "apad-track", clock.now_us)
     if days is not None:
         passed = max(clock.now_us - origin_us, 0) // days.day_us
         # Started mid-mission (a restored console): the days gone by are not known, not zero.

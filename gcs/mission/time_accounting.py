@@ -6,7 +6,8 @@ the GCS hears of each aPad's primitive (`PRIMITIVE_STATUS`): travelling while a 
 progress, docking while a Dock or Undock is (approach, latch, release), holding otherwise (Hold
 between legs, waiting for an aMussel to surface, charging, idle). `add_step` is pure; `track`
 registers it on the world's clock, ending with the fleet's last step, so an aPad's times add up
-exactly to the mission time.
+exactly to the mission time. On the event platform (an `EventClock`) the same count is taken when
+time moves on, over the stretch since, by the primitive heard all along it (it changes only at instants).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from numpy.typing import NDArray
 from apad_sitl.vocabulary import Primitive, Progress
 from gcs.link.telemetry import PrimitiveView
 from missiontime import US_PER_S, seconds_to_us
+from missiontime.event_clock import EventClock
 from mussel_sim.recorder import Recorder
 from mussel_sim.state_time import NEVER
 
@@ -67,15 +69,26 @@ def track(world: World, times: dict[int, ApadTimes]) -> None:
     period_us = seconds_to_us(fleet.config.step_period_s)
     last = [clock.now_us]
 
-    def sample(now_us: int) -> None:
-        if now_us <= last[0] or (fleet.end_us is not None and now_us > fleet.end_us):
-            return
-        dt_us, last[0] = now_us - last[0], now_us
+    def count(upto_us: int) -> None:
+        dt_us, last[0] = upto_us - last[0], upto_us
         for sysid, acc in times.items():
             view = world.link.vehicles.get(sysid)
             add_step(acc, view.primitive if view is not None else PrimitiveView(), dt_us)
 
-    clock.scheduler.every(fleet.config.step_period_s, sample, "apad-time", clock.now_us + period_us)
+    def sample(now_us: int) -> None:
+        if now_us <= last[0] or (fleet.end_us is not None and now_us > fleet.end_us):
+            return
+        count(now_us)
+
+    def stretch(now_us: int) -> None:  # event platform: the stretch since the last move, to the fleet's end
+        upto = now_us if fleet.end_us is None else min(now_us, fleet.end_us)
+        if upto > last[0]:
+            count(upto)
+
+    if isinstance(clock, EventClock):
+        clock.on_time(stretch)
+    else:
+        clock.scheduler.every(fleet.config.step_period_s, sample, "apad-time", clock.now_us + period_us)
 
 
 def mussel_times(rec: Recorder) -> tuple[list[dict[str, float]], list[float | None]]:

@@ -77,7 +77,7 @@ def test_a_sweep_spec_names_its_platform_or_is_refused(tmp_path: Path) -> None:
     spec.write_text('[sweep]\nscenarios = ["pool12"]\n')
     assert str(load_spec(spec).platform) == "lockstep"
     spec.write_text('[sweep]\nscenarios = ["pool12"]\nplatform = "ideal"\n')
-    with pytest.raises(SpecError, match="sweep.platform: unknown platform 'ideal'"):
+    with pytest.raises(SpecError, match=r"sweep\.platform: unknown platform 'ideal'"):
         load_spec(spec)
 
 

@@ -99,7 +99,7 @@ def test_a_wait_nothing_can_end_is_raised_not_a_hang() -> None:
 
 
 def test_plain_sleeps_on_the_event_clock_arrive_exactly() -> None:
-    clock, news = _clock(EventClock, 1)
+    clock, _ = _clock(EventClock, 1)
     clock.sleep(7.25)
     assert clock.time() == 7.25
 
