@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from gcs.mission.headless import run_mission
+from gcs.mission.platform import Platform
 from gcs.results.run_result import RunResult
 from gcs.scenario.reader import load_scenario
 from mussel_sim.battery import DISCHARGE_ACTIVE_PER_MIN
@@ -24,21 +25,36 @@ from mussel_sim.battery import DISCHARGE_ACTIVE_PER_MIN
 pytestmark = pytest.mark.sitl
 
 
+def _table_ii(name: str, platform: Platform = Platform.LOCKSTEP) -> dict[str, RunResult]:
+    base = load_scenario(name)
+    return {s: run_mission(base.with_overrides(strategy=s), platform=platform) for s in ("cautious", "greedy", "none")}
+
+
 @pytest.fixture(scope="module")
 def pool12() -> dict[str, RunResult]:
-    base = load_scenario("pool12")
-    return {s: run_mission(base.with_overrides(strategy=s)) for s in ("cautious", "greedy", "none")}
+    return _table_ii("pool12")
 
 
 @pytest.fixture(scope="module")
 def bay24() -> dict[str, RunResult]:
-    base = load_scenario("bay24")
-    return {s: run_mission(base.with_overrides(strategy=s)) for s in ("cautious", "greedy", "none")}
+    return _table_ii("bay24")
 
 
-@pytest.mark.parametrize("runs", ["pool12", "bay24"])
+@pytest.fixture(scope="module")
+def pool12_event() -> dict[str, RunResult]:
+    return _table_ii("pool12", Platform.EVENT)
+
+
+@pytest.fixture(scope="module")
+def bay24_event() -> dict[str, RunResult]:
+    return _table_ii("bay24", Platform.EVENT)
+
+
+@pytest.mark.parametrize("runs", ["pool12", "bay24", "pool12_event", "bay24_event"])
 def test_table_ii_shape(runs: str, request: pytest.FixtureRequest) -> None:
+    """On both platforms (issue 37): the event platform answers the paper's questions as lockstep does."""
     r: dict[str, RunResult] = request.getfixturevalue(runs)
+    assert {x.platform for x in r.values()} == {"event" if runs.endswith("_event") else "lockstep"}
     assert r["cautious"].uptime["avg"] > r["none"].uptime["avg"], "cautious beats no charging"
     assert r["cautious"].uptime["min"] > r["greedy"].uptime["min"], "cautious lifts the minimum"
     assert r["greedy"].cost_m < r["cautious"].cost_m, "greedy moves less"
@@ -48,17 +64,21 @@ def test_table_ii_shape(runs: str, request: pytest.FixtureRequest) -> None:
         assert result.uptime["min"] <= result.uptime["avg"] <= result.uptime["max"]
 
 
-def test_charging_runs_complete_cycles_and_the_odometer_agrees_with_the_plan(pool12: dict[str, RunResult]) -> None:
+@pytest.mark.parametrize("runs", ["pool12", "pool12_event"])
+def test_charging_runs_complete_cycles_and_the_odometer_agrees_with_the_plan(runs: str,
+                                                                            request: pytest.FixtureRequest) -> None:
     for strategy in ("cautious", "greedy"):
-        r = pool12[strategy]
+        r = request.getfixturevalue(runs)[strategy]
         assert r.cycles >= 3  # the paper: four full sets in 40 min
         # The aPad really travelled about what the planner's setpoint distances add up to.
         assert r.travelled_m == pytest.approx(r.cost_m, rel=0.1)
 
 
-def test_no_charging_uptime_is_the_closed_form_of_the_start_batteries(pool12: dict[str, RunResult]) -> None:
+@pytest.mark.parametrize("runs", ["pool12", "pool12_event"])
+def test_no_charging_uptime_is_the_closed_form_of_the_start_batteries(runs: str,
+                                                                     request: pytest.FixtureRequest) -> None:
     # Active in step k (1..N) while u0 - k * d > 0, with d the per-step discharge (eq. 1).
-    r = pool12["none"]
+    r = request.getfixturevalue(runs)["none"]
     n_steps = int(r.duration_s)
     d = DISCHARGE_ACTIVE_PER_MIN * r.theta / 60.0
     for m in r.mussels:
