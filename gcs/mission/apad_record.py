@@ -79,16 +79,18 @@ class ApadRecord:
         self._track.offer(self._k, [t_s, *lat, *lon, *cost_m])
         self._k += 1
 
-    def stretch(self, upto_k: int, t_s: Callable[[int], float], lat: list[float], lon: list[float],
-                cost_m: list[float]) -> None:
-        """The samples not yet offered up to index `upto_k`, all of the same position and cost (the event
-        platform: nothing heard changed meanwhile); only those the track keeps are made (the stride's multiples)."""
-        k = self._k
+    def stretch(self, upto_k: int, t_s: Callable[[int], float],
+                heard: Callable[[], tuple[list[float], list[float], list[float]]]) -> None:
+        """The samples not yet offered up to index `upto_k`, all of the same position and cost (`heard`: the
+        event platform, nothing heard changed meanwhile); only those the track keeps are made (the stride's
+        multiples), and `heard` is asked only if there is one."""
+        k, row = self._k, None
         while True:
             stride = self._track.stride  # it may double on the way
             k = -(-k // stride) * stride
             if k > upto_k:
                 break
+            lat, lon, cost_m = row = row or heard()
             self._track.offer(k, [t_s(k), *lat, *lon, *cost_m])
             k += 1
         self._k = max(self._k, upto_k + 1)
@@ -143,7 +145,7 @@ def start(world: World, complete: bool = True) -> ApadRecord:
     def stretch(now_us: int) -> None:  # event platform: the samples before now, of what was heard all along
         upto_us = now_us - 1 if fleet.end_us is None else min(now_us - 1, fleet.end_us)
         record.stretch((upto_us - first_us) // period_us, lambda k: (first_us + k * period_us - origin_us) / US_PER_S,
-                       *heard())
+                       heard)
 
     def day_end(now_us: int) -> None:
         if fleet.end_us is None or now_us <= fleet.end_us:

@@ -26,6 +26,7 @@ from gcs.link.telemetry import DEG_E7
 from gcs.records.events import EventLog
 from gcs.swarm.partition import Partition, partition
 from missiontime import US_PER_S, Clock, seconds_to_us
+from missiontime.event_clock import EventClock
 from mussel_sim.geo import LocalFrame
 from mussel_sim.vocabulary import MusselState
 
@@ -114,7 +115,7 @@ class FleetShares:
 
 
 class SwarmWatch:
-    """A periodic task on the world's clock: re-shares the fleet when the usable aPads change."""
+    """A watch on the world's clock: re-shares the fleet when the usable aPads change."""
 
     def __init__(
         self, registry: VehicleRegistry, shares: FleetShares, frame: LocalFrame, apads: dict[int, float],
@@ -134,7 +135,20 @@ class SwarmWatch:
         self.check(self.clock.now_us)
 
     def register(self, start_us: int) -> None:
-        self.clock.scheduler.every(WATCH_PERIOD_S, self.check, "swarm.watch", start_us)
+        """Every `WATCH_PERIOD_S` from `start_us`; on the event platform whenever time moves on (what it
+        watches changes only at instants, and the ideal link loses no aPad)."""
+        if isinstance(self.clock, EventClock):
+            seen: list[tuple[int, int, int]] = []
+
+            def on_time(now_us: int) -> None:  # looked at again only if what it reads changed
+                state = (self.registry.version, self.registry.mussels.version, len(self.retired))
+                if now_us >= start_us and (not seen or seen[0] != state):
+                    seen[:] = [state]
+                    self.check(now_us)
+
+            self.clock.on_time(on_time)
+        else:
+            self.clock.scheduler.every(WATCH_PERIOD_S, self.check, "swarm.watch", start_us)
 
     def usable_now(self, now_us: int) -> frozenset[int]:
         out = set()
