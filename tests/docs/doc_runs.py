@@ -27,6 +27,7 @@ COPY = "cp missions/pool12.toml mine.toml"
 SED = """sed -i 's#"areas/#"missions/areas/#; s#"starts/#"missions/starts/#' mine.toml"""
 MINE = "vil run mine.toml --strategy greedy"
 SLEEP_DAY = "vil run missions/bay120-sleep.toml --duration 24h"
+EVENT_DAY = "vil run bay120-sleep --duration 24h --platform event"
 SLACK_RUN = "vil run pool12 --strategy docs/examples/slack_first.py:slack_first,cautious"
 POOL12_NAME = "vil run pool12 --strategy NAME --seeds 20 --json pool12-NAME.json"
 BAY24_NAME = "vil run bay24 --strategy NAME --seeds 20 --json bay24-NAME.json"
@@ -207,6 +208,22 @@ def run_sleep_day(w: Work) -> None:
     r = result(w)
     assert r["scenario"] == "bay120-sleep" and r["duration_s"] == duration_s and r["theta"] == 30
     assert "duration = \"40m\"" in (w.path / "missions/bay120-sleep.toml").read_text()
+    assert len(r["mussels"]) == 120 and all(m["first_depleted_s"] is None for m in r["mussels"])
+    if w.full:
+        assert len(r["days"]) == 30
+
+
+def run_event_day(w: Work) -> None:
+    """The sleeping day on the event platform: the result names it, no .tlog is written, the summary says
+    so, and every aMussel is alive at the end (as lockstep's day: docs/platforms.md's agreement)."""
+    line = w.line(EVENT_DAY)
+    duration = line.split("--duration ")[1].split()[0]
+    done = w.sh(line, timeout_s=3600)
+    r = result(w)
+    assert r["platform"] == "event" and r["scenario"] == "bay120-sleep"
+    assert r["duration_s"] == {"24h": 86400.0, "2h": 7200.0}[duration]
+    assert not list((w.path / "runs" / "latest").glob("*.tlog"))
+    assert "on the event platform" in words(done.stdout) and "no .tlog" in words(done.stdout)
     assert len(r["mussels"]) == 120 and all(m["first_depleted_s"] is None for m in r["mussels"])
     if w.full:
         assert len(r["days"]) == 30
