@@ -69,6 +69,7 @@ from mussel_sim.recorder import Recorder
 from mussel_sim.report_policy import NO_KEEPALIVE_US, ChargerReports, LastWords, ReportByException
 from mussel_sim.sensors import DummySensors, SensorField
 from mussel_sim.startconfig import MAX_MUSSEL_ID
+from mussel_sim.transport_poller import TransportPoller
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
 __all__ = ["FLEET_COMPONENT_ID", "FLEET_SYSTEM_ID", "MODEL_STEP_S", "SURFACE_DEPTH_M", "BatchSink", "CommsConfig",
@@ -293,7 +294,7 @@ class FleetRunner:
             self.event_steps.input_coming(None)
         self.orders.heard_acoustically(mussel_id, command, self.state.time_us)
         if self.event_steps is not None:
-            self.event_steps.input_taken(None)
+            self.event_steps.input_taken()
 
     def _send_batch(self, spec: hot.HotSpec, columns: dict[str, Any]) -> None:
         """One message per aMussel, packed as a batch: byte for byte what one-by-one encoding makes."""
@@ -333,7 +334,7 @@ class FleetRunner:
         else:  # an input: the model brought to lockstep's last step before it, the next step after it
             self.event_steps.input_coming(msg)
             self._act(msg, src)
-            self.event_steps.input_taken(msg)
+            self.event_steps.input_taken()
 
     def _act(self, msg: mavlink.MAVLink_message, src: int) -> None:
         if isinstance(msg, mavlink.MAVLink_global_position_int_message):
@@ -357,9 +358,16 @@ class FleetRunner:
                 return
             self.real_mussel_ids.add(mussel_id)
 
-    def poller(self, transport: Transport) -> _TransportPoller:
+    def poller(self, transport: Transport) -> TransportPoller:
         """A scheduler poller that feeds whatever `transport` received into this runner."""
-        return _TransportPoller(self, transport)
+        return TransportPoller(transport, self.feed)
+
+    def bring_up_to(self, now_us: int) -> None:
+        """The model where lockstep's is at `now_us`, for a part that reads `state` between the fleet's
+        own steps (the acoustic modems): on the event platform a step with no input (`EventSteps.catch_up`);
+        in lockstep it is there already."""
+        if self.event_steps is not None:
+            self.event_steps.catch_up(now_us)
 
     # --- internals --------------------------------------------------------------------------------------
 
@@ -386,19 +394,3 @@ class FleetRunner:
         self.send(self.codec.encode(msg))
         if self.local is not None:
             self.local(msg)
-
-
-class _TransportPoller:
-    def __init__(self, runner: FleetRunner, transport: Transport) -> None:
-        self.runner = runner
-        self.transport = transport
-
-    def poll(self) -> bool:
-        handled = False
-        for data in self.transport.receive():
-            handled = True
-            self.runner.feed(data)
-        return handled
-
-    def fileno(self) -> int | None:
-        return self.transport.fileno()

@@ -40,6 +40,7 @@ class EventSteps:
         self.runner = runner
         self.scheduler = scheduler
         self.grid = grid
+        self._coming = False  # the message acting now is an input (`input_coming`)
         self.steps = 0  # model steps taken (the event platform's cost, against lockstep's one a period)
         # First at the start: the statuses of the start state, as lockstep's first publish.
         self.task: Task = scheduler.every(grid.period_us / 1e6, self.run, "mussel-step", grid.origin_us)
@@ -96,19 +97,23 @@ class EventSteps:
     def _is_input(self, msg: mavlink.MAVLink_message | None) -> bool:
         if msg is None or isinstance(msg, _INPUTS):
             return True
-        if isinstance(msg, mavlink.MAVLink_global_position_int_message):  # matters to a rider only
-            s = self.runner.state
-            return bool(s.surface_held.any() or (s.state == DOCKED).any())
+        if isinstance(msg, mavlink.MAVLink_global_position_int_message):  # a move matters to a rider only
+            r = self.runner
+            s = r.state
+            heard = (msg.lat / 1e7, msg.lon / 1e7)
+            return (r.apads.deg.get(int(msg.get_srcSystem())) != heard
+                    and bool(s.surface_held.any() or (s.state == DOCKED).any()))
         return False
 
     def input_coming(self, msg: mavlink.MAVLink_message | None) -> None:
         """Before a valid message (None: one heard acoustically) acts: the model brought up to date."""
-        if self._is_input(msg):
+        self._coming = self._is_input(msg)
+        if self._coming:
             self.catch_up(self.scheduler.now_us)
 
-    def input_taken(self, msg: mavlink.MAVLink_message | None) -> None:
-        """After it acted: the next step at the first step instant after now if it queued anything."""
-        if not self._is_input(msg):
+    def input_taken(self) -> None:
+        """After it acted: the next step at the first step instant after now if it was an input."""
+        if not self._coming:
             return
         at = self.grid.after_us(self.scheduler.now_us)
         task = self.task
