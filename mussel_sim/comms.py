@@ -29,13 +29,15 @@ aMussel says so `report_policy.LAST_WORDS` times more (its brown-out reports: en
 then its radio is off, as its acoustic modem is (`mussel_sim.modems`): a fleet that depleted costs the
 link and the GCS nothing. Every aMussel that speaks reports by exception (`report_policy`): at once when
 its state changes, else at each keep-alive window's start; the fleet's node sends a HEARTBEAT every second.
+
+On the event platform (`register(..., events=True)`, `mussel_sim.event_steps`) the model steps only
+when something changes, and nothing is periodic: no heartbeat, no keep-alive, no sensors.
 """
 
 from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -46,6 +48,17 @@ from mavlink_dialect.transport import Transport
 from missiontime import US_PER_S, Scheduler, Task, seconds_to_us
 from mussel_sim.apad_fixes import ApadFixes
 from mussel_sim.battery import to_millivolts
+from mussel_sim.comms_config import (
+    FLEET_COMPONENT_ID,
+    FLEET_SYSTEM_ID,
+    HEARTBEAT_PERIOD_S,
+    MODEL_STEP_S,
+    SURFACE_DEPTH_M,
+    CommsConfig,
+    MusselIdCollision,
+)
+from mussel_sim.event_grid import EventGrid
+from mussel_sim.event_steps import EventSteps
 from mussel_sim.fleet import apply_latches, step
 from mussel_sim.fleet_orders import PendingOrders
 from mussel_sim.fleet_sleep import publish_rows
@@ -53,50 +66,21 @@ from mussel_sim.fleet_state import FleetInputs, FleetParams, FleetState, StepEve
 from mussel_sim.geo import LocalFrame
 from mussel_sim.inbox_checks import invalid_field
 from mussel_sim.recorder import Recorder
-from mussel_sim.report_policy import ChargerReports, LastWords, ReportByException
+from mussel_sim.report_policy import NO_KEEPALIVE_US, ChargerReports, LastWords, ReportByException
 from mussel_sim.sensors import DummySensors, SensorField
 from mussel_sim.startconfig import MAX_MUSSEL_ID
+from mussel_sim.transport_poller import TransportPoller
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
-FLEET_SYSTEM_ID = 251
-FLEET_COMPONENT_ID = 25
+__all__ = ["FLEET_COMPONENT_ID", "FLEET_SYSTEM_ID", "MODEL_STEP_S", "SURFACE_DEPTH_M", "BatchSink", "CommsConfig",
+           "FleetRunner", "MusselIdCollision"]
+
 DEG_E7 = 1e7
 STATUSTEXT_MAX = 50
-SURFACE_DEPTH_M = 0.01  # this shallow an aMussel is at the surface, in WiFi's reach (floating and docked: 0 m)
-HEARTBEAT_PERIOD_S = 1.0
-MODEL_STEP_S = 1.0  # the model steps at 1 Hz of mission time (the paper's ROS node)
 
 
 # Where a co-located router takes whole batches: (message id, frames, columns by wire field name).
 BatchSink = Callable[[int, list[bytes], dict[str, Any]], None]
-
-
-class MusselIdCollision(RuntimeError):
-    """A real aMussel reported an id this fleet simulates: the run cannot tell them apart."""
-
-    def __init__(self, mussel_id: int, source_system: int) -> None:
-        super().__init__(
-            f"aMussel id {mussel_id} is simulated by this fleet and also reported by a real aMussel "
-            f"(MAVLink system {source_system}); give the simulated fleet ids that no real node uses"
-        )
-        self.mussel_id = mussel_id
-        self.source_system = source_system
-
-
-@dataclass(frozen=True)
-class CommsConfig:
-    step_period_s: float = MODEL_STEP_S
-    status_rate_hz: float = 1.0  # AMUSSEL_STATUS per aMussel
-    sensors_rate_hz: float = 0.2  # AMUSSEL_SENSORS per aMussel
-    # An aMussel whose state has not changed reports only this often (`report_policy`); 0: every publish.
-    status_keepalive_s: float = 0.0
-    apad_ids: frozenset[int] | None = None  # systems whose positions and slots are an aPad's; None: any
-    commanders: frozenset[int] | None = None  # systems whose AMUSSEL_COMMAND is obeyed (a GCS); None: any
-    report_refusals: bool = True  # STATUSTEXT for surface commands refused for safety
-    # Acoustic scenarios: only aMussels at the surface speak over MAVLink (WiFi); the others are heard
-    # through their TDMA slots (`mussel_sim.modems`) or, depleted under water, not at all. False: every
-    # aMussel over MAVLink, as in the paper's WiFi-only experiment.
-    wifi_at_surface_only: bool = False
 
 
 class FleetRunner:
@@ -156,19 +140,33 @@ class FleetRunner:
         self.reports = ReportByException(state.n, seconds_to_us(self.config.status_keepalive_s),
                                          seconds_to_us(1.0 / self.config.status_rate_hz))
         self.charger = ChargerReports(self.reports)
+        self.event_steps: EventSteps | None = None  # the event platform's stepping (`register`)
 
     # --- periodic tasks ----------------------------------------------------------------------------
 
-    def register(self, scheduler: Scheduler, start_us: int = 0, end_us: int | None = None) -> list[Task]:
+    def register(self, scheduler: Scheduler, start_us: int = 0, end_us: int | None = None,
+                 events: bool = False) -> list[Task]:
         """Step first (so a publish at the same instant shows the new state), then publish.
 
         With `end_us` the model takes no step past that mission time: a run's uptime covers
         exactly its duration even if the mission loop finishes a dock after the end (the latch
         events after it still apply, with no time passing: `fleet.apply_latches`).
+
+        `events`: the event platform's one task (`mussel_sim.event_steps`): the model stepped at the
+        step instants where something changes, its statuses by exception right after each step
+        (no keep-alive), no heartbeat and no sensors (nothing the GCS records reads AMUSSEL_SENSORS:
+        only the .tlog carried them, and the event platform writes none).
         """
         cfg = self.config
         self.end_us = end_us
         self._scheduler = scheduler
+        if events:
+            period_us = seconds_to_us(cfg.step_period_s)
+            self.reports = ReportByException(self.state.n, NO_KEEPALIVE_US, period_us)
+            self.charger = ChargerReports(self.reports)
+            self.event_steps = EventSteps(self, scheduler, EventGrid(start_us, period_us, end_us))
+            self._step_task = self.event_steps.task
+            return [self._step_task]
         self._step_task = scheduler.every(
             cfg.step_period_s, self.step_task, "mussel-step", start_us + round(cfg.step_period_s * US_PER_S)
         )
@@ -184,7 +182,9 @@ class FleetRunner:
         after the saved state's time, not after whenever this runner was started."""
         self.state, self.recorder = state, recorder
         self.rng.bit_generator.state = rng_state
-        if self._scheduler is not None and self._step_task is not None:
+        if self.event_steps is not None:
+            self.event_steps.resumed()
+        elif self._scheduler is not None and self._step_task is not None:
             self._scheduler.reschedule(self._step_task, next_us=state.time_us + self._step_task.period_us)
 
     def step_task(self, now_us: int) -> None:
@@ -194,10 +194,22 @@ class FleetRunner:
             return
         if self.end_us is not None and now_us > self.end_us:
             if self.orders.latches_changed:  # a dock or undock the aPad finished after the end
-                self.state = apply_latches(self.state, self._take_inputs(), self.params)  # commands: no use now
+                self.state = apply_latches(self.state, self.take_inputs(), self.params)  # commands: no use now
             return
-        self.state, events = step(self.state, self._take_inputs(), self.params, self.rng, dt_us / US_PER_S)
-        self.recorder.record(self.state, dt_us)
+        self.step_to(now_us, self.take_inputs())
+
+    def step_to(self, now_us: int, inputs: FleetInputs, periods: int = 1) -> None:
+        """One step of the model to `now_us` with `inputs`, recorded as `periods` step periods (the
+        event platform's longer steps; their drift spread as so many, `fleet.step`)."""
+        dt_us = now_us - self.state.time_us
+        before = self.state
+        if periods == 1:
+            self.state, events = step(before, inputs, self.params, self.rng, dt_us / US_PER_S)
+            self.recorder.record(self.state, dt_us)
+        else:
+            self.state, events = step(before, inputs, self.params, self.rng, dt_us / US_PER_S,
+                                      self.config.step_period_s)
+            self.recorder.record(self.state, dt_us, periods, before)
         self.last_events = events
         if self.config.report_refusals:
             self._report(events)
@@ -278,7 +290,11 @@ class FleetRunner:
         if mussel_id not in self._ids:
             self.dropped["invalid:acoustic:mussel_id"] += 1
             return
+        if self.event_steps is not None:  # the model brought to lockstep's last step first: the ping's time
+            self.event_steps.input_coming(None)
         self.orders.heard_acoustically(mussel_id, command, self.state.time_us)
+        if self.event_steps is not None:
+            self.event_steps.input_taken()
 
     def _send_batch(self, spec: hot.HotSpec, columns: dict[str, Any]) -> None:
         """One message per aMussel, packed as a batch: byte for byte what one-by-one encoding makes."""
@@ -313,6 +329,14 @@ class FleetRunner:
         if bad is not None:
             self.dropped[f"invalid:{msg.get_type()}:{bad}"] += 1
             return
+        if self.event_steps is None:
+            self._act(msg, src)
+        else:  # an input: the model brought to lockstep's last step before it, the next step after it
+            self.event_steps.input_coming(msg)
+            self._act(msg, src)
+            self.event_steps.input_taken()
+
+    def _act(self, msg: mavlink.MAVLink_message, src: int) -> None:
         if isinstance(msg, mavlink.MAVLink_global_position_int_message):
             self.apads.deg[src] = (msg.lat / DEG_E7, msg.lon / DEG_E7)
         elif isinstance(msg, mavlink.MAVLink_dock_slot_status_message):
@@ -334,13 +358,25 @@ class FleetRunner:
                 return
             self.real_mussel_ids.add(mussel_id)
 
-    def poller(self, transport: Transport) -> _TransportPoller:
+    def poller(self, transport: Transport) -> TransportPoller:
         """A scheduler poller that feeds whatever `transport` received into this runner."""
-        return _TransportPoller(self, transport)
+        return TransportPoller(transport, self.feed)
+
+    def bring_up_to(self, now_us: int) -> None:
+        """The model where lockstep's is at `now_us`, for a part that reads `state` between the fleet's
+        own steps (the acoustic modems): on the event platform a step with no input (`EventSteps.catch_up`);
+        in lockstep it is there already."""
+        if self.event_steps is not None:
+            self.event_steps.catch_up(now_us)
 
     # --- internals --------------------------------------------------------------------------------------
 
-    def _take_inputs(self) -> FleetInputs:
+    def quiet_inputs(self) -> FleetInputs:
+        """A step's inputs with nothing queued taken: the aPads' positions only."""
+        return FleetInputs.make(apads=self.apads.for_step(self.state, False))
+
+    def take_inputs(self) -> FleetInputs:
+        """The queued inputs for the next step (the queue is empty after), with the aPads' positions."""
         return self.orders.take(self.apads.for_step(self.state, self.orders.pending))
 
     def _report(self, events: StepEvents) -> None:
@@ -358,19 +394,3 @@ class FleetRunner:
         self.send(self.codec.encode(msg))
         if self.local is not None:
             self.local(msg)
-
-
-class _TransportPoller:
-    def __init__(self, runner: FleetRunner, transport: Transport) -> None:
-        self.runner = runner
-        self.transport = transport
-
-    def poll(self) -> bool:
-        handled = False
-        for data in self.transport.receive():
-            handled = True
-            self.runner.feed(data)
-        return handled
-
-    def fileno(self) -> int | None:
-        return self.transport.fileno()

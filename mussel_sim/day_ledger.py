@@ -3,7 +3,8 @@
 A simulated day is the aMussels' day: 86,400 s of aMussel time, which at time scale theta is
 86,400 / theta s of mission time (theta 30: 48 min; a 24-h mission is 30 simulated days). A step
 counts in the day its end falls in, a step ending exactly on a day's end in that day, as eq. (3)
-counts a step wholly in the state it ended in. Per day: the steps, the sum over them of the active
+counts a step wholly in the state it ended in (a step of several periods counts as so many steps:
+the event platform's never spans a day's end). Per day: the steps, the sum over them of the active
 count (so the day's mean uptime is that over steps x aMussels), how many aMussels were alive (not
 DEPLETED) at the day's last step, and how many ran flat for the first time that day. Memory grows by
 one row per day (a week at theta 30 is 210 rows), never per step.
@@ -46,16 +47,17 @@ class DayLedger:
         """`day_of` of many instants (an event at a day's boundary counts in the day it ends)."""
         return np.maximum(np.asarray(times_us, np.int64) - self.start_us - 1, 0) // self.day_us
 
-    def add(self, time_us: int, active: int, alive: int, newly_depleted: int) -> None:
-        """Count one step that ended at `time_us` with these counts."""
+    def add(self, time_us: int, active: int, alive: int, newly_depleted: int, steps: int = 1) -> None:
+        """Count one step that ended at `time_us` with these counts, as `steps` steps of the model's
+        period (a longer step lies within one day, its counts constant over it: the event platform's)."""
         d = self.day_of(time_us)
         while len(self.steps) <= d:  # a new day (or days without a step: a day shorter than a step)
             for column in (self.steps, self.active_sum, self.depleted_new):
                 column.append(0)
             self.alive_end.append(self.alive_end[-1] if self.alive_end else alive)
             self.end_us.append(self.end_us[-1] if self.end_us else self.start_us)
-        self.steps[d] += 1
-        self.active_sum[d] += active
+        self.steps[d] += steps
+        self.active_sum[d] += active * steps
         self.depleted_new[d] += newly_depleted
         self.alive_end[d] = alive
         self.end_us[d] = time_us

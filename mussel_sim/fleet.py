@@ -30,6 +30,7 @@ its battery gave out (at the surface if it was floating). Uptime is the recorder
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from functools import cache
 
@@ -158,8 +159,16 @@ def step(
     params: FleetParams,
     rng: np.random.Generator,
     dt_s: float,
+    step_period_s: float | None = None,
 ) -> tuple[FleetState, StepEvents]:
-    """Advance the fleet by `dt_s` seconds of mission time (simulated time: theta * dt_s)."""
+    """Advance the fleet by `dt_s` seconds of mission time (simulated time: theta * dt_s).
+
+    Exact for any `dt_s` over which nothing changes discontinuously (`mussel_sim.next_change`): the
+    battery and transit timers are linear, wakes and samples counted in closed form. The random drift's
+    half-width is per step of `step_period_s`: a longer step spreads by sqrt(dt_s / step_period_s), as
+    many small ones would (variance-preserving); None: per step whatever its length (lockstep's steps).
+    A current moves an aMussel by its velocity at the step's start: exact for a uniform current, an
+    Euler step of the whole `dt_s` for a gridded one."""
     ids = state.ids
     # The last state's arrays are read-only: copied before the first change (most steps change none).
     st, timer, dock_apad, dock_slot = state.state, state.timer_s, state.dock_apad, state.dock_slot
@@ -223,7 +232,10 @@ def step(
         y += vn * dt_s
     if params.drift_half_width_m > 0:
         # Always 2n draws, docked or not: the random stream does not depend on what happened.
-        drift = random_drift_m(rng, state.n, params.drift_half_width_m)
+        half = params.drift_half_width_m
+        if step_period_s is not None and dt_s != step_period_s:
+            half *= math.sqrt(dt_s / step_period_s)
+        drift = random_drift_m(rng, state.n, half)
         x += drift[0]
         y += drift[1]
     docked = docked_mask.nonzero()[0]

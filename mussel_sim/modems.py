@@ -72,6 +72,7 @@ class MusselModems:
         self._follow_power()
         if slot.owner is not Owner.AMUSSEL:
             return  # the aPads' slots: they send nothing yet
+        self.fleet.bring_up_to(now_us)  # the event platform's model steps only at changes
         s = self.fleet.state
         k = int(np.searchsorted(s.ids, slot.node_id))
         if k >= s.n or int(s.ids[k]) != slot.node_id:

@@ -81,6 +81,7 @@ class RecorderHead:
     max_trace_rows: int = DEFAULT_MAX_TRACE_ROWS
     days: DayLedger | None = None  # a copy; None: no per-day figures
     start_us: int | None = None  # mission time before the first step; None: a checkpoint from before it was kept
+    n_rows: int | None = None  # step rows kept (event steps: fewer than n_steps); None: n_steps
 
 
 @dataclass(frozen=True)
@@ -92,6 +93,7 @@ class RecorderRows:
     trace_steps: NDArray[np.int64]  # (j,) step index of each trace row, increasing
     trace: NDArray[np.float32]  # (j, n_trace) battery fraction
     trace_state: NDArray[np.uint8] | None = None  # (j, n_trace) MusselState; None: not recorded (all ACTIVE)
+    trace_rows: NDArray[np.int64] | None = None  # (j,) the step row of each trace row; None: its step (lockstep)
 
 
 class Recorder:
@@ -128,7 +130,8 @@ class Recorder:
         self.active_steps = np.zeros(n, np.int64)  # (n,) steps each agent ended active
         self.samples_taken = np.zeros(n, np.int64)  # (n,) wakes ACTIVE on the seabed (the last state's count)
         self.samples_due = np.zeros(n, np.int64)  # (n,) wakes of its schedule
-        self.n_steps = 0
+        self.n_steps = 0  # steps of the model's period (a step of k periods counts k)
+        self.n_rows = 0  # step rows: one per step recorded, and one per trace row inside a longer step
         self._active_count = np.zeros(1024, np.int32)  # (capacity,) grows by doubling
         self._time_us = np.zeros(1024, np.int64)
         if trace_ids is None:
@@ -147,34 +150,74 @@ class Recorder:
         self._max_rows = max(min(int(max_trace_bytes // self._row_bytes), self._max_trace_rows), 2)
         self._trace_rows: list[NDArray[np.float32]] = []
         self._state_rows: list[NDArray[np.uint8]] = []
-        self._trace_steps: list[int] = []
+        self._trace_steps: list[int] = []  # the step index of each trace row (multiples of the stride)
+        self._trace_at: list[int] = []  # its step row (the same as its step unless steps were longer)
 
-    def record(self, state: FleetState, dt_us: int | None = None) -> None:
+    def record(self, state: FleetState, dt_us: int | None = None, periods: int = 1,
+               before: FleetState | None = None) -> None:
         """Count one step of `dt_us` (default: since the last state recorded) that ended in `state`
-        (state.ids must be this recorder's ids)."""
-        newly_depleted = self.times.add(state.state, state.time_us - self._last_us if dt_us is None else dt_us)
-        self._last_us = state.time_us
+        (state.ids must be this recorder's ids), as `periods` steps of the model's period (the event
+        platform's longer steps, over which nothing changed discontinuously: the state constant, the
+        battery linear from `before`'s, which traces the steps inside it; `next_change`)."""
+        dt_us = state.time_us - self._last_us if dt_us is None else dt_us
+        newly_depleted = self.times.add(state.state, dt_us)
+        start_us, self._last_us = self._last_us, state.time_us
         self.samples_taken, self.samples_due = state.samples_taken, state.samples_due  # read-only: no copy
         active = self._counts[state.state]
-        self.active_steps += active
+        if periods == 1:
+            self.active_steps += active
+        else:
+            self.active_steps += active * np.int64(periods)
+        n_active = int(np.count_nonzero(active))
         k = self.n_steps
-        if k == self._active_count.size:
-            self._active_count = np.concatenate([self._active_count, np.zeros_like(self._active_count)])
-            self._time_us = np.concatenate([self._time_us, np.zeros_like(self._time_us)])
-        self._active_count[k] = n_active = int(np.count_nonzero(active))
-        self._time_us[k] = state.time_us
-        self.n_steps = k + 1
+        if periods > 1 and self.trace_stride > 0:
+            self._trace_inside(state, before, k, periods, start_us, dt_us, n_active)
+        last = k + periods - 1  # the step index of the step's last period
+        row = self._add_row(state.time_us, n_active)
+        self.n_steps = k + periods
         if self.days is not None:
-            self.days.add(state.time_us, n_active, self._alive(state.state), newly_depleted)
-        if self.trace_stride > 0 and k % self.trace_stride == 0:
+            self.days.add(state.time_us, n_active, self._alive(state.state), newly_depleted, periods)
+        if self.trace_stride > 0 and last % self.trace_stride == 0:
             if len(self._trace_rows) >= self._max_rows:
                 self._decimate()
-            if k % self.trace_stride == 0:
-                cols = self._trace_cols
-                u = state.battery_frac if cols is None else state.battery_frac[cols]
-                self._trace_rows.append(u.astype(np.float32))
-                self._state_rows.append(state.state.copy() if cols is None else state.state[cols])
-                self._trace_steps.append(k)
+            if last % self.trace_stride == 0:
+                self._trace(state.battery_frac, state.state, last, row)
+
+    def _add_row(self, time_us: int, n_active: int) -> int:
+        r = self.n_rows
+        if r == self._active_count.size:
+            self._active_count = np.concatenate([self._active_count, np.zeros_like(self._active_count)])
+            self._time_us = np.concatenate([self._time_us, np.zeros_like(self._time_us)])
+        self._active_count[r] = n_active
+        self._time_us[r] = time_us
+        self.n_rows = r + 1
+        return r
+
+    def _trace(self, battery: NDArray[np.float64], state: NDArray[np.uint8], step: int, row: int) -> None:
+        cols = self._trace_cols
+        u = battery if cols is None else battery[cols]
+        self._trace_rows.append(u.astype(np.float32))
+        self._state_rows.append(state.copy() if cols is None else state[cols])
+        self._trace_steps.append(step)
+        self._trace_at.append(row)
+
+    def _trace_inside(self, state: FleetState, before: FleetState | None, k: int, periods: int, start_us: int,
+                      dt_us: int, n_active: int) -> None:
+        """The trace rows of the periods k .. k + periods - 2 of a longer step (its last is the step's
+        own), each with a step row of its own at its instant: the battery linear between `before`'s and
+        `state`'s, the state and the active count the step's (constant over it)."""
+        u0 = state.battery_frac if before is None else before.battery_frac
+        du = state.battery_frac - u0
+        j = -(-k // self.trace_stride) * self.trace_stride
+        while j < k + periods - 1:
+            if len(self._trace_rows) >= self._max_rows:
+                self._decimate()
+                j = -(-j // self.trace_stride) * self.trace_stride
+                continue
+            done = j - k + 1  # periods of the step at the end of period j
+            row = self._add_row(start_us + dt_us * done // periods, n_active)
+            self._trace(u0 + du * (done / periods), state.state, j, row)
+            j += self.trace_stride
 
     def _decimate(self) -> None:
         self.trace_stride *= 2
@@ -182,22 +225,26 @@ class Recorder:
         self._trace_rows = [self._trace_rows[i] for i in keep]
         self._state_rows = [self._state_rows[i] for i in keep]
         self._trace_steps = [self._trace_steps[i] for i in keep]
+        self._trace_at = [self._trace_at[i] for i in keep]
 
     def head(self) -> RecorderHead:
         """The fixed-size state (a copy): what `restore` needs besides the rows."""
         return RecorderHead(self.ids, self._trace_ids_arg, self._max_trace_bytes, self.active_steps.copy(),
                             self.n_steps, self.trace_stride, self.sinking_counts_active, self.times.copy(),
                             self._last_us, self.samples_taken.copy(), self.samples_due.copy(), self._max_trace_rows,
-                            self.days.copy() if self.days is not None else None, self.start_us)
+                            self.days.copy() if self.days is not None else None, self.start_us,
+                            None if self.n_rows == self.n_steps else self.n_rows)
 
     def rows_since(self, k: int) -> RecorderRows:
-        """The rows of steps k, k + 1, ... recorded so far (copies; trace rows only as kept now)."""
-        if not 0 <= k <= self.n_steps:
-            raise ValueError(f"step {k} is outside 0..{self.n_steps}")
-        j = bisect_left(self._trace_steps, k)
+        """The step rows k, k + 1, ... recorded so far and the trace rows at them (copies; trace rows
+        only as kept now). In lockstep a step row is a step."""
+        if not 0 <= k <= self.n_rows:
+            raise ValueError(f"step {k} is outside 0..{self.n_rows}")
+        j = bisect_left(self._trace_at, k)
         steps, trace, trace_state = self._traces(j)
-        return RecorderRows(self._time_us[k: self.n_steps].copy(), self._active_count[k: self.n_steps].copy(),
-                            steps, trace, trace_state)
+        at = np.asarray(self._trace_at[j:], np.int64)
+        return RecorderRows(self._time_us[k: self.n_rows].copy(), self._active_count[k: self.n_rows].copy(),
+                            steps, trace, trace_state, None if np.array_equal(at, steps) else at)
 
     def _traces(self, j: int = 0) -> tuple[NDArray[np.int64], NDArray[np.float32], NDArray[np.uint8]]:
         """The trace rows kept, from the j-th on: (steps `(k,)`, battery `(k, n_trace)`, state `(k, n_trace)`)."""
@@ -218,13 +265,14 @@ class Recorder:
         rec.days = head.days.copy() if head.days is not None else None
         rec.start_us = int(head.start_us) if head.start_us is not None else 0
         n = int(head.n_steps)
+        n_rows = n if head.n_rows is None else int(head.n_rows)
         if head.active_steps.shape != rec.ids.shape or n < 0 or int(head.trace_stride) < 0:
             raise ValueError("recorder head does not fit its ids")
         if head.times.state_us.shape != rec.times.state_us.shape:
             raise ValueError("recorder head's state times do not fit its ids")
         rec.times = head.times.copy()
-        if rows.time_us.shape != (n,) or rows.active_count.shape != (n,):
-            raise ValueError(f"{rows.time_us.size} step rows for {n} steps")
+        if rows.time_us.shape != (n_rows,) or rows.active_count.shape != (n_rows,):
+            raise ValueError(f"{rows.time_us.size} step rows for {n_rows} steps")
         steps = np.asarray(rows.trace_steps, np.int64)
         if rows.trace.shape != (steps.size, rec.trace_ids.size):
             raise ValueError("trace rows do not fit the traced aMussels")
@@ -233,6 +281,9 @@ class Recorder:
             raise ValueError("trace state rows do not fit the battery rows")
         if steps.size and (steps[0] < 0 or steps[-1] >= n or (np.diff(steps) <= 0).any()):
             raise ValueError("trace rows are not in step order")
+        at = steps if rows.trace_rows is None else np.asarray(rows.trace_rows, np.int64)
+        if at.shape != steps.shape or (at.size and (at[0] < 0 or at[-1] >= n_rows or (np.diff(at) <= 0).any())):
+            raise ValueError("trace rows do not fit the step rows")
         rec.active_steps = np.array(head.active_steps, np.int64)
         for name in ("samples_taken", "samples_due"):
             counts = getattr(head, name)
@@ -240,19 +291,20 @@ class Recorder:
                 if np.shape(counts) != rec.ids.shape:
                     raise ValueError(f"recorder head's {name} does not fit its ids")
                 setattr(rec, name, np.array(counts, np.int64))
-        rec.n_steps = n
+        rec.n_steps, rec.n_rows = n, n_rows
         rec.trace_stride = int(head.trace_stride)
-        capacity = max(1024, 1 << max(n - 1, 0).bit_length())
+        capacity = max(1024, 1 << max(n_rows - 1, 0).bit_length())
         rec._active_count = np.zeros(capacity, np.int32)
         rec._time_us = np.zeros(capacity, np.int64)
-        rec._active_count[:n] = rows.active_count
-        rec._time_us[:n] = rows.time_us
+        rec._active_count[:n_rows] = rows.active_count
+        rec._time_us[:n_rows] = rows.time_us
         if rec.trace_stride > 0:
             keep = steps % rec.trace_stride == 0
             kept = np.ascontiguousarray(rows.trace[keep], np.float32)
             rec._trace_rows = list(kept)
             rec._state_rows = list(np.ascontiguousarray(states[keep], np.uint8))
             rec._trace_steps = steps[keep].tolist()
+            rec._trace_at = at[keep].tolist()
         if len(rec._trace_rows) > rec._max_rows:
             raise ValueError("more trace rows than the recorder's budget")
         return rec
@@ -269,22 +321,24 @@ class Recorder:
         return self.samples_taken.copy(), self.samples_due.copy()
 
     def active_count(self) -> NDArray[np.int32]:
-        """Number of aMussels active (ACTIVE, or SINKING if it counts) at the end of each step `(n_steps,)`."""
-        return self._active_count[: self.n_steps].copy()
+        """Number of aMussels active (ACTIVE, or SINKING if it counts) at the end of each step row `(n_rows,)`
+        (lockstep: each step; longer steps: each, and each trace row's instant inside one)."""
+        return self._active_count[: self.n_rows].copy()
 
     def step_time_us(self) -> NDArray[np.int64]:
-        """Mission time at the end of each step `(n_steps,)`."""
-        return self._time_us[: self.n_steps].copy()
+        """Mission time at the end of each step row `(n_rows,)`."""
+        return self._time_us[: self.n_rows].copy()
 
     def battery_trace(self) -> tuple[NDArray[np.int64], NDArray[np.float32]]:
-        """(step indices `(k,)` (0 = first recorded step), battery u `(k, n_trace)` float32)."""
-        steps, battery, _ = self._traces()
-        return steps, battery
+        """(step rows `(k,)` (0 = the first; index `step_time_us`, `active_count`), battery u `(k, n_trace)`
+        float32). In lockstep a step row is the step index."""
+        _, battery, _ = self._traces()
+        return np.asarray(self._trace_at, np.int64), battery
 
     def state_trace(self) -> tuple[NDArray[np.int64], NDArray[np.uint8]]:
-        """(step indices `(k,)`, MusselState `(k, n_trace)` uint8) at the same steps as `battery_trace`."""
-        steps, _, state = self._traces()
-        return steps, state
+        """(step rows `(k,)`, MusselState `(k, n_trace)` uint8) at the same rows as `battery_trace`."""
+        _, _, state = self._traces()
+        return np.asarray(self._trace_at, np.int64), state
 
     @property
     def max_trace_rows(self) -> int:
@@ -299,7 +353,8 @@ class Recorder:
             avg_uptime_pct=float(up.mean()) if up.size else 0.0,
             max_uptime_pct=float(up.max()) if up.size else 0.0,
             min_uptime_pct=float(up.min()) if up.size else 0.0,
-            avg_active=float(counts.mean()) if counts.size else 0.0,
+            avg_active=(float(counts.mean()) if self.n_rows == self.n_steps  # lockstep: as ever
+                        else float(self.active_steps.sum()) / self.n_steps) if counts.size else 0.0,
         )
 
 

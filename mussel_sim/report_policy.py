@@ -37,6 +37,8 @@ LATCHED = mavlink.DOCK_LATCH_STATE_LATCHED
 STATUS_KEEPALIVE_S = 5.0
 _NO_ROWS = np.zeros(0, np.intp)
 _NO_ROWS.flags.writeable = False
+# The event platform's keep-alive: none (nothing periodic on an ideal link; the GCS foresees the rest).
+NO_KEEPALIVE_US = 2**62
 LAST_WORDS = 10  # publishes of each message a depleted aMussel still makes; 0.4 ** 10: 1e-4 all lost at 40 %
 NEVER = 255  # the state of an aMussel never reported: no state has that code
 
