@@ -25,6 +25,7 @@ from mussel_sim.comms import MODEL_STEP_S
 from mussel_sim.vocabulary import MusselState
 
 MODEL_STEP_US = seconds_to_us(MODEL_STEP_S)
+EXACT_STEPS = 64  # stretches up to this many steps are taken step by step (`charged_forward`)
 
 
 def steps_since(report_us: int, now_us: int) -> int:
@@ -33,14 +34,25 @@ def steps_since(report_us: int, now_us: int) -> int:
 
 
 def charged_forward(battery: float, steps: int, charge: ChargeProfile, theta: float) -> float:
-    """eq. (2) for `steps` steps from `battery`, as the fleet steps it (the band of the value before each step)."""
+    """eq. (2) for `steps` steps from `battery`, as the fleet steps it (the band of the value before each step).
+
+    A few steps (lockstep's reports come every few seconds) are taken one by one, to the bit; a long
+    stretch (the event platform reports only changes) in closed form within each band, the steps near a
+    band's edge one by one, so the band of each step is the one the fleet's would have."""
     dt_min = sim_minutes(theta, MODEL_STEP_S)
     thresholds, rates = charge.thresholds, charge.rates_per_min
-    u = battery
-    for _ in range(steps):
+    u, left = battery, steps
+    while left > 0:
         if u >= 1.0:
             return 1.0
-        u = min(u + rates[bisect_left(thresholds, u)] * dt_min, 1.0)
+        band = bisect_left(thresholds, u)
+        step = rates[band] * dt_min
+        inside = int(((thresholds[band] if band < len(thresholds) else 1.0) - u) / step)  # steps surely in it
+        if left > EXACT_STEPS and inside > EXACT_STEPS:
+            taken = min(left, inside - 1)
+            u, left = u + taken * step, left - taken
+        else:
+            u, left = min(u + step, 1.0), left - 1
     return u
 
 

@@ -232,7 +232,8 @@ def build_world(
         local=port.send_local, local_batch=port.send_batch,
     )
     port.handler = fleet.handle
-    fleet.register(clock.scheduler, clock.now_us, end_us=start_us + seconds_to_us(scenario.mission.duration_s))
+    fleet.register(clock.scheduler, clock.now_us, end_us=start_us + seconds_to_us(scenario.mission.duration_s),
+                   events=event)
     buffer_m = options.geofence_buffer_m
     fence = geofence_ring(area, frame, buffer_m) if buffer_m is not None else []
     api = ApadApi(link, clock, default_apad=scenario.apad.system_id, geofence_deg=fence or None)

@@ -80,3 +80,26 @@ def test_a_tables_deployed_ones_at_once_are_each_one_foreseen_to_the_bit() -> No
                   for b, t, d in zip(battery, report_us, drain, strict=True)]
     assert at_once.tolist() == one_by_one
     assert (at_once < battery).any() and (at_once == battery).any()  # run down, and reports from after now
+
+
+@pytest.mark.parametrize("battery", [0.0, 0.05, 0.1619, 0.3, 0.5633, 0.8])
+@pytest.mark.parametrize("steps", [65, 200, 1_000, 20_000])
+def test_a_long_stretch_in_closed_form_is_the_fleet_s_steps_to_float_noise(battery: float, steps: int) -> None:
+    """The event platform's reports are far apart: a docked one charged over thousands of steps at once,
+    band by band, ends where the fleet's own steps end (across both band edges and at full)."""
+    assert charged_forward(battery, steps, CHARGE, THETA) == pytest.approx(stepped(battery, [True] * steps),
+                                                                          abs=1e-12)
+
+
+def test_a_long_stretch_costs_a_few_operations_not_one_per_step() -> None:
+    calls = []
+
+    class Counting(list[float]):
+        def __getitem__(self, i):  # type: ignore[no-untyped-def, override]
+            calls.append(i)
+            return super().__getitem__(i)
+
+    counting = type(CHARGE)(CHARGE.name, CHARGE.thresholds, tuple(CHARGE.rates_per_min))
+    object.__setattr__(counting, "rates_per_min", Counting(CHARGE.rates_per_min))
+    charged_forward(0.0, 50_000, counting, THETA)
+    assert len(calls) < 3 * 2 * 64  # per band: its closed form and the steps near its edge
