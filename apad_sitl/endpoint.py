@@ -88,6 +88,7 @@ class SitlVehicle:
         log_append: bool = False,
         modem: tuple[BytePort, Callable[[], None] | None] | None = None,
         park_at_rest: bool = True,
+        ideal_link: bool = False,
     ) -> None:
         """`rates_hz` overrides DEFAULT_RATES_HZ per message id; `log_epoch_us` offsets .tlog stamps and
         is the Unix time of t = 0 for signing timestamps. With `signing_key` every frame we send is
@@ -95,7 +96,9 @@ class SitlVehicle:
         is the water area as a (lat, lon) ring: Go To targets outside it and undocking outside it are refused.
         `modem`: the aPad's own nanomodem, its serial port and what puts it where the aPad is before
         each write (`modem_serial.py`); None: the aPad has none. `park_at_rest` False ticks the physics
-        at its rate throughout (`apad_sitl.parking`: the same result, at a cost).
+        at its rate throughout (`apad_sitl.parking`: the same result, at a cost). `ideal_link`: the event
+        platform's link, which carries no heartbeats and wants no repeats: telemetry by exception, and
+        nothing runs while the hull rests (`apad_sitl.streams`); lockstep's default sends every period.
         """
         self.transport = transport
         self.system_id = system_id
@@ -109,6 +112,7 @@ class SitlVehicle:
         self.home_lat_deg, self.home_lon_deg = home_lat_deg, home_lon_deg
         self.physics_hz = physics_hz
         self.park_at_rest = park_at_rest
+        self.ideal_link = ideal_link
 
         # The aPad's state (what a checkpoint saves); the parts change it.
         self.apad = ApadState(with_param(params, "SYSID_THISMAV", system_id), current_mps)
@@ -126,7 +130,8 @@ class SitlVehicle:
         self.mussels = MusselFixTable(self.frame, self.dropped)
         target_e7 = DegE7(self.frame)  # the target a Go To commanded, echoed by PRIMITIVE_STATUS
         self.commands = CommandTable(self, apad)
-        self.streams = Streams(self, apad, self.commands, self.frame, system_id, rates_hz, target_e7)
+        self.streams = Streams(self, apad, self.commands, self.frame, system_id, rates_hz, target_e7,
+                               by_exception=ideal_link)
         self.modes = Modes(self, apad, self.commands)
         self.navigation = Navigation(self, apad, self.commands, self.frame, self.geofence, target_e7)
         self.energy = EnergyMeter(apad, self.dropped)
@@ -173,11 +178,15 @@ class SitlVehicle:
         self.now_us = max(self.now_us, start_us)
         self.event("start", **self._start_fields)
         name = f"apad{self.system_id}"
-        self.physics = PhysicsTicks(self, scheduler, self.physics_hz, f"{name}.physics", start_us, self.park_at_rest)
-        self.streams.attach(scheduler, start_us, name)
+        self.physics = physics = PhysicsTicks(self, scheduler, self.physics_hz, f"{name}.physics", start_us,
+                                              self.park_at_rest)
+        if self.ideal_link:  # the streams park with the physics, and wake with it
+            physics.on_rearm = self.streams.wake
+            self.apad.changed_while_parked = physics.settle  # ticking again if the change ended the rest
+        self.streams.attach(scheduler, start_us, name, physics if self.ideal_link else None)
         if self.modem is not None:
             self.modem.attach(scheduler, start_us, name)
-        self.modes.attach(scheduler, start_us, name)
+        self.modes.attach(scheduler, start_us, name, parked=self.ideal_link)
         scheduler.add_poller(self)
 
     def close(self) -> None:

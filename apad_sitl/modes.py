@@ -59,11 +59,14 @@ class Modes:
         commands.register(mavlink.MAV_CMD_DO_SET_MODE, self._cmd_set_mode, stateful=True)
         commands.register(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, self._cmd_arm, stateful=True)
 
-    def attach(self, scheduler: Scheduler, start_us: int, name: str) -> None:
-        """The failsafe's deadline task, idle until a GCS heartbeat sets it."""
+    def attach(self, scheduler: Scheduler, start_us: int, name: str, parked: bool = False) -> None:
+        """The failsafe's deadline task, idle until a GCS heartbeat sets it: waking each _IDLE_US, or with
+        `parked` off the scheduler until then (an ideal link, whose GCS sends none: nothing runs)."""
         self._scheduler = scheduler
         self._deadline = scheduler.every(_IDLE_US / US_PER_S, self._on_deadline, f"{name}.failsafe",
                                          start_us + _IDLE_US)
+        if parked:
+            scheduler.reschedule(self._deadline, active=False)
 
     # ------------------------------------------------------------------ modes
 
@@ -133,7 +136,7 @@ class Modes:
         host = self._host
         self.last_gcs_heartbeat_us = host.now_us
         if self._scheduler is not None and self._deadline is not None and not host.closed:
-            self._scheduler.reschedule(self._deadline, next_us=host.now_us + self._timeout_us())
+            self._scheduler.reschedule(self._deadline, next_us=host.now_us + self._timeout_us(), active=True)
 
     def _timeout_us(self) -> int:
         return self._timeout(self._apad.params)

@@ -29,6 +29,8 @@ stepped one by one. The result is the one ticking gives, to the bit.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 from typing import Protocol
 
 from apad_sitl.docking import MusselFixTable
@@ -36,7 +38,9 @@ from apad_sitl.energy import EnergyMeter
 from apad_sitl.hull_step import rest_holds, rest_key, rest_steps, step_hull
 from apad_sitl.logs import VehicleLog
 from apad_sitl.modes import Modes
+from apad_sitl.rest import ChargingRest, Rest
 from apad_sitl.state import ApadState
+from apad_sitl.vehicle import BATTERY_FULL_V, VehicleState
 from apad_sitl.vocabulary import Primitive, Progress
 from missiontime import US_PER_S, Scheduler, Task
 
@@ -66,6 +70,7 @@ class PhysicsTicks:
         self.parked = False
         self.parks = 0  # times the task was taken off the scheduler (figures for bench/ and tests:
         self.ticks = 0  # and the ticks it ran)
+        self.on_rearm: Callable[[], None] | None = None  # told when a rest ends and the task ticks again
 
     def tick(self, now_us: int) -> None:
         self.ticks += 1
@@ -142,6 +147,49 @@ class PhysicsTicks:
         self.parked = False
         self._host.apad.pending = None
         self._scheduler.reschedule(self.task, next_us=self.last_us + self.task.period_us, active=True)
+        if self.on_rearm is not None:
+            self.on_rearm()
+
+    def ahead(self) -> RestAhead | None:
+        """What the parked rest holds ahead of now (the ticks until now taken); None while ticking."""
+        self.settle()
+        apad = self._host.apad
+        rest = apad.rest
+        if not self.parked or rest is None:
+            return None
+        if isinstance(rest, ChargingRest):  # no closed form: known only to come to full
+            return RestAhead(replace(rest.state(), battery_v=BATTERY_FULL_V), None, self.last_us or 0, 0, 0, None)
+        assert self.last_us is not None
+        still = rest.still_from()
+        period = self.task.period_us
+        end = rest.after(max(still, rest.steps))
+        still_us = self.last_us + max(0, still - rest.steps) * period
+        return RestAhead(end, still_us, self.last_us, rest.steps, period, rest)
+
+
+@dataclass(frozen=True)
+class RestAhead:
+    """A parked hull's rest from `last_us` (its last tick taken, `steps` into the rest) on.
+
+    `end` is the hull once the rest has done all it can (drained flat, charged full, or as now); it
+    gets there at `still_us`, or at an instant with no closed form (None: a charging rest, whose
+    battery rises step by step, `rest.ChargingRest`). `hull_at` is the hull at an instant ahead,
+    in the closed form (`rest.Rest.after`) the ticks would leave; only where `still_us` is known.
+    """
+
+    end: VehicleState
+    still_us: int | None
+    last_us: int
+    steps: int
+    period_us: int
+    rest: Rest | None
+
+    def hull_at(self, t_us: int) -> VehicleState:
+        """The hull after the ticks up to `t_us` (every tick at or before it: read after the physics task's
+        turn in that instant, as a stream task reads it)."""
+        if self.rest is None or self.still_us is None or t_us >= self.still_us:
+            return self.end
+        return self.rest.after(self.steps + max(0, t_us - self.last_us) // self.period_us)
 
 
 def _busy(apad: ApadState) -> bool:

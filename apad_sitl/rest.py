@@ -22,6 +22,7 @@ Pure: no clock, no I/O; `dt_s` is the physics step the rest was found at.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 from apad_sitl.energy_counters import EnergyCounters
@@ -75,13 +76,31 @@ class Rest:
         steps, cached = self._cache
         if steps == self.steps:
             return cached
-        o, n = self.origin, self.steps
+        state = self.after(self.steps)
+        self._cache = (self.steps, state)
+        return state
+
+    def after(self, n: int) -> VehicleState:
+        """The hull after `n` steps of the rest (what `state` is once `steps` is `n`); changes nothing."""
+        o = self.origin
         battery_v = max(BATTERY_EMPTY_V, o.battery_v - n * self._drain_v)
         # A flat battery stops the thrusters: from the step after it emptied, the thrust is 0 (as stepped).
         thrust = 0.0 if o.battery_v - (n - 1) * self._drain_v <= BATTERY_EMPTY_V else o.thrust_mps2
-        state = replace(o, battery_v=battery_v, thrust_mps2=thrust)
-        self._cache = (n, state)
-        return state
+        return replace(o, battery_v=battery_v, thrust_mps2=thrust)
+
+    def still_from(self) -> int:
+        """The step count from which the hull changes no more: 0 if nothing drains (held full at the
+        charger), else the step after the battery went flat (the thrust is 0 from then)."""
+        o, drain = self.origin, self._drain_v
+        if drain <= 0.0:
+            return 0
+        # The first n with o.battery_v - (n - 1) * drain <= empty (the test `after` makes), from its estimate.
+        n = max(1, math.ceil((o.battery_v - BATTERY_EMPTY_V) / drain) + 1)
+        while n > 1 and o.battery_v - (n - 2) * drain <= BATTERY_EMPTY_V:
+            n -= 1
+        while o.battery_v - (n - 1) * drain > BATTERY_EMPTY_V:
+            n += 1
+        return n
 
 
 class ChargingRest:

@@ -43,6 +43,9 @@ class ApadState:
         self.rest: Rest | ChargingRest | None = None
         # Set while the physics task is parked at rest (`apad_sitl.parking`): takes the steps it skipped.
         self.pending: Callable[[], None] | None = None
+        # Ideal-link mode (`apad_sitl.streams`): called after a setter changed the state while the physics
+        # task is parked, which may end the rest with no message to settle it (the world, a test, a restore).
+        self.changed_while_parked: Callable[[], None] | None = None
         self._mode: int = RoverMode.HOLD
         self._armed = True  # boots armed so a mission script needs no arming step
         self.speed_override_mps = 0.0  # DO_CHANGE_SPEED for later Go Tos; 0: SPEED_MAX
@@ -75,6 +78,8 @@ class ApadState:
         self.settle()  # the steps skipped so far were taken from the old state
         self.rest = None
         self._state = value
+        if self.pending is not None:
+            self._changed()
 
     @property
     def energy(self) -> EnergyCounters:
@@ -94,6 +99,8 @@ class ApadState:
     def params(self, value: ApadParams) -> None:
         self.settle()  # the ticks until now ran with the old set
         self._params = value
+        if self.pending is not None:
+            self._changed()
 
     @property
     def current_mps(self) -> tuple[float, float]:
@@ -104,6 +111,8 @@ class ApadState:
     def current_mps(self, value: tuple[float, float]) -> None:
         self.settle()  # the ticks until now drifted in the old current
         self._current_mps = value
+        if self.pending is not None:
+            self._changed()
 
     @property
     def primitive(self) -> PrimitiveState:
@@ -142,6 +151,8 @@ class ApadState:
             return
         for listener in self._primitive_listeners:
             listener(old, new)
+        if self.pending is not None:
+            self._changed()
 
     def set_mode(self, mode: int) -> None:
         """Change the mode and report it (nothing if it is the mode already)."""
@@ -158,6 +169,12 @@ class ApadState:
             self._armed = armed
             for listener in self._armed_listeners:
                 listener(armed)
+            if self.pending is not None:
+                self._changed()
+
+    def _changed(self) -> None:
+        if self.changed_while_parked is not None:
+            self.changed_while_parked()
 
     # ------------------------------------------------------------------ a checkpoint's restore
 

@@ -7,6 +7,19 @@ PRIMITIVE_STATUS and DOCK_SLOT_STATUS also go out the moment they change (`annou
 script never waits a stream period to see its command take effect: the vehicle's core makes
 `primitive_changed` a listener of the primitive, and `send_heartbeat` one of mode and arming.
 
+On an ideal link (`by_exception`, the event platform's) a stream reports by exception: at its period
+it sends only what differs from what it last sent (`apad_sitl.by_exception`); HEARTBEAT goes once
+at attach and then with each change of mode or arming, as it does at once anyway. Nothing runs where
+nothing happens: while the hull rests with its physics task parked (`apad_sitl.parking`), each
+stream fires next at the first instant of its grid at which its message would differ, over the
+rest's closed form, and is parked when it never would; `wake` (the physics ticking again: a command
+handled, a setter of the state) puts them back on their grid. The battery's rule: a resting hull's
+battery drains (or charges at home) with no tick, so SYS_STATUS and BATTERY_STATUS fire at the
+first instant of their grid at which the value they report has changed (a draining rest: in closed
+form, `rest.Rest.after`; a charging rest, which has none: at every instant of their grid until
+full). The GCS's battery is thus at every instant what a stream sending every period would have
+told it: never staler than the stream's period.
+
 A requested interval shorter than MIN_INTERVAL_US (20 ms, 50 Hz) is clamped to it and ACCEPTED, as
 ArduPilot does with rates above its limit: a stock GCS asking for "as fast as you can" gets a rate,
 and nobody gets a stream flood on request (1 µs used to be granted).
@@ -18,11 +31,13 @@ import math
 from collections.abc import Callable, Mapping
 from typing import Any
 
+from apad_sitl import by_exception as bx
 from apad_sitl import messages as msgs
 from apad_sitl.dege7 import DegE7
 from apad_sitl.host import ACCEPT, ACCEPTED, DENY, Command, CommandRegistry, PartHost, Reply, invalid, whole
 from apad_sitl.primitives import PrimitiveState, SlotState
 from apad_sitl.state import ApadState
+from apad_sitl.vehicle import VehicleState
 from apad_sitl.vocabulary import N_SLOTS, Primitive
 from mavlink_dialect import mavlink
 from missiontime import US_PER_S, Scheduler, Task
@@ -45,6 +60,14 @@ DEFAULT_RATES_HZ: dict[int, float] = {
 MAX_MSG_ID = 2**24 - 1  # MAVLink 2 message ids are 24 bits
 MAX_INTERVAL_US = 2**31 - 1  # an int32 of microseconds (~36 min); longer is a typo, not a rate
 MIN_INTERVAL_US = 20_000  # 50 Hz per stream at most, whatever is asked
+# Streams whose message changes only where it is sent at once anyway (mode, arming): by exception, one
+# report at attach and none periodic.
+AT_ONCE_ONLY = frozenset({mavlink.MAVLINK_MSG_ID_HEARTBEAT})
+
+Message = mavlink.MAVLink_message
+# A stream's messages at an instant, of the hull `state` (None: the hull now, read where each reads it).
+Build = Callable[[int, VehicleState | None], list[Message]]
+
 
 
 class Streams:
@@ -64,7 +87,9 @@ class Streams:
         system_id: int,
         rates_hz: Mapping[int, float] | None = None,
         target_e7: DegE7 | None = None,
+        by_exception: bool = False,
     ) -> None:
+        """`by_exception`: the ideal link's telemetry (the module's docstring)."""
         self._host = host
         self._apad = apad
         self._frame = frame
@@ -81,21 +106,34 @@ class Streams:
         self._tasks: dict[int, Task] = {}
         self._sent_primitive: tuple[Any, ...] | None = None
         self._sent_slots: list[SlotState | None] = [None] * N_SLOTS
+        self.by_exception = by_exception
+        self._last: dict[tuple[int, int], tuple[Any, ...]] = {}  # by exception: each stream's last report
+        self._resting: set[int] = set()  # by exception: streams off their period while the hull rests
+        self._rest: bx.Resting | None = None
 
-        send = host.send
-        self._senders: dict[int, Callable[[int], None]] = {
-            mavlink.MAVLINK_MSG_ID_HEARTBEAT: lambda now: self.send_heartbeat(),
-            mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: self._send_position,
-            mavlink.MAVLINK_MSG_ID_SYS_STATUS: lambda now: send(msgs.sys_status(apad.state)),
-            mavlink.MAVLINK_MSG_ID_BATTERY_STATUS: lambda now: send(msgs.battery_status(apad.state, apad.energy)),
-            mavlink.MAVLINK_MSG_ID_PRIMITIVE_STATUS: self._send_primitive_status,
-            mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS: self._send_all_slots,
-            mavlink.MAVLINK_MSG_ID_ATTITUDE: lambda now: send(msgs.attitude(now, apad.state)),
-            mavlink.MAVLINK_MSG_ID_VFR_HUD: lambda now: send(msgs.vfr_hud(apad.state, apad.params)),
-            mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: lambda now: send(msgs.extended_sys_state()),
-            mavlink.MAVLINK_MSG_ID_HOME_POSITION: self._send_home,
-            mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION: lambda now: send(msgs.autopilot_version(system_id)),
+        def now_or(state: VehicleState | None) -> VehicleState:
+            return apad.state if state is None else state
+
+        # What each stream sends, built (pure); its sender sends it.
+        self._builders: dict[int, Build] = {
+            mavlink.MAVLINK_MSG_ID_HEARTBEAT: lambda now, s: [msgs.heartbeat(apad.mode, apad.armed)],
+            mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: self._position,
+            mavlink.MAVLINK_MSG_ID_SYS_STATUS: lambda now, s: [msgs.sys_status(now_or(s))],
+            mavlink.MAVLINK_MSG_ID_BATTERY_STATUS: lambda now, s: [msgs.battery_status(now_or(s), apad.energy)],
+            mavlink.MAVLINK_MSG_ID_PRIMITIVE_STATUS: self._primitive_status,
+            mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS: lambda now, s: [
+                msgs.dock_slot_status(now, slot, apad.primitive.slot_state(slot)) for slot in range(1, N_SLOTS + 1)],
+            mavlink.MAVLINK_MSG_ID_ATTITUDE: lambda now, s: [msgs.attitude(now, now_or(s))],
+            mavlink.MAVLINK_MSG_ID_VFR_HUD: lambda now, s: [msgs.vfr_hud(now_or(s), apad.params)],
+            mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: lambda now, s: [msgs.extended_sys_state()],
+            mavlink.MAVLINK_MSG_ID_HOME_POSITION: self._home,
+            mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION: lambda now, s: [msgs.autopilot_version(system_id)],
         }
+        self._senders: dict[int, Callable[[int], None]] = {msg_id: self._sender(build)
+                                                           for msg_id, build in self._builders.items()}
+        self._senders[mavlink.MAVLINK_MSG_ID_HEARTBEAT] = lambda now: self.send_heartbeat()
+        self._senders[mavlink.MAVLINK_MSG_ID_PRIMITIVE_STATUS] = self._send_primitive_status
+        self._senders[mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS] = self._send_all_slots
         commands.register(mavlink.MAV_CMD_REQUEST_MESSAGE, self._cmd_request_message)
         commands.register(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, self._cmd_set_message_interval)
         commands.register(mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES, self._cmd_request_autopilot_capabilities)
@@ -103,17 +141,88 @@ class Streams:
 
     # ------------------------------------------------------------------ tasks
 
-    def attach(self, scheduler: Scheduler, start_us: int, name: str) -> None:
-        """One task per stream, first firing at `start_us` if its rate is not 0."""
+    def attach(self, scheduler: Scheduler, start_us: int, name: str, rest: bx.Resting | None = None) -> None:
+        """One task per stream, first firing at `start_us` if its rate is not 0. By exception, `rest` is the
+        physics task the streams park with (None: they never park)."""
         self._scheduler = scheduler
+        self._rest = rest
         for msg_id, sender in self._senders.items():
-            task = scheduler.every(1.0, self._stream_callback(sender), f"{name}.{_msg_name(msg_id)}", start_us)
+            callback = self._report_callback(msg_id) if self.by_exception else self._stream_callback(sender)
+            task = scheduler.every(1.0, callback, f"{name}.{_msg_name(msg_id)}", start_us)
             self._tasks[msg_id] = task
             self._apply_interval(msg_id, task, start_us)
 
     def stop(self) -> None:
+        self._resting.clear()
         for task in self._tasks.values():
             task.active = False
+
+    def wake(self) -> None:
+        """By exception: the streams parked or sent ahead while the hull rested back on their grid at the
+        next instant a stream ticking throughout would run (the physics ticks again: what they report may
+        change)."""
+        scheduler = self._scheduler
+        if scheduler is None or self._host.closed:
+            return
+        for msg_id in self._resting:
+            task = self._tasks[msg_id]
+            if self._interval_us[msg_id] > 0:
+                scheduler.reschedule(task, next_us=bx.next_on_grid(task, scheduler), active=True)
+        self._resting.clear()
+
+    def _report_callback(self, msg_id: int) -> Callable[[int], None]:
+        """A stream by exception: what differs from its last report sent, then when it fires next."""
+        host, build = self._host, self._builders[msg_id]
+
+        def callback(now_us: int) -> None:
+            host.now_us = now_us
+            self._resting.discard(msg_id)
+            built = build(now_us, None)
+            for msg in built:
+                if self._last.get(bx.stream_of(msg)) != bx.report_key(msg):
+                    self._send_report(msg)
+            task = self._tasks[msg_id]
+            if msg_id in AT_ONCE_ONLY:
+                task.active = False
+            else:
+                self._plan(msg_id, task, now_us, built)
+
+        return callback
+
+    def _send_report(self, msg: Message) -> None:
+        self._emit(msg)
+        msg_id = msg.get_msgId()
+        if msg_id == mavlink.MAVLINK_MSG_ID_PRIMITIVE_STATUS:
+            self._sent_primitive = self._primitive_key()
+        elif msg_id == mavlink.MAVLINK_MSG_ID_DOCK_SLOT_STATUS:
+            _, slot = bx.stream_of(msg)
+            self._sent_slots[slot - 1] = self._apad.primitive.slot_state(slot)
+
+    def _plan(self, msg_id: int, task: Task, now_us: int, built: list[Message]) -> None:
+        """While the hull rests parked: on to the first instant of the grid whose message differs, or
+        parked if none will (a charging rest, with no closed form: at its period)."""
+        ahead = self._rest.ahead() if self._rest is not None else None
+        if ahead is None or self._scheduler is None:
+            return  # the physics ticks: at the stream's period
+        build, now_keys = self._builders[msg_id], bx.keys(built)
+        if bx.keys(build(now_us, ahead.end)) == now_keys:  # it would only repeat itself: parked
+            self._scheduler.reschedule(task, active=False)
+            self._resting.add(msg_id)
+            return
+        still_us = ahead.still_us
+        if still_us is None:
+            return
+        period = task.period_us
+        k_end = max(1, -((now_us - still_us) // period))  # the first instant of the grid at or after still_us
+
+        def differs(k: int) -> bool:
+            t_us = now_us + k * period
+            return bx.keys(build(t_us, ahead.hull_at(t_us))) != now_keys
+
+        k = bx.first_change(differs, k_end)
+        if k > 1:
+            self._scheduler.reschedule(task, next_us=now_us + k * period)
+            self._resting.add(msg_id)
 
     def _stream_callback(self, sender: Callable[[int], None]) -> Callable[[int], None]:
         host = self._host
@@ -125,6 +234,9 @@ class Streams:
         return callback
 
     def _apply_interval(self, msg_id: int, task: Task, now_us: int) -> None:
+        if msg_id in self._resting and self._scheduler is not None:  # on its grid, as if it had kept ticking
+            self._resting.discard(msg_id)
+            self._scheduler.reschedule(task, next_us=bx.next_on_grid(task, self._scheduler), active=True)
         interval_us = self._interval_us[msg_id]
         if interval_us > 0 and not self._host.closed and self._scheduler is not None:
             self._scheduler.reschedule(task, period_us=interval_us, next_us=next_send_us(task, now_us, interval_us),
@@ -181,32 +293,48 @@ class Streams:
         """A HEARTBEAT now (also the listener of mode and arming: consoles show a change at once)."""
         apad = self._apad
         if not self._host.closed:
-            self._host.send(msgs.heartbeat(apad.mode, apad.armed))
+            self._emit(msgs.heartbeat(apad.mode, apad.armed))
 
-    def _send_position(self, now_us: int) -> None:
-        state = self._apad.state
+    def _emit(self, msg: Message) -> None:
+        """Send a stream's message (periodic, requested or at once); by exception, remember it as its last."""
+        self._host.send(msg)
+        if self.by_exception:
+            self._last[bx.stream_of(msg)] = bx.report_key(msg)
+
+    def _sender(self, build: Build) -> Callable[[int], None]:
+        def send(now_us: int) -> None:
+            for msg in build(now_us, None):
+                self._emit(msg)
+
+        return send
+
+    def _position(self, now_us: int, state: VehicleState | None) -> list[Message]:
+        state = self._apad.state if state is None else state
         lat_e7, lon_e7 = self.position_e7.of(state.x_m, state.y_m)
-        self._host.send(msgs.global_position_int(now_us, lat_e7, lon_e7, state))
+        return [msgs.global_position_int(now_us, lat_e7, lon_e7, state)]
 
-    def _send_home(self, now_us: int) -> None:
+    def _home(self, now_us: int, state: VehicleState | None) -> list[Message]:
         frame = self._frame
-        self._host.send(msgs.home_position(now_us, round(frame.origin_lat_deg * 1e7),
-                                           round(frame.origin_lon_deg * 1e7)))
+        return [msgs.home_position(now_us, round(frame.origin_lat_deg * 1e7), round(frame.origin_lon_deg * 1e7))]
 
     def _primitive_key(self) -> tuple[Any, ...]:
         p = self._apad.primitive
         return (p.kind, p.progress, p.target_x_m, p.target_y_m, p.slot, p.mussel_id)
 
-    def _send_primitive_status(self, now_us: int) -> None:
+    def _primitive_status(self, now_us: int, state: VehicleState | None) -> list[Message]:
         apad = self._apad
         p = apad.primitive
         lat_e7, lon_e7 = (0, 0) if p.kind == Primitive.IDLE else self.target_e7.of(p.target_x_m, p.target_y_m)
-        self._host.send(msgs.primitive_status(now_us, p, lat_e7, lon_e7, apad.state))
+        return [msgs.primitive_status(now_us, p, lat_e7, lon_e7, apad.state if state is None else state)]
+
+    def _send_primitive_status(self, now_us: int) -> None:
+        for msg in self._primitive_status(now_us, None):
+            self._emit(msg)
         self._sent_primitive = self._primitive_key()
 
     def send_slot(self, slot: int) -> None:
         s = self._apad.primitive.slot_state(slot)
-        self._host.send(msgs.dock_slot_status(self._host.now_us, slot, s))
+        self._emit(msgs.dock_slot_status(self._host.now_us, slot, s))
         self._sent_slots[slot - 1] = s
 
     def _send_all_slots(self, now_us: int) -> None:
