@@ -111,10 +111,25 @@ class EventClock(VirtualClock):
             return None
         return grid_at_or_after(start_us, period_us, max(seconds_to_us(wake_s), self.now_us + 1))
 
+    def wake(self, start_us: int, period_s: float, wake_at: WakeFn | None) -> Callable[[], int | None]:
+        """`wake_us` of one wait, asked again only after news or once passed: a declaration reads what the GCS
+        knows, and between news its beliefs run on as they were foreseen (the instant it named stands)."""
+        period_us = max(seconds_to_us(period_s), 1)
+        known: list[tuple[int, int | None]] = []
+
+        def next_us() -> int | None:
+            news = self.news()
+            if not known or known[0][0] != news or (known[0][1] is not None and known[0][1] <= self.now_us):
+                known[:] = [(news, self.wake_us(start_us, period_us, wake_at))]
+            return known[0][1]
+
+        return next_us
+
     def sleep_until(self, look: Callable[[], T | None], period_s: float, wake_at: WakeFn | None = None) -> T:
         start_us, period_us = self.now_us, max(seconds_to_us(period_s), 1)
+        wake = self.wake(start_us, period_s, wake_at)
         while True:
-            if self.advance_until_news(self.wake_us(start_us, period_us, wake_at)):
+            if self.advance_until_news(wake()):
                 self.advance_to(grid_at_or_after(start_us, period_us, self.now_us))  # news: seen at the next look
             self.looks += 1
             answer = look()

@@ -149,7 +149,7 @@ class _Process:
     # and what the look answered or raised, for the script to take when it wakes.
     look: Callable[[], object] | None = None
     period_us: int = 0
-    wake_at: WakeFn | None = None  # event platform: when time alone could answer the look
+    wake: Callable[[], int | None] | None = None  # event platform: when time alone could answer the look
     start_us: int = 0  # when the look's wait began: its grid of looks
     entry: int = -1  # the sequence number of its queue entry; older entries are stale
     answer: object = None
@@ -223,12 +223,13 @@ class Processes:
         runs in the thread holding the baton at each wake time, in the order the script's own sleeps
         would have woken it, and only an answer (or an exception, re-raised here) wakes its thread.
         On an `EventClock` the wake times are the news and `wake_at` (`_next_look_us`)."""
-        process.look, process.period_us, process.wake_at = look, max(period_us, 1), wake_at
-        process.start_us = self.clock.now_us
+        process.look, process.period_us, process.start_us = look, max(period_us, 1), self.clock.now_us
+        if isinstance(self.clock, EventClock):
+            process.wake = self.clock.wake(process.start_us, us_to_s(process.period_us), wake_at)
         try:
             self.park(process, self._next_look_us(process))
         finally:
-            process.look = process.wake_at = None
+            process.look = process.wake = None
         answer, raised = process.answer, process.raised
         process.answer = process.raised = None
         if raised is not None:
@@ -243,10 +244,9 @@ class Processes:
     def _next_look_us(self, process: _Process) -> int:
         """When a sleeping script looks next by time alone: a period on (lockstep), or its wake time on
         its grid (`EventClock`; never, when only news can answer it)."""
-        clock = self.clock
-        if not isinstance(clock, EventClock):
-            return clock.now_us + process.period_us
-        wake = clock.wake_us(process.start_us, process.period_us, process.wake_at)
+        if process.wake is None:
+            return self.clock.now_us + process.period_us
+        wake = process.wake()
         return NEVER_US if wake is None else wake
 
     def _until_news(self, clock: EventClock, wake_us: int) -> bool:

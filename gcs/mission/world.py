@@ -329,7 +329,7 @@ def _embed_one(
         apad_end, apad_params(s, a), a.home_lat_deg, a.home_lon_deg, system_id=a.system_id, modem=_apad_modem(world, a),
         current_mps=(s.environment.current_east_mps, s.environment.current_north_mps),
         log_dir=world.folder.path if world.folder else None, log_epoch_us=epoch_us, signing_key=options.signing_key,
-        geofence_deg=world.geofence_deg or None, log_append=append_logs,
+        geofence_deg=world.geofence_deg or None, log_append=append_logs, ideal_link=world.platform is Platform.EVENT,
     )
     if vehicle.log is not None:
         vehicle.log.mute(muted_logs)  # before its first event, at attach
