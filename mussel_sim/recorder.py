@@ -12,6 +12,12 @@ simulated day (`DayLedger`, given `day_us`) is counted at every step, so the per
 exact whatever the traces kept. `trace_every_steps=0` turns traces off; `trace_ids` restricts them
 to some aMussels.
 
+On the event platform a step may cover several of the model's periods (`record(..., periods=k)`, nothing
+discontinuous in it: `mussel_sim.next_change`): it counts as k steps (uptime, the day's figures), the
+trace keeps its rows on the periods' grid (the battery linear inside the step), and the step rows
+(`step_time_us`, `active_count`) are one per step recorded plus one at each trace row inside a longer
+one, so `battery_trace()`'s rows index them as in lockstep, where a step row is a step.
+
 What counts as active (eq. (3) and the active count): ACTIVE, and SINKING unless
 `sinking_counts_active=False`. The paper's simulated aMussel "transitions to a discharging battery
 behaviour and becomes active" as it is released, so the 20 s it takes to reach the seabed count as
