@@ -175,6 +175,7 @@ class AcousticNetwork:
         end_us = self.fleet.end_us
         if not self.planners or (end_us is not None and now_us > end_us):
             return  # past the mission's end the fleet's model stops (uptime's span) while the loops wind up
+        self.fleet.bring_up_to(now_us)  # the event platform steps the model only where it changes: the truth now
         s = self.fleet.state
         ids = s.ids.tolist()
         table = self.registry.mussels

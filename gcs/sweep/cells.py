@@ -132,24 +132,32 @@ def run_cell(cell: Cell, runs_dir: str | None = None) -> dict[str, Any]:
 
     def keep_series(world: World) -> None:
         rec = world.fleet.recorder
-        series.update(active_series(rec.step_time_us(), rec.active_count(), world.scenario.mission.duration_s))
+        series.update(active_series(rec.step_time_us(), rec.active_count(), world.scenario.mission.duration_s,
+                                    rec.start_us))
 
     out = Path(runs_dir) / f"{run_stem(cell.scenario)}-{cell.key}" if runs_dir is not None else None
     result = run_mission(cell.scenario, out, on_end=keep_series, platform=cell.platform)
     return {"result": result.to_json(), "series": series}
 
 
-def active_series(time_us: NDArray[np.int64], active: NDArray[np.int32], duration_s: float) -> dict[str, Any]:
-    """The active count's mean over bins of mission time (at most `SERIES_POINTS`), for bands across runs.
+def active_series(time_us: NDArray[np.int64], active: NDArray[np.int32], duration_s: float,
+                  start_us: int = 0) -> dict[str, Any]:
+    """The active count's mean over bins of mission time (at most `SERIES_POINTS`), for bands across runs:
+    each row (the count over a step ending at `time_us`, from the row before or `start_us`) weighed by the
+    time it covers in each bin (lockstep's steps are one second each; the event platform's as long as
+    nothing changes).
 
     Returns {"bin_s": width, "t_s": [end of each bin], "active": [mean count in it]}.
     """
     bin_s = max(SERIES_MIN_BIN_S, float(np.ceil(duration_s / SERIES_POINTS)))
     if active.size == 0:
         return {"bin_s": bin_s, "t_s": [], "active": []}
-    bins = np.maximum(np.ceil(time_us / (bin_s * US_PER_S)).astype(np.int64) - 1, 0)
-    counts = np.bincount(bins)
-    present = counts > 0
-    means = np.bincount(bins, weights=active.astype(np.float64))[present] / counts[present]
+    knots = np.concatenate(([start_us], time_us)).astype(np.float64)
+    area = np.concatenate(([0.0], np.cumsum(active * np.diff(knots))))  # the count integrated up to each knot
+    width_us = bin_s * US_PER_S
+    edges = np.arange(int(np.ceil(knots[-1] / width_us)) + 1) * width_us
+    covered = np.diff(np.clip(edges, knots[0], knots[-1]))
+    present = covered > 0
+    means = np.diff(np.interp(edges, knots, area))[present] / covered[present]
     ends = np.minimum((np.flatnonzero(present) + 1) * bin_s, duration_s)
     return {"bin_s": bin_s, "t_s": ends.round(3).tolist(), "active": means.round(3).tolist()}
