@@ -6,7 +6,8 @@ decoded message to the handler a part registered for it. The parts, one capabili
 MAVSDK's plugins on one `System`:
 
     commands.py          COMMAND_LONG / COMMAND_INT, retransmissions, COMMAND_ACK; the MAV_CMD table
-    streams.py           telemetry streams, SET_MESSAGE_INTERVAL, REQUEST_MESSAGE, on-change status
+    streams.py           telemetry streams, SET_MESSAGE_INTERVAL, REQUEST_MESSAGE, on-change status;
+                         by exception on the ideal link (`ideal_link`, by_exception.py)
     modes.py             HOLD / GUIDED, arming, the GCS heartbeat failsafe
     navigation.py        Go To Point (DO_REPOSITION, DO_CHANGE_SPEED)
     docking.py           the aMussel fix table, Dock and Undock

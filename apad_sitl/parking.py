@@ -25,6 +25,10 @@ failsafe is checked at the first and the last of them (only its `failsafe_active
 and whether the link is lost only changes once between two messages). Should the rest not hold
 for them after all (its key changed without a message: a test setting a parameter), they are
 stepped one by one. The result is the one ticking gives, to the bit.
+
+On the ideal link the telemetry streams park with the task (`apad_sitl.streams`): `ahead` tells
+them what the rest holds ahead (the hull at an instant, in closed form), and `on_rearm` wakes them
+when the task ticks again.
 """
 
 from __future__ import annotations

@@ -30,6 +30,8 @@ from apad_sitl.home_charger import home_charge_wh, volts_after
 from apad_sitl.params import ApadParams
 from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V, VehicleState, drain_v
 
+NEVER_STEPS = 2**62  # `Rest.still_from` of a drain that would take longer than any mission: ages of steps
+
 
 def at_rest(before: VehicleState, after: VehicleState) -> bool:
     """True if a step from `before` to `after` changed nothing but the battery: a fixed point."""
@@ -90,17 +92,29 @@ class Rest:
 
     def still_from(self) -> int:
         """The step count from which the hull changes no more: 0 if nothing drains (held full at the
-        charger), else the step after the battery went flat (the thrust is 0 from then)."""
+        charger) or it is flat already, else the step after the battery went flat (the thrust is 0 from then)."""
         o, drain = self.origin, self._drain_v
         if drain <= 0.0:
             return 0
-        # The first n with o.battery_v - (n - 1) * drain <= empty (the test `after` makes), from its estimate.
-        n = max(1, math.ceil((o.battery_v - BATTERY_EMPTY_V) / drain) + 1)
-        while n > 1 and o.battery_v - (n - 2) * drain <= BATTERY_EMPTY_V:
-            n -= 1
-        while o.battery_v - (n - 1) * drain > BATTERY_EMPTY_V:
-            n += 1
-        return n
+        # The first n with o.battery_v - (n - 1) * drain <= empty (the very test `after` makes; monotone in n):
+        # bisected between 0 and a bound doubled from the estimate, exact whatever the floats' rounding.
+        def flat(n: int) -> bool:
+            return o.battery_v - (n - 1) * drain <= BATTERY_EMPTY_V
+
+        estimate = (o.battery_v - BATTERY_EMPTY_V) / drain
+        if not estimate < NEVER_STEPS:  # a drain too small to empty it in any mission (or a float's range)
+            return NEVER_STEPS
+        hi = max(1, math.ceil(estimate) + 1)
+        while not flat(hi) and hi < NEVER_STEPS:
+            hi *= 2
+        lo = -1  # flat(-1) is false: the battery then is above its start (drain > 0)
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if flat(mid):
+                hi = mid
+            else:
+                lo = mid
+        return max(hi, 0)
 
 
 class ChargingRest:

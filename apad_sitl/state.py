@@ -12,6 +12,9 @@ them without its telemetry. A part that changes them calls these and knows nothi
 The parked physics (`apad_sitl.parking`) is settled here, not by the callers: every read of what
 its skipped ticks change (the hull `state`, the `energy` counters) and every write of what they
 step on (`state`, `params`, `current_mps`, the primitive, mode, arming) first takes the ticks skipped so far.
+On the ideal link (`apad_sitl.streams`) a write of what the rest holds for also calls
+`changed_while_parked` after it, so the physics (and the streams parked with it) tick again at once
+when it ends the rest, not at the next message or read.
 The physics itself steps `state` (or lets it rest, `rest`), PARAM_SET swaps `params`, DO_CHANGE_SPEED
 sets `speed_override_mps` (read by the next Go To only, so plain), and the energy part counts in `energy`.
 """

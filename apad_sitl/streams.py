@@ -69,7 +69,6 @@ Message = mavlink.MAVLink_message
 Build = Callable[[int, VehicleState | None], list[Message]]
 
 
-
 class Streams:
     """The vehicle's telemetry part. `attach` makes the tasks; `stop` ends them.
 

@@ -22,7 +22,7 @@ from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.energy import EnergyMeter
 from apad_sitl.hull_step import step_hull
 from apad_sitl.params import ApadParams
-from apad_sitl.rest import Rest, at_rest
+from apad_sitl.rest import NEVER_STEPS, Rest, at_rest
 from apad_sitl.state import ApadState
 from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V, VehicleState, step
 from mavlink_dialect import Codec, mavlink, memory_pair
@@ -84,6 +84,24 @@ def test_a_rest_drains_to_empty_and_stays_there_as_stepping_does() -> None:
         assert rest.state().battery_v == pytest.approx(want.battery_v, abs=1e-12)
         assert rest.state().thrust_mps2 == want.thrust_mps2
     assert rest.state().battery_v == BATTERY_EMPTY_V
+
+
+@settings(max_examples=200, deadline=None)
+@given(battery_v=st.floats(BATTERY_EMPTY_V, 16.0), idle_vph=st.floats(0.0, 50.0), thrust=st.floats(0.0, 0.5))
+def test_a_rest_changes_no_more_from_the_step_it_says(battery_v: float, idle_vph: float, thrust: float) -> None:
+    """`still_from`, where the ideal link's streams stop looking ahead: `after` is the same from there on,
+    and not two steps before (one: the thrust, 0 already, may drop to 0 a step after the battery went flat)."""
+    params = replace(ApadParams(), batt_drain_idle_vph=idle_vph)
+    rest = Rest(VehicleState(battery_v=battery_v, thrust_mps2=thrust), params, DT)
+    n = rest.still_from()
+    if n == NEVER_STEPS:  # a drain too small to empty it in any mission
+        assert rest.after(n).battery_v > BATTERY_EMPTY_V
+        return
+    assert rest.after(n) == rest.after(n + 1) == rest.after(n + 10**9)
+    if n > 0:
+        assert rest.after(n).battery_v == BATTERY_EMPTY_V
+    if n > 1:
+        assert rest.after(n - 2) != rest.after(n)
 
 
 def test_a_moving_hull_is_not_at_rest() -> None:
