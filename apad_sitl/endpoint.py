@@ -143,7 +143,7 @@ class SitlVehicle:
         self._wire()
 
         if log_dir is not None:
-            self.log = VehicleLog(Path(log_dir), system_id, log_epoch_us, append=log_append)
+            self.log = VehicleLog(Path(log_dir), system_id, log_epoch_us, append=log_append, tlog=not ideal_link)
         # Logged at attach, stamped with the mission time then (a resumed mission's aPad starts late).
         self._start_fields = {"system_id": system_id, "home_lat_deg": home_lat_deg, "home_lon_deg": home_lon_deg,
                               "current_mps": list(current_mps)}

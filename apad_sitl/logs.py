@@ -40,23 +40,27 @@ class VehicleLog:
     """Both logs of one aPad. `muted`: nothing reaches the files (a resumed lockstep mission
     replaying what they already hold)."""
 
-    def __init__(self, log_dir: Path, system_id: int, epoch_us: int = 0, append: bool = False) -> None:
-        """`append` continues existing logs (the mission resumed after a GCS crash)."""
+    def __init__(self, log_dir: Path, system_id: int, epoch_us: int = 0, append: bool = False,
+                 tlog: bool = True) -> None:
+        """`append` continues existing logs (the mission resumed after a GCS crash); `tlog` False: the event
+        log alone (the event platform's ideal link carries no bytes to log)."""
         log_dir.mkdir(parents=True, exist_ok=True)
         self.tlog_path = tlog_path(log_dir, system_id)
         self.events_path = events_path(log_dir, system_id)
         self.signing_path = signing_path(log_dir, system_id)
         self.epoch_us = epoch_us
-        self._tlog = TlogWriter(self.tlog_path, epoch_us, append)
+        self._tlog = TlogWriter(self.tlog_path, epoch_us, append) if tlog else None
         self._events = open(self.events_path, "a" if append else "w", encoding="utf-8")  # noqa: SIM115
         self.muted = False
         self._flushed_at = time.monotonic()
 
     def message(self, time_us: int, frame: bytes | bytearray) -> None:
-        self._tlog.write(time_us, bytes(frame))
+        if self._tlog is not None:
+            self._tlog.write(time_us, bytes(frame))
 
     def messages(self, time_us: int, frames: list[bytes]) -> None:
-        self._tlog.write_many(time_us, frames)
+        if self._tlog is not None:
+            self._tlog.write_many(time_us, frames)
 
     def event(self, time_us: int, event: str, **fields: Any) -> None:
         if self.muted:
@@ -66,22 +70,26 @@ class VehicleLog:
         self._events.flush()  # events are rare and the ones before a crash matter most
 
     def mute(self, muted: bool) -> None:
-        self.muted = self._tlog.muted = muted
+        self.muted = muted
+        if self._tlog is not None:
+            self._tlog.muted = muted
 
     def sizes(self) -> dict[Path, int]:
         """How long each log is now, everything written flushed first (what a checkpoint keeps)."""
         events = self.events_path.stat().st_size if self._events.closed else self._events.tell()
-        return {self.tlog_path: self._tlog.size(), self.events_path: events}
+        return ({} if self._tlog is None else {self.tlog_path: self._tlog.size()}) | {self.events_path: events}
 
     def flush(self) -> None:
         """Into the kernel, unless that was done less than FLUSH_EVERY_WALL_S ago (wall time)."""
         now = time.monotonic()
         if now - self._flushed_at >= FLUSH_EVERY_WALL_S:
             self._flushed_at = now
-            self._tlog.flush()
+            if self._tlog is not None:
+                self._tlog.flush()
 
     def close(self) -> None:
-        self._tlog.close()
+        if self._tlog is not None:
+            self._tlog.close()
         if not self._events.closed:
             self._events.close()
 
