@@ -14,7 +14,7 @@ from __future__ import annotations
 import heapq
 import select
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
 from typing import Protocol, TypeVar
 
@@ -59,6 +59,18 @@ class Task:
     order: int  # registration order: ties run in the order tasks were added
     active: bool = True
     generation: int = 0  # bumped on every reschedule; older queue entries are stale
+
+
+@dataclass(frozen=True)
+class Declared:
+    """What a wait declares it waits for: a clock that jumps from event to event looks only then
+    (`missiontime.event_clock`); the others look at every period whatever it says.
+
+    `wake_at`: the first mission second time alone could answer it (None: only news can). `news`: what it
+    reads that only a message changes, as one comparable value (None: anything the world hears)."""
+
+    wake_at: Callable[[], float | None] | None = None
+    news: Callable[[], Hashable] | None = None
 
 
 class Poller(Protocol):
@@ -222,12 +234,10 @@ class Clock(Protocol):
 
     def sleep(self, dt_s: float) -> None: ...
 
-    def sleep_until(self, look: Callable[[], T | None], period_s: float,
-                    wake_at: Callable[[], float | None] | None = None) -> T:
+    def sleep_until(self, look: Callable[[], T | None], period_s: float, declared: Declared | None = None) -> T:
         """Sleep `period_s` at a time until `look()`, called after each sleep, answers (not None);
-        return the answer. What `look` raises is raised here. `wake_at`: the first mission second time
-        alone could make `look` answer (None: only news can); a clock that jumps from event to event
-        looks only then and after news (`missiontime.event_clock`), the others at every period."""
+        return the answer. What `look` raises is raised here. `declared`: what it waits for (`Declared`);
+        a clock that jumps from event to event looks only then, the others at every period."""
         ...
 
 
@@ -257,8 +267,7 @@ class VirtualClock:
     def sleep(self, dt_s: float) -> None:
         self.advance_to(self._now_us + seconds_to_us(max(dt_s, 0.0)))
 
-    def sleep_until(self, look: Callable[[], T | None], period_s: float,
-                    wake_at: Callable[[], float | None] | None = None) -> T:
+    def sleep_until(self, look: Callable[[], T | None], period_s: float, declared: Declared | None = None) -> T:
         return sleep_until(self, look, period_s)
 
     def advance_to(self, target_us: int) -> None:
@@ -337,8 +346,7 @@ class WallClock:
             else:
                 self._wait(timeout_s)
 
-    def sleep_until(self, look: Callable[[], T | None], period_s: float,
-                    wake_at: Callable[[], float | None] | None = None) -> T:
+    def sleep_until(self, look: Callable[[], T | None], period_s: float, declared: Declared | None = None) -> T:
         return sleep_until(self, look, period_s)
 
 

@@ -25,14 +25,12 @@ Bounded: a wait with nothing left to wake it (no task due, no wake time) is a bu
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
 from typing import TypeVar
 
-from missiontime.clocks import Scheduler, VirtualClock, seconds_to_us
+from missiontime.clocks import Declared, Scheduler, VirtualClock, seconds_to_us
 
 T = TypeVar("T")
-
-WakeFn = Callable[[], float | None]  # the first mission second time alone could settle a wait; None: only news
 
 
 class StalledWait(RuntimeError):
@@ -103,35 +101,56 @@ class EventClock(VirtualClock):
         self.advance_to(target_us)
         return self.news() != mark
 
-    def wake_us(self, start_us: int, period_us: int, wake_at: WakeFn | None) -> int | None:
-        """Where a wait started at `start_us` looks next by time alone: its wake time on its grid (at least
-        the next grid instant after now), or None when only news can end it."""
-        wake_s = wake_at() if wake_at is not None else None
-        if wake_s is None:
-            return None
-        return grid_at_or_after(start_us, period_us, max(seconds_to_us(wake_s), self.now_us + 1))
-
-    def wake(self, start_us: int, period_s: float, wake_at: WakeFn | None) -> Callable[[], int | None]:
-        """`wake_us` of one wait, asked again only after news or once passed: a declaration reads what the GCS
-        knows, and between news its beliefs run on as they were foreseen (the instant it named stands)."""
-        period_us = max(seconds_to_us(period_s), 1)
-        known: list[tuple[int, int | None]] = []
-
-        def next_us() -> int | None:
-            news = self.news()
-            if not known or known[0][0] != news or (known[0][1] is not None and known[0][1] <= self.now_us):
-                known[:] = [(news, self.wake_us(start_us, period_us, wake_at))]
-            return known[0][1]
-
-        return next_us
-
-    def sleep_until(self, look: Callable[[], T | None], period_s: float, wake_at: WakeFn | None = None) -> T:
-        start_us, period_us = self.now_us, max(seconds_to_us(period_s), 1)
-        wake = self.wake(start_us, period_s, wake_at)
+    def sleep_until(self, look: Callable[[], T | None], period_s: float, declared: Declared | None = None) -> T:
+        waiting = Waiting(self, period_s, declared)
         while True:
-            if self.advance_until_news(wake()):
-                self.advance_to(grid_at_or_after(start_us, period_us, self.now_us))  # news: seen at the next look
-            self.looks += 1
+            wake = waiting.wake_us()
+            if self.advance_until_news(wake):
+                if not waiting.news_for_it() and (wake is None or self.now_us < wake):
+                    continue  # heard, but nothing this wait reads
+                self.advance_to(waiting.look_at(self.now_us))  # news: seen at the next look
+            waiting.looks()
             answer = look()
             if answer is not None:
                 return answer
+
+
+class Waiting:
+    """One wait on an `EventClock`: its grid of looks, its declaration, what it had heard at its last look.
+
+    Its wake time is asked again only after news it reads, or once passed: a declaration reads what the GCS
+    knows, and between news its beliefs run on as they were foreseen (the instant it named stands)."""
+
+    def __init__(self, clock: EventClock, period_s: float, declared: Declared | None) -> None:
+        self.clock = clock
+        self.start_us = clock.now_us
+        self.period_us = max(seconds_to_us(period_s), 1)
+        self.declared = declared or Declared()
+        self._heard = self._news()
+        self._wake: tuple[Hashable, int | None] | None = None
+
+    def _news(self) -> Hashable:
+        return self.declared.news() if self.declared.news is not None else self.clock.news()
+
+    def news_for_it(self) -> bool:
+        """Whether what it reads changed since its last look."""
+        return self._news() != self._heard
+
+    def looks(self) -> None:
+        self._heard = self._news()
+        self.clock.looks += 1
+
+    def look_at(self, t_us: int) -> int:
+        """Its look at or after `t_us`: on its grid."""
+        return grid_at_or_after(self.start_us, self.period_us, t_us)
+
+    def wake_us(self) -> int | None:
+        """Where it looks next by time alone: its wake time on its grid (at least the next grid instant after
+        now), or None when only news can end it."""
+        news, now = self._news(), self.clock.now_us
+        if self._wake is None or self._wake[0] != news or (self._wake[1] is not None and self._wake[1] <= now):
+            wake_at = self.declared.wake_at
+            wake_s = wake_at() if wake_at is not None else None
+            at = None if wake_s is None else self.look_at(max(seconds_to_us(wake_s), now + 1))
+            self._wake = (news, at)
+        return self._wake[1]

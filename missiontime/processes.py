@@ -48,8 +48,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Generic, TypeVar
 
-from missiontime.clocks import Clock, Scheduler, seconds_to_us, us_to_s
-from missiontime.event_clock import EventClock, WakeFn, grid_at_or_after
+from missiontime.clocks import Clock, Declared, Scheduler, seconds_to_us, us_to_s
+from missiontime.event_clock import EventClock, Waiting
 
 T = TypeVar("T")
 
@@ -80,11 +80,11 @@ class ProcessClock:
     def sleep(self, dt_s: float) -> None:
         self._coordinator.park(self._process, self.now_us + seconds_to_us(max(dt_s, 0.0)))
 
-    def sleep_until(self, look: Callable[[], T | None], period_s: float, wake_at: WakeFn | None = None) -> T:
+    def sleep_until(self, look: Callable[[], T | None], period_s: float, declared: Declared | None = None) -> T:
         """Looked at by whichever thread holds the baton when the script's time comes: a look that
         does not answer sleeps the script again without waking its thread (no hand-over). On an
-        `EventClock` its time comes after news and at `wake_at`, as the clock's own waits look."""
-        return self._coordinator.park_until(self._process, look, seconds_to_us(max(period_s, 0.0)), wake_at)
+        `EventClock` its time comes after news it reads and at its wake time, as the clock's own waits look."""
+        return self._coordinator.park_until(self._process, look, seconds_to_us(max(period_s, 0.0)), declared)
 
 
 def _held_lock() -> threading.Lock:
@@ -149,8 +149,7 @@ class _Process:
     # and what the look answered or raised, for the script to take when it wakes.
     look: Callable[[], object] | None = None
     period_us: int = 0
-    wake: Callable[[], int | None] | None = None  # event platform: when time alone could answer the look
-    start_us: int = 0  # when the look's wait began: its grid of looks
+    waiting: Waiting | None = None  # event platform: the look's wait (its grid, wake time, news)
     entry: int = -1  # the sequence number of its queue entry; older entries are stale
     answer: object = None
     raised: BaseException | None = None
@@ -218,18 +217,18 @@ class Processes:
             raise ProcessStopped(process.name)
 
     def park_until(self, process: _Process, look: Callable[[], T | None], period_us: int,
-                   wake_at: WakeFn | None = None) -> T:
+                   declared: Declared | None = None) -> T:
         """Called from the running script: sleep `period_us` at a time until `look()` answers; the look
         runs in the thread holding the baton at each wake time, in the order the script's own sleeps
         would have woken it, and only an answer (or an exception, re-raised here) wakes its thread.
-        On an `EventClock` the wake times are the news and `wake_at` (`_next_look_us`)."""
-        process.look, process.period_us, process.start_us = look, max(period_us, 1), self.clock.now_us
+        On an `EventClock` the wake times are the news it reads and its wake time (`_next_look_us`)."""
+        process.look, process.period_us = look, max(period_us, 1)
         if isinstance(self.clock, EventClock):
-            process.wake = self.clock.wake(process.start_us, us_to_s(process.period_us), wake_at)
+            process.waiting = Waiting(self.clock, us_to_s(process.period_us), declared)
         try:
             self.park(process, self._next_look_us(process))
         finally:
-            process.look = process.wake = None
+            process.look = process.waiting = None
         answer, raised = process.answer, process.raised
         process.answer = process.raised = None
         if raised is not None:
@@ -244,9 +243,9 @@ class Processes:
     def _next_look_us(self, process: _Process) -> int:
         """When a sleeping script looks next by time alone: a period on (lockstep), or its wake time on
         its grid (`EventClock`; never, when only news can answer it)."""
-        if process.wake is None:
+        if process.waiting is None:
             return self.clock.now_us + process.period_us
-        wake = process.wake()
+        wake = process.waiting.wake_us()
         return NEVER_US if wake is None else wake
 
     def _until_news(self, clock: EventClock, wake_us: int) -> bool:
@@ -257,8 +256,9 @@ class Processes:
         self._seen_news = clock.news()
         now = clock.now_us
         for wake, seq, process in list(self._queue):
-            if seq == process.entry and process.look is not None:
-                at = grid_at_or_after(process.start_us, process.period_us, now)
+            waiting = process.waiting
+            if seq == process.entry and waiting is not None and waiting.news_for_it():
+                at = waiting.look_at(now)
                 if at < wake:
                     self._push(process, at)
         return True
@@ -300,6 +300,8 @@ class Processes:
     def _looked(process: _Process) -> bool:
         """Run a sleeping script's look; True if it answered or raised (the script wakes to take it)."""
         assert process.look is not None
+        if process.waiting is not None:
+            process.waiting.looks()
         try:
             process.answer = process.look()
         except BaseException as exc:  # the script's own to raise, in its own thread

@@ -6,7 +6,7 @@ loop, the console and replay read it. Nothing else keeps a second copy of what w
 
 from __future__ import annotations
 
-from collections.abc import Collection
+from collections.abc import Callable, Collection
 from dataclasses import dataclass, field
 
 from apad_sitl.vocabulary import N_SLOTS, Latch, Primitive
@@ -118,6 +118,27 @@ class VehicleRegistry:
         self.fleet_heard_us = -1  # when (our clock) the fleet last spoke (a status, its node's heartbeat); -1: never
         self._seq: dict[tuple[int, int], int] = {}  # (system, component) -> the last sequence number taken
         self.version = 0  # bumped on every change a screen could show
+        # Bumped on every change a wait could read: all of `version`'s but a battery's that crosses no watched
+        # threshold (`watch_battery`); the event platform's waits look at this news (missiontime.event_clock).
+        self.news = 0
+        self._battery_watch: dict[int, list[Callable[[float], bool]]] = {}
+
+    def watch_battery(self, system_id: int, holds: Callable[[float], bool]) -> None:
+        """A wait reads whether `holds(battery_v)` of aPad `system_id` (the mission's end, a charge done): a
+        report that changes it is news; one that only moves the volts between such thresholds is not."""
+        self._battery_watch.setdefault(system_id, []).append(holds)
+
+    def battery_news(self, system_id: int, battery_v: float | None) -> tuple[bool, ...] | None:
+        """What a wait can read of aPad `system_id`'s battery: each watched threshold, held or not."""
+        if battery_v is None:
+            return None
+        return tuple(holds(battery_v) for holds in self._battery_watch.get(system_id, ()))
+
+    def _quiet_battery(self, system_id: int, before: float | None, after: float | None) -> bool:
+        """Whether a battery report from `before` to `after` volts changes nothing a wait reads."""
+        if before is None or after is None:
+            return before == after
+        return all(holds(before) == holds(after) for holds in self._battery_watch.get(system_id, ()))
 
     def silent_us(self, view: VehicleView, now_us: int) -> int:
         """How long the aPad of `view` has been silent: since its last heartbeat; 0 over the ideal link,
@@ -145,6 +166,7 @@ class VehicleRegistry:
             if refused is None:
                 self.mussel_heard_us[record.mussel_id] = self.fleet_heard_us = now_us
                 self.version += 1
+                self.news += 1
             return refused
         if isinstance(record, GoToSent):
             if system_id == self.gcs_system_id:  # another GCS's (or a forged) Go To is not our cost
@@ -157,10 +179,12 @@ class VehicleRegistry:
             view.last_heartbeat_us = now_us
             view.custom_mode, view.armed = record.custom_mode, record.armed
             self.version += 1
+            self.news += 1
             return None
         view = self.vehicles.get(system_id)
         if view is None:
             return None  # not (yet) a vehicle: its heartbeat makes it one
+        quiet = False
         match record:
             case Position():
                 view.lat_deg, view.lon_deg = record.lat_deg, record.lon_deg
@@ -178,9 +202,11 @@ class VehicleRegistry:
                     self.released_us[held.mussel_id] = now_us  # it charged until now (`gcs.belief.foresight`)
                 view.slots[record.slot] = record
             case Battery():
+                before = view.battery_v
                 if record.voltage_v is not None:
                     view.battery_v = record.voltage_v
                 view.battery_pct = record.remaining_pct
+                quiet = self._quiet_battery(system_id, before, view.battery_v)
             case Charging():
                 view.charging = record.charging
             case Home():
@@ -191,6 +217,7 @@ class VehicleRegistry:
                 view.statustext.append(record.text)
                 del view.statustext[:-STATUSTEXT_KEPT]
         self.version += 1
+        self.news += 0 if quiet else 1
         return None
 
     def count_frame(self, system_id: int, component_id: int, seq: int) -> None:
@@ -229,6 +256,7 @@ class VehicleRegistry:
             mine.update(theirs)
         self.fleet_heard_us = saved.fleet_heard_us
         self.version += 1
+        self.news += 1
 
     def expect(self, system_id: int, kind: Primitive, a: int = 0, b: int = 0) -> None:
         """We are about to command `kind` on this aPad: its reports count once they are about it."""

@@ -23,6 +23,7 @@ from gcs.loop.fleet_knowledge import FleetKnowledge
 from gcs.loop.telemetry_pace import HOLDING_PHASES, PACE_WORTH_S, PLANNING_PHASES, TelemetryPace
 from gcs.swarm.shares import others_lapse_s, route_conflicts
 from missiontime import us_to_s
+from missiontime.clocks import Declared
 from mussel_sim.geo import pair_distance_m
 from mussel_sim.vocabulary import MusselCommand, MusselState
 
@@ -86,11 +87,11 @@ class ApadActions:
             # Accepted, but not one report on it (all lost, or the failsafe took over unheard):
             # send it again; a re-send of a Go To in force is answered, not restarted.
             if not self.wait_until(partial(self._goto_heard, mine), timeout_s=GOTO_HEARD_S,
-                                    interruptible=interruptible):
+                                    interruptible=interruptible, others=False):
                 self._log("goto_unconfirmed", lat=target.lat, lon=target.lon, after_s=GOTO_HEARD_S)
                 continue
             if not self.wait_until(partial(self._goto_over, mine), timeout_s=trip_limit_s,
-                                    interruptible=interruptible):
+                                    interruptible=interruptible, others=False):
                 self._log("goto_timeout", lat=target.lat, lon=target.lon, after_s=round(trip_limit_s, 1))
                 continue
             if self._replaced(mine):  # the operator commanded the aPad meanwhile: the loop takes it back
@@ -247,17 +248,20 @@ class ApadActions:
     # --- waiting, ending, pausing -----------------------------------------------------------
 
     def wait_until(self, done: Callable[[], bool], timeout_s: float | None = None, interruptible: bool = True,
-                   holding_for_s: float = 0.0, look_by: Callable[[], float | None] | None = None) -> bool:
+                   holding_for_s: float = 0.0, look_by: Callable[[], float | None] | None = None,
+                   others: bool = True) -> bool:
         """Wait until `done`; False at `timeout_s`. What it waits for is declared: `done` reads what the GCS
         knows, so news (a report, an acknowledgement) can turn it true, and time alone from `look_by()` on
         (the first instant, mission s, a belief running between reports could: `gcs.loop.wake_times`;
         None: only news can). Lockstep and the field look at every `poll_s`, as a field script's sleep loop
         does (the reference); a platform that jumps from event to event wakes at news or `look_by`
-        instead, and `gcs.loop.wait_check` holds the declarations to what lockstep sees.
+        instead, and `gcs.loop.wait_check` holds the declarations to what lockstep sees. `others` False: `done`
+        reads nothing of the other aPads (their reports are no news to it).
         With slow telemetry in a holding phase, or when it holds in place for about `holding_for_s` (above
         an aMussel on its way up) and that is worth two rounds of requests (`PACE_WORTH_S`)."""
+        news = self.knows.news if others else partial(self.knows.news, False)
         if wait_check.ENABLED:
-            check = wait_check.WaitCheck(self.knows.news, self.clock, look_by, getattr(done, "__qualname__", "wait"))
+            check = wait_check.WaitCheck(news, self.clock, look_by, getattr(done, "__qualname__", "wait"))
             done = partial(check.looked, done)
         deadline = None if timeout_s is None else self.clock.time() + timeout_s
         holding = holding_for_s > PACE_WORTH_S or self.status.phase in HOLDING_PHASES
@@ -284,10 +288,12 @@ class ApadActions:
                                  self.settings.mission.duration_s if interruptible else None) if t is not None]
             return min(times) if times else None
 
+        declared = Declared(wake_at, news)
+
         while (looked := settled()) is None:
             if self.control.before_wait is not None:  # the console's hook sees every sleep
                 self._wait(poll_s)
-            elif (looked := self.clock.sleep_until(look, poll_s, wake_at)) is not _Looked.YOURS:
+            elif (looked := self.clock.sleep_until(look, poll_s, declared)) is not _Looked.YOURS:
                 break
             while self.control.paused and not self.control.stop:
                 self._wait(poll_s)

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Hashable
-from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -23,7 +22,7 @@ from gcs.belief.duty import Duty, OrdersSent
 from gcs.belief.foresight import foreseen_battery, foreseen_deployed
 from gcs.belief.real_fleet import MAX_REPORT_AGE_S, RealFleet
 from gcs.link.apad_api import ApadApi, Location
-from gcs.link.telemetry import SlotView
+from gcs.link.telemetry import PrimitiveView, SlotView
 from gcs.loop.control import LoopSettings
 from gcs.results.accounting import SURFACE_DEPTH_M
 from gcs.strategies import Outlook, traits
@@ -314,17 +313,20 @@ class FleetKnowledge:
         """Ids of the aMussels last reported in one of `states`."""
         return self.api.mussels.select(states)
 
-    def news(self) -> Hashable:
+    def news(self, others: bool = True) -> Hashable:
         """What the GCS holds that a wait can read and only a message changes, as one comparable value: the
         fleet's table (its version moves with every report), the share's claims and owners, every aPad as last
-        heard (arrival stamps left out: a repeated report of the same thing is no news), and whether this
-        aPad's link is up (it comes back with a heartbeat). A wait's other changes are time's
-        (`gcs.loop.wake_times`)."""
+        heard (arrival stamps left out: a repeated report of the same thing is no news; its battery as the
+        thresholds waits read, `VehicleRegistry.watch_battery`), and whether this aPad's link is up (it comes
+        back with a heartbeat). `others` False: this aPad alone of the aPads (a wait that reads no other's).
+        A wait's other changes are time's (`gcs.loop.wake_times`)."""
         registry = self.api.link.registry
-        apads = tuple((sysid, v.custom_mode, v.armed, v.lat_deg, v.lon_deg, v.battery_v, v.charging, v.home,
-                       replace(v.primitive, time_us=0), tuple(v.slots.values()),
+        vehicles = sorted(registry.vehicles.items()) if others else \
+            [(s, v) for s, v in registry.vehicles.items() if s == self.apad_id]
+        apads = tuple((sysid, v.custom_mode, v.armed, v.lat_deg, v.lon_deg, registry.battery_news(sysid, v.battery_v),
+                       v.charging, v.home, _primitive_news(v.primitive), tuple(v.slots.values()),
                        None if v.expected is None else (v.expected.kind, v.expected.a, v.expected.b, v.expected.seen))
-                      for sysid, v in sorted(registry.vehicles.items()))
+                      for sysid, v in vehicles)
         return registry.mussels.version, 0 if self.shares is None else self.shares.version, apads, self.link_up()
 
     def link_up(self) -> bool:
@@ -368,3 +370,9 @@ class FleetKnowledge:
         """This aPad was lost long enough for another to take over its claim: leave the aMussel to
         that one (no sink: it is being fetched)."""
         return self.shares is not None and not self.shares.holds(self.apad_id, mussel_id)
+
+
+def _primitive_news(p: PrimitiveView) -> tuple[object, ...]:
+    """A PRIMITIVE_STATUS as news: all it says but when it was stamped (a repeat is no news)."""
+    return (p.primitive, p.progress, p.target_lat_e7, p.target_lon_e7, p.distance_to_go_m, p.distance_travelled_m,
+            p.slot, p.mussel_id)

@@ -53,7 +53,7 @@ def idle_wait(crew: Crew) -> None:
         found = len(charging_pool(knows, crew.book))
         return found > 0 and found >= min(knows.pool_needed(mission.min_pool), free) and act.link_up()
 
-    act.wait_until(pool_full, look_by=functools.partial(pool_look_by, knows))
+    act.wait_until(pool_full, look_by=functools.partial(pool_look_by, knows), others=False)
 
 
 def plan_collection(crew: Crew) -> list[int]:
@@ -271,7 +271,7 @@ def charging_wait(crew: Crew) -> None:
     act.hold()
     strategy = crew.status.strategy
     act.wait_until(lambda: all(knows.charged(m, strategy) for m in knows.docked().values()),
-                   look_by=lambda: all_charged_look_by(knows, list(knows.docked().values()), strategy))
+                   look_by=lambda: all_charged_look_by(knows, list(knows.docked().values()), strategy), others=False)
 
 
 def plan_redeployment(crew: Crew, only: set[int] | None = None) -> list[tuple[int, int]]:

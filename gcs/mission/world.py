@@ -10,6 +10,8 @@ embedded SITL aPad or a real one at an address.
 
 from __future__ import annotations
 
+import functools
+import operator
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -142,6 +144,10 @@ class World:
         s = self.scenario
         a = next(a for a in s.apads if apad_id is None or a.system_id == apad_id)
         settings = loop_settings(s, a, sorted(self.homes))
+        registry = self.link.registry  # what of the aPad's battery its waits read: the mission's end, a charge done
+        registry.watch_battery(a.system_id, functools.partial(operator.ge, settings.battery_end_v))
+        if settings.energy is not None:
+            registry.watch_battery(a.system_id, settings.energy.charged)
         clock = clock or self.clock
         api = self.api if clock is self.clock else self.api.on_clock(clock)
         loop = EnergySharingLoop(api, clock, settings, self.homes, a.system_id, self.events, control, shares,
@@ -244,7 +250,7 @@ def build_world(
     world = World(scenario, clock, link, api, fleet, frame, config, homes, events, geofence_deg=fence, folder=folder,
                   options=options, platform=platform)
     if isinstance(clock, EventClock):  # its waits look when the GCS hears anything
-        clock.hears(lambda: link.registry.version)
+        clock.hears(lambda: link.registry.news)
         clock.hears(lambda: link.registry.mussels.version)
     world.mute_logs(muted_logs)
     if scenario.acoustic.enabled:

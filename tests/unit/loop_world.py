@@ -189,8 +189,8 @@ class ScriptedKnowledge:
     def link_up(self) -> bool:
         return self.world.link_up
 
-    def news(self) -> Hashable:
-        """What the test set, as one value: a change of the world is news."""
+    def news(self, others: bool = True) -> Hashable:
+        """What the test set, as one value: a change of the world is news (one aPad: `others` changes nothing)."""
         w = self.world
         return (tuple(sorted(w.states.items())), tuple(sorted(w.batteries.items())), tuple(w.slots.values()),
                 w.battery_v, w.charging_at_home, w.link_up)

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from missiontime import Clock, VirtualClock
+from missiontime.clocks import Declared
 from missiontime.event_clock import EventClock, StalledWait, grid_at_or_after
 from missiontime.processes import Processes
 
@@ -59,7 +60,7 @@ def test_a_wait_on_news_ends_where_lockstep_ends_with_far_fewer_looks(seed: int)
             counted[0] += 1
             return "news" if news.count >= 3 else ("time" if clock.time() >= 40.0 else None)
 
-        answer = clock.sleep_until(look, 0.5, lambda: 40.0)
+        answer = clock.sleep_until(look, 0.5, Declared(lambda: 40.0))
         ends[kind] = (answer, clock.time())
         looks[kind] = counted[0]
     assert ends[EventClock] == ends[VirtualClock]
@@ -75,7 +76,7 @@ def test_a_wait_that_only_time_can_end_looks_once_at_its_wake_time_on_its_grid()
         seen.append(clock.time())
         return "late" if clock.time() >= 12.34 else None
 
-    assert clock.sleep_until(look, 0.5, lambda: 12.34) == "late"
+    assert clock.sleep_until(look, 0.5, Declared(lambda: 12.34)) == "late"
     assert seen == [12.7]  # 0.2 + 25 x 0.5: where lockstep's look after 12.34 s is
     assert clock.looks == 1
 
@@ -88,7 +89,7 @@ def test_a_wake_time_already_past_falls_back_to_looking_every_period() -> None:
         seen.append(clock.time())
         return "done" if len(seen) == 4 else None
 
-    clock.sleep_until(look, 0.5, lambda: 0.0)  # a belief that cannot say: the past
+    clock.sleep_until(look, 0.5, Declared(lambda: 0.0))  # a belief that cannot say: the past
     assert seen == [0.5, 1.0, 1.5, 2.0]
 
 
@@ -123,7 +124,7 @@ def _two_scripts(kind: type[VirtualClock], seed: int) -> tuple[list[tuple[str, f
             return "five" if shared[0] >= 5 else None
 
         log.append(("waiter", c.time()))
-        c.sleep_until(look, 0.5, None)
+        c.sleep_until(look, 0.5)
         log.append(("waiter woke", c.time()))
 
     def worker(c: Clock) -> None:
@@ -155,7 +156,7 @@ def test_a_looking_script_with_a_wake_time_on_processes_wakes_at_it() -> None:
 
         def script(c: Clock) -> None:
             c.sleep(0.3)
-            c.sleep_until(lambda: "t" if c.time() >= 9.9 else None, 1.0, lambda: 9.9)
+            c.sleep_until(lambda: "t" if c.time() >= 9.9 else None, 1.0, Declared(lambda: 9.9))
             woke.append(c.time())
 
         procs = Processes(clock)
@@ -176,7 +177,7 @@ def test_on_a_lockstep_clock_the_wake_time_changes_nothing() -> None:
             seen.append(clock.time())
             return "x" if clock.time() >= 3 else None
 
-        clock.sleep_until(look, 0.5, wake_at)
+        clock.sleep_until(look, 0.5, Declared(wake_at))
         return seen
 
     assert looks(None) == looks(lambda: 3.0) == [0.5 * k for k in range(1, 7)]
