@@ -146,6 +146,10 @@ REGISTRY: dict[str, Entry] = {
                            ci=tls.QUIET_FLOOR + " --day-h 0.05 --hours 0.05 --repeat 1",
                            why="seven runs twice, one of them bay120-sleep's day, are five minutes of CPU: 3 minutes "
                                "each, once, print the same rows"),
+    tls.PLATFORMS: Entry("tools", tls.run_platforms,
+                         ci=tls.PLATFORMS + " --part agreement --seeds 1 --scenarios pool12 --strategies greedy",
+                         why="every scenario and strategy on 20 seeds, the days and the year are an hour of CPU: one "
+                             "seed of pool12 greedy on both platforms prints the agreement table's row"),
     tls.STARTUP: Entry("tools", tls.run_startup, ci=tls.STARTUP + " --repeat 1",
                        why="best of 5 fresh processes each; one shows the same rows"),
     # README: Long missions

@@ -21,6 +21,7 @@ FLEET_STEP = ".venv/bin/python bench/fleet_step.py"
 SCENARIO_SPEED = ".venv/bin/python bench/scenario_speed.py"
 TUI_FRAME = ".venv/bin/python bench/tui_frame.py"
 LONG_MISSION = ".venv/bin/python bench/long_mission.py"
+PLATFORMS = ".venv/bin/python bench/platforms.py"
 MISSION_COST = ".venv/bin/python bench/mission_cost.py"
 QUIET_FLOOR = ".venv/bin/python bench/quiet_floor.py"
 STARTUP = ".venv/bin/python bench/startup.py"
@@ -135,6 +136,14 @@ def run_long_mission(w: Work) -> None:
     out = bench(w, LONG_MISSION)
     short, long = ("40", "240") if w.full else re.findall(r"--short (\d+) --long (\d+)", w.line(LONG_MISSION))[0]
     assert f"{short} min mission:" in out and f"{long} min mission:" in out, out
+
+
+def run_platforms(w: Work) -> None:
+    """both platforms side by side: the agreement table (full: every part, every scenario and strategy)."""
+    out = bench(w, PLATFORMS, "Agreement:", "avg % L / E (diff)", "plans same")
+    assert re.search(r"│ pool12 +│ greedy +│ [\d.]+ / [\d.]+ \([+-][\d.]+\)", out), out
+    if w.full:
+        assert "seeds of 24h" in out and "a simulated year" in out, out
 
 
 def run_quiet_floor(w: Work) -> None:
