@@ -63,3 +63,14 @@ def test_a_separate_scheduler_and_two_workers_give_the_local_rows_of_real_missio
     rows = same_rows_on_both(tmp_path, SPEC.format(strategies='["cautious", "greedy"]', seeds="1-3", duration="6m"),
                              local_processes=True)
     assert len(rows) == 6 and (rows["cost_m"] > 0).any()
+
+
+def test_an_event_platform_sweep_gives_the_local_rows_on_a_separate_scheduler(tmp_path: Path) -> None:
+    """`platform = "event"` in a spec (issue 37): every cell runs on the event platform, on a local cluster and
+    on a separately started scheduler with workers alike, and its rows say so."""
+    text = SPEC.format(strategies='["cautious", "greedy"]', seeds="1-2", duration="40m") + '\n'
+    text = text.replace('seeds = "1-2"', 'seeds = "1-2"\nplatform = "event"')
+    rows = same_rows_on_both(tmp_path, text, local_processes=False)
+    assert len(rows) == 4 and (rows["cost_m"] > 0).all()
+    platform = [c for c in rows.columns if c.endswith("platform")]
+    assert platform and set(rows[platform[0]]) == {"event"}, list(rows.columns)
