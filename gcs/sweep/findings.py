@@ -55,6 +55,12 @@ def load(folder: Path) -> tuple[dict[str, Any], pd.DataFrame, pd.DataFrame]:
     return meta, rows, active
 
 
+def platforms_of(rows: pd.DataFrame) -> str:
+    """What the runs ran on, for a title: "lockstep", "event", or both (results from before issue 37: lockstep)."""
+    names = sorted(set(rows["platform"])) if "platform" in rows.columns else ["lockstep"]
+    return " and ".join(f"{n} platform" if k == len(names) - 1 else n for k, n in enumerate(names))
+
+
 def write_report(folder: Path, console: Console | None = None) -> list[Path]:
     """Tables and plots of the sweep in `folder`; prints the table to `console` if given."""
     meta, rows, active = load(folder)
@@ -63,9 +69,10 @@ def write_report(folder: Path, console: Console | None = None) -> list[Path]:
     table = summary(rows, ["scenario", "config"])
     written = [out / "summary.csv", out / "summary.md"]
     table.to_csv(written[0], index=False)
-    written[1].write_text(markdown(table, meta["name"]), encoding="utf-8")
+    title = f"{meta['name']} ({platforms_of(rows)})"
+    written[1].write_text(markdown(table, title), encoding="utf-8")
     if console is not None:
-        console.print(rich_table(table, meta["name"]))
+        console.print(rich_table(table, title))
     written += _plots(out, rows, active, table)
     return written
 

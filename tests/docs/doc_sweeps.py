@@ -84,7 +84,7 @@ def run_quick_sweep(w: Work) -> None:
     assert len(rows) == 15 and set(rows["strategy"]) == {"cautious", "greedy", "none"} and set(rows["seed"]) == {
         1, 2, 3, 4, 5}
     assert (rows["duration_s"] == 2400).all() and set(rows["scenario"]) == {"pool12"}
-    assert "quick: means with 95 % intervals" in printed
+    assert "quick (lockstep platform): means with 95 % intervals" in printed
     assert all(f"pool12 {s} 5 " in printed for s in ("cautious", "greedy", "none")), printed
 
 
