@@ -19,15 +19,17 @@ from numpy.typing import NDArray
 from apad_sitl.vocabulary import Latch
 from gcs.acoustic_net.knowledge import UNDERWATER, age_s, believed_battery
 from gcs.belief.duty import Duty, OrdersSent
-from gcs.belief.foresight import foreseen_battery, foreseen_deployed
+from gcs.belief.fleet_belief import Believed
+from gcs.belief.foresight import foreseen_battery
 from gcs.belief.real_fleet import MAX_REPORT_AGE_S, RealFleet
 from gcs.link.apad_api import ApadApi, Location
 from gcs.link.telemetry import PrimitiveView, SlotView
 from gcs.loop.control import LoopSettings
+from gcs.loop.fleet_beliefs import FleetBeliefs
 from gcs.results.accounting import SURFACE_DEPTH_M
 from gcs.strategies import Outlook, traits
 from gcs.swarm.shares import FleetShares, orphans
-from missiontime import Clock, seconds_to_us
+from missiontime import US_PER_S, Clock, seconds_to_us
 from mussel_sim.battery import ChargeProfile, charge_profile, discharge_profile, sim_minutes
 from mussel_sim.geo import pair_distance_m
 from mussel_sim.vocabulary import MusselState
@@ -84,7 +86,7 @@ class FleetKnowledge:
         self.orders = orders if orders is not None else OrdersSent()
         self._default_duty = Duty(discharge_profile(settings.mussel_discharge).rate_per_min)
         self._default_charge = charge_profile(settings.mussel_charge)
-        self._drains: tuple[tuple[int, int], NDArray[np.float64]] | None = None  # (table size, orders sent)
+        self._beliefs = FleetBeliefs(api, clock, self.orders, acoustic is not None, self.drain_per_s, self.battery)
 
     # --- the charging pool ----------------------------------------------------------------------
 
@@ -92,11 +94,9 @@ class FleetKnowledge:
         """Ids of the active aMussels below the pool threshold, lowest first, as the GCS believes them
         (`LoopBook.charging_pool` makes the charging pool of them)."""
         threshold = self.settings.mission.pool_threshold
-        if self.acoustic is None:
-            ids = self._active_below(threshold)
-        else:  # heard now and then: the estimate decides, and one silent too long is not planned for
-            ids = [m for m in self.api.mussels.select((MusselState.ACTIVE,))
-                   if self.battery(m) < threshold and self.heard_alive(m)]
+        active = self.believed((MusselState.ACTIVE,))
+        # Heard now and then (acoustic): the estimate decides, and one silent too long is not planned for.
+        ids = active.ids[(active.battery < threshold) & self._alive(active)].tolist()
         if self.real is not None:  # a real one's last report may be old: its estimate decides
             real = set(self.real.ids())
             below = self.real.below(threshold, self.clock.now_us, self.drain_per_min, self.orders.changed.get)
@@ -113,26 +113,6 @@ class FleetKnowledge:
                 continue
             (inside if self.api.inside_geofence(self.api.get_location(m)) else outside).append(m)
         return inside, outside
-
-    def _active_below(self, threshold: float) -> list[int]:
-        """Ids of ACTIVE aMussels whose battery (`battery`) is below `threshold`, lowest first: the
-        simulated ones' run forward from their reports in one go (`foresight.foreseen_deployed`), a real
-        one by its estimate."""
-        t = self.api.mussels
-        active = t.state == MusselState.ACTIVE
-        belief = foreseen_deployed(t.battery_frac, t.time_us, self.clock.now_us, self._drain_rows())
-        ids = t.ids[active & t.simulated & (belief < threshold)].tolist()
-        ids += [m for m in t.ids[active & ~t.simulated].tolist() if self.battery(m) < threshold]
-        return sorted(ids)
-
-    def _drain_rows(self) -> NDArray[np.float64]:
-        """Each table row's aMussel's drain per mission second (`drain_per_s`), made again only when the
-        table grew or a sleep order changed a duty."""
-        t = self.api.mussels
-        key = (t.ids.size, self.orders.sent)
-        if self._drains is None or self._drains[0] != key:
-            self._drains = key, np.array([self.drain_per_s(m) for m in t.ids.tolist()], float)
-        return self._drains[1]
 
     def cannot_collect(self, mussel_id: int) -> str | None:
         """Why the aPad should not set off for this aMussel now, or None: it has depleted (below
@@ -172,7 +152,9 @@ class FleetKnowledge:
         heard = [m for m in self.homes if m in self.api.mussels and self.serves(m)]
         if not heard:  # nothing heard yet: nothing to count
             return need
-        seabed = sum(1 for m in heard if self.state(m) == MusselState.ACTIVE and self.heard_alive(m))
+        active = self.believed((MusselState.ACTIVE,))
+        alive = set(active.ids[self._alive(active)].tolist())
+        seabed = sum(1 for m in heard if m in alive)
         return max(1, min(need, seabed))
 
     def heard_alive(self, mussel_id: int) -> bool:
@@ -185,6 +167,13 @@ class FleetKnowledge:
             return True
         heard_s = age_s(view, self.clock.now_us)
         return self.battery(mussel_id) > 0.0 and heard_s <= MAX_REPORT_AGE_S
+
+    def _alive(self, b: Believed) -> NDArray[np.bool_]:
+        """`heard_alive` of each of `b`."""
+        if self.acoustic is None:
+            return np.ones(b.ids.size, bool)
+        heard_s = np.maximum(self.clock.now_us - b.heard_us, 0) / US_PER_S  # `age_s`
+        return ~b.simulated | ((b.battery > 0.0) & (heard_s <= MAX_REPORT_AGE_S))
 
     def too_late_to_call_up(self) -> bool:
         return self.settings.mission.duration_s - self.clock.time() < self.settings.call_up_margin_s
@@ -281,6 +270,16 @@ class FleetKnowledge:
             return self.real.estimate(mussel_id, self.clock.now_us, on_slot, self.drain_per_min(mussel_id),
                                       self.orders.changed.get(mussel_id)).battery_frac
         return view.battery_frac
+
+    def believed(self, states: tuple[MusselState, ...]) -> Believed:
+        """The aMussels last reported in one of `states`, lowest id first, each with the battery it is believed
+        to hold now (`battery`, to the bit), its drain and when it was heard: the whole fleet's beliefs at once
+        (`FleetBeliefs`: numpy, made once per table version and instant)."""
+        return self._beliefs.of(states)
+
+    def batteries(self, ids: list[int]) -> NDArray[np.float64]:
+        """`battery` of each of `ids`, in their order, from the fleet's beliefs at once."""
+        return self._beliefs.batteries(ids)
 
     def charge(self, mussel_id: int) -> ChargeProfile:
         """Its charge profile on a slot: its scenario profile's (a sleep order keeps it), else the loop's."""

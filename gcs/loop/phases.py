@@ -120,7 +120,7 @@ def collection_input(crew: Crew, ids: list[int], capacity: int) -> PlanInput:
         mussel_ids=np.array(ids, np.int64),
         lat_deg=np.array([w.lat for w in where]),
         lon_deg=np.array([w.lon for w in where]),
-        battery_frac=np.array([knows.battery(m) for m in ids]),
+        battery_frac=knows.batteries(ids),
         outlook=knows.outlook(),
         drain_per_s=np.array([knows.drain_per_s(m) for m in ids], np.float64),
         wake_in_s=np.array([knows.wake_in_s(m) for m in ids], np.float64),

@@ -64,7 +64,7 @@ def schedule_input(crew: Crew, start_s: float) -> ScheduleInput | None:
         mussel_ids=np.array(ids, np.int64),
         lat_deg=np.array([w.lat for w in where]),
         lon_deg=np.array([w.lon for w in where]),
-        battery_frac=np.array([knows.battery(m) for m in ids]),
+        battery_frac=knows.batteries(ids),
         drain_per_s=np.array([knows.drain_per_s(m) for m in ids]),
         awake_drain_per_s=np.full(len(ids), ALWAYS_ON.drain_per_s(theta)),
         asleep=np.array([knows.duty(m).asleep for m in ids]),

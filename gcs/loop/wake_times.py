@@ -12,6 +12,8 @@ each bound gives one step of slack.
 
 from __future__ import annotations
 
+import numpy as np
+
 from gcs.belief.real_fleet import MAX_REPORT_AGE_S
 from gcs.loop.fleet_knowledge import RELEASE_MARGIN_S, FleetKnowledge
 from gcs.strategies import traits
@@ -30,23 +32,24 @@ def earliest(times: list[float]) -> float | None:
 def pool_look_by(knows: FleetKnowledge) -> float | None:
     """The first instant the charging pool, or what a collection waits for, could grow by time alone: an
     active aMussel's believed battery reaching the pool threshold, one heard now and then falling silent
-    too long or believed empty (fewer on the seabed to wait for), a lost aPad's claims lapsing."""
+    too long or believed empty (fewer on the seabed to wait for), a lost aPad's claims lapsing. Over the
+    whole fleet's beliefs at once (`FleetKnowledge.believed`), each instant as the scalar formulas give it."""
     now_s = knows.clock.time()
     threshold = knows.settings.mission.pool_threshold
-    times = []
-    for m in knows.in_states((MusselState.ACTIVE,)):
-        drain = knows.drain_per_s(m)
-        battery = knows.battery(m)
-        if drain > 0 and battery >= threshold:
-            times.append(now_s + (battery - threshold) / drain - STEP_SLACK_S)
-        if knows.acoustic is not None and knows.simulated(m):
-            heard_s = knows.api.mussels[m].time_us / US_PER_S
-            times.append(heard_s + MAX_REPORT_AGE_S)
-            if drain > 0 and battery > 0:  # believed empty already: time changes nothing more
-                times.append(now_s + battery / drain - STEP_SLACK_S)
+    b = knows.believed((MusselState.ACTIVE,))
+    draining = b.drain_per_s > 0
+    reaching = draining & (b.battery >= threshold)
+    times = [now_s + (b.battery[reaching] - threshold) / b.drain_per_s[reaching] - STEP_SLACK_S]
+    if knows.acoustic is not None:
+        times.append(b.heard_us[b.simulated] / US_PER_S + MAX_REPORT_AGE_S)
+        emptying = b.simulated & draining & (b.battery > 0)  # believed empty already: time changes nothing more
+        times.append(now_s + b.battery[emptying] / b.drain_per_s[emptying] - STEP_SLACK_S)
     if knows.shares is not None:
-        times += [lost_us / US_PER_S + CLAIM_GRACE_S for lost_us in knows.shares.lost_since_us.values()]
-    return earliest([t for t in times if t >= now_s - STEP_SLACK_S])
+        times.append(np.array([lost_us / US_PER_S + CLAIM_GRACE_S for lost_us in knows.shares.lost_since_us.values()],
+                              np.float64))
+    every = np.concatenate(times)
+    ahead = every[every >= now_s - STEP_SLACK_S]
+    return float(ahead.min()) if ahead.size else None
 
 
 def charged_look_by(knows: FleetKnowledge, mussel_id: int, strategy: str) -> float | None:

@@ -9,8 +9,12 @@ from __future__ import annotations
 from collections.abc import Hashable
 from dataclasses import dataclass, field
 
+import numpy as np
+from numpy.typing import NDArray
+
 from apad_sitl.vocabulary import N_SLOTS, Latch
 from gcs.belief.duty import Duty, OrdersSent
+from gcs.belief.fleet_belief import Believed
 from gcs.link.apad_api import Location
 from gcs.link.telemetry import SlotView
 from gcs.loop.control import LoopSettings
@@ -159,6 +163,15 @@ class ScriptedKnowledge:
 
     def battery(self, mussel_id: int) -> float:
         return self.world.batteries[mussel_id]
+
+    def believed(self, states: tuple[MusselState, ...]) -> Believed:
+        ids = self.in_states(states)
+        return Believed(np.array(ids, np.int64), self.batteries(ids),
+                        np.array([self.drain_per_s(m) for m in ids], np.float64), np.zeros(len(ids), np.int64),
+                        np.array([self.simulated(m) for m in ids], bool))
+
+    def batteries(self, ids: list[int]) -> NDArray[np.float64]:
+        return np.array([self.battery(m) for m in ids], np.float64)
 
     def charge(self, mussel_id: int) -> ChargeProfile:
         own = self.profile_duty(mussel_id).charge

@@ -7,14 +7,16 @@ and reads back the commands and waits it made, in order, and the events it logge
 from __future__ import annotations
 
 import inspect
+from typing import cast
 
 import pytest
 from loop_bench import Bench, Call, RecordingActions, public_names, same_signature
 from loop_world import ScriptedKnowledge
+from wake_reference import same_instant, scalar_pool_look_by
 
 from apad_sitl.vocabulary import Latch
 from gcs.link.telemetry import SlotView
-from gcs.loop import phases, turns
+from gcs.loop import phases, turns, wake_times
 from gcs.loop.actions import ApadActions
 from gcs.loop.control import MissionEnded, Phase
 from gcs.loop.fleet_knowledge import FleetKnowledge
@@ -93,6 +95,27 @@ def test_idle_wait_with_the_strategy_none_never_collects(b: Bench) -> None:
     b.status.strategy = "none"
     with pytest.raises(MissionEnded):
         phases.idle_wait(b.crew)
+
+
+def test_the_idle_waits_wake_time_is_the_per_amussel_formulas_on_the_bench() -> None:
+    """`pool_look_by` over the fleet's beliefs at once gives the instant the scalar reads gave, to the bit: batteries
+    above, at and below the threshold (those below: none), sleepers on the scenario's profile and on an order,
+    one docked and one floating (not on the seabed: left out), a lost aPad's claims lapsing; at many instants."""
+    b = Bench("bay120-sleep")
+    pool_of(b, [0.95, 0.80, 0.8000001, 0.5, 0.99, 1.0, 0.0, 0.87])
+    b.mussel(20, 5.0, 5.0, 0.9, state=FLOATING)
+    b.on_slot(1, 21, battery=0.3)
+    b.book.ordered(2, ASLEEP)
+    b.book.ordered(5, ALWAYS_ON)
+    b.world.shares = FleetShares(owner={m: 1 for m in range(1, 22)}, lost_since_us={2: 40_000_000, 3: 9_000_000})
+    looked = []
+    for step in range(30):
+        b.clock.advance_to(b.clock.now_us + 7_300_000 * step)
+        b.world.batteries[8] = max(b.world.batteries[8] - 0.004, 0.0)
+        got = wake_times.pool_look_by(cast(FleetKnowledge, b.knows))
+        assert same_instant(got, scalar_pool_look_by(cast(FleetKnowledge, b.knows))), step
+        looked.append(got)
+    assert None not in looked and len(set(looked)) > 10  # an instant ahead each time, and it moves
 
 
 def test_plan_collection_puts_orphans_first_and_leaves_out_the_unreachable(b: Bench) -> None:
