@@ -180,7 +180,7 @@ class SitlVehicle:
         self.event("start", **self._start_fields)
         name = f"apad{self.system_id}"
         self.physics = physics = PhysicsTicks(self, scheduler, self.physics_hz, f"{name}.physics", start_us,
-                                              self.park_at_rest)
+                                              self.park_at_rest, closed_forms=self.ideal_link)
         if self.ideal_link:  # the streams park with the physics, and wake with it
             physics.on_rearm = self.streams.wake
             self.apad.changed_while_parked = physics.settle  # ticking again if the change ended the rest
