@@ -15,13 +15,15 @@ from apad_sitl import cruise as cruise_mod
 from apad_sitl import latch_hold as hold_mod
 from apad_sitl import primitives as prim
 from apad_sitl import rest as rest_mod
+from apad_sitl import settling as settling_mod
 from apad_sitl import vehicle as veh
 from apad_sitl.energy import EnergyMeter
 from apad_sitl.primitives import MusselFix
 from apad_sitl.state import ApadState
 
 # The closed forms that end at a step of their own (`limit`), after which the hull is stepped.
-BOUNDED = (cruise_mod.Cruise, hold_mod.LatchHold)
+BOUNDED = (cruise_mod.Cruise, hold_mod.LatchHold, settling_mod.Settling)
+_TIMED = (hold_mod.LatchHold, settling_mod.Settling)  # the closed forms that run latch timers
 
 
 def step_hull(apad: ApadState, energy: EnergyMeter, mussels: Mapping[int, MusselFix],
@@ -58,18 +60,26 @@ def step_hull(apad: ApadState, energy: EnergyMeter, mussels: Mapping[int, Mussel
 def _find_closed_form(apad: ApadState, energy: EnergyMeter, mussels: Mapping[int, MusselFix],
                       before: veh.VehicleState, primitive: prim.PrimitiveState, current_mps: tuple[float, float],
                       dt_s: float) -> None:
-    """After a step from `before` under `primitive` (the battery untouched since): a cruise or a latch hold
-    from here, if the step was one of either and an armed hull's (the ideal link's closed forms)."""
-    new, state = apad.primitive, apad.state
-    if not apad.armed:
+    """After a step from `before` under `primitive` (the battery untouched since): a cruise, a settling or a
+    latch hold from here, if the step was one of them and an armed hull's (the ideal link's closed forms)."""
+    new, state, p = apad.primitive, apad.state, apad.params
+    if not apad.armed or not (new is primitive or hold_mod.timers_only(primitive, new)):
         return
+    key = rest_key(apad, current_mps)
+    fixes = hold_mod.closing_fixes(new, mussels)
+    if rest_mod.at_rest(before, state):
+        if new is not primitive and not energy.could_charge():
+            hold = hold_mod.LatchHold(rest_mod.Rest(state, p, dt_s), new, fixes, key)
+            if hold.limit > 1:
+                apad.rest = hold
+        return  # else a rest, if any (`step_hull`)
+    found: cruise_mod.Cruise | settling_mod.Settling | None = None
     if new is primitive:
-        apad.rest = cruise_mod.found(before, state, new, apad.params, dt_s, rest_key(apad, current_mps))
-    elif hold_mod.timers_only(primitive, new) and rest_mod.at_rest(before, state) and not energy.could_charge():
-        hull = rest_mod.Rest(state, apad.params, dt_s)
-        hold = hold_mod.LatchHold(hull, new, hold_mod.closing_fixes(new, mussels), rest_key(apad, current_mps))
-        if hold.limit > 1:
-            apad.rest = hold
+        found = cruise_mod.found(before, state, new, p, dt_s, key)
+    if found is None:
+        found = settling_mod.found(before, state, new, p, current_mps, mussels, p.home_charge_w > 0.0, dt_s, fixes,
+                                   key)
+    apad.rest = found
 
 
 def rest_key(apad: ApadState, current_mps: tuple[float, float]) -> tuple[object, ...]:
@@ -84,7 +94,7 @@ def rest_holds(apad: ApadState, mussels: Mapping[int, MusselFix], current_mps: t
     rest = apad.rest
     if rest is None or rest.key != rest_key(apad, current_mps) or rest.dt_s != dt_s:
         return False
-    return not isinstance(rest, hold_mod.LatchHold) or hold_mod.closing_fixes(apad.primitive, mussels) == rest.fixes
+    return not isinstance(rest, _TIMED) or hold_mod.closing_fixes(apad.primitive, mussels) == rest.fixes
 
 
 def rest_steps(apad: ApadState, energy: EnergyMeter, mussels: Mapping[int, MusselFix],
@@ -95,7 +105,7 @@ def rest_steps(apad: ApadState, energy: EnergyMeter, mussels: Mapping[int, Musse
     if rest is None or not rest_holds(apad, mussels, current_mps, dt_s):
         return 0
     taken = rest.take(n, energy.counters)
-    if taken and isinstance(rest, hold_mod.LatchHold):  # its timers ran: the primitive as stepping leaves it
+    if taken and isinstance(rest, _TIMED):  # its timers ran: the primitive as stepping leaves it
         apad.set_primitive(rest.primitive())
         rest.key = rest_key(apad, current_mps)
     return taken

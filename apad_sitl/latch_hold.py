@@ -45,12 +45,46 @@ def closing_fixes(primitive: PrimitiveState, mussels: Mapping[int, MusselFix]) -
     return tuple(mussels.get(s.mussel_id) for s in primitive.slots if s.latch == Latch.CLOSING)
 
 
+class LatchTimers:
+    """The latch timers of `origin` (a primitive) as `primitives.step` runs them, step by step: `limit` is
+    the last step before one completes (None: none runs), `after(n)` the primitive n steps on."""
+
+    __slots__ = ("_cache", "dt_s", "limit", "origin")
+
+    def __init__(self, origin: PrimitiveState, dt_s: float) -> None:
+        self.origin = origin
+        self.dt_s = dt_s
+        running = [_steps_before_done(s.timer_s, dt_s) for s in origin.slots if s.latch in _TIMED]
+        self.limit = min(running) if running else None
+        self._cache = (0, origin)
+
+    def after(self, n: int) -> PrimitiveState:
+        """The primitive after `n` steps (n <= `limit`): each running timer less `dt_s` once a step, the
+        same subtraction (kept from the last asked: a few subtractions a step)."""
+        done, primitive = self._cache
+        if done == n or self.limit is None:
+            return primitive
+        if done > n:
+            done, primitive = 0, self.origin
+        slots = []
+        for s in primitive.slots:
+            if s.latch in _TIMED:
+                timer = s.timer_s
+                for _ in range(n - done):
+                    timer = timer - self.dt_s
+                s = replace(s, timer_s=timer)
+            slots.append(s)
+        primitive = replace(primitive, slots=tuple(slots))
+        self._cache = (n, primitive)
+        return primitive
+
+
 class LatchHold:
     """The hull at rest (`hull`, a `rest.Rest` from the same origin) while the latch timers of `primitive`
     run: `steps` counts the steps of `dt_s` taken since, at most `limit` (the last before a timer completes).
     """
 
-    __slots__ = ("_timers", "dt_s", "fixes", "hull", "key", "limit", "origin_primitive", "steps")
+    __slots__ = ("dt_s", "fixes", "hull", "key", "limit", "steps", "timers")
 
     def __init__(self, hull: Rest, primitive: PrimitiveState, fixes: tuple[MusselFix | None, ...],
                  key: tuple[object, ...] = ()) -> None:
@@ -58,10 +92,9 @@ class LatchHold:
         self.dt_s = hull.dt_s
         self.key = key  # what it holds for (as a rest's key; the primitive's timers kept up as they run)
         self.fixes = fixes  # the closing latches' aMussels as the hold began: a status that moves one ends it
-        self.origin_primitive = primitive
         self.steps = 0
-        self._timers = (0, primitive)
-        self.limit = min(_steps_before_done(s.timer_s, self.dt_s) for s in primitive.slots if s.latch in _TIMED)
+        self.timers = LatchTimers(primitive, self.dt_s)
+        self.limit = self.timers.limit or 0
 
     def take(self, n: int, counters: EnergyCounters) -> int:
         """Up to `n` more steps, no further than `limit`: how many it took."""
@@ -74,24 +107,8 @@ class LatchHold:
         return self.hull.state()
 
     def primitive(self) -> PrimitiveState:
-        """The primitive after `steps` steps: each running timer less `dt_s` once a step, as `primitives.step`
-        takes it (kept from the last asked: a few subtractions a step)."""
-        done, primitive = self._timers
-        if done == self.steps:
-            return primitive
-        if done > self.steps:
-            done, primitive = 0, self.origin_primitive
-        slots = []
-        for s in primitive.slots:
-            if s.latch in _TIMED:
-                timer = s.timer_s
-                for _ in range(self.steps - done):
-                    timer = timer - self.dt_s
-                s = replace(s, timer_s=timer)
-            slots.append(s)
-        primitive = replace(primitive, slots=tuple(slots))
-        self._timers = (self.steps, primitive)
-        return primitive
+        """The primitive after `steps` steps (its timers as stepping leaves them)."""
+        return self.timers.after(self.steps)
 
 
 def _steps_before_done(timer_s: float, dt_s: float) -> int:

@@ -34,13 +34,15 @@ from apad_sitl.vocabulary import RoverMode
 if TYPE_CHECKING:
     from apad_sitl.cruise import Cruise
     from apad_sitl.latch_hold import LatchHold
+    from apad_sitl.settling import Settling
 
 PrimitiveListener = Callable[[PrimitiveState, PrimitiveState], None]  # (old, new)
 ModeListener = Callable[[int], None]  # the new mode
 ArmedListener = Callable[[bool], None]  # armed now
 # The hull advanced in closed form: at rest (`apad_sitl.rest`), or on the ideal link busy too (a Go To's
-# cruise, `apad_sitl.cruise`; latch timers running while it holds still, `apad_sitl.latch_hold`).
-HullRest: TypeAlias = "Rest | ChargingRest | Cruise | LatchHold"
+# cruise, `apad_sitl.cruise`; latch timers running while it holds still, `apad_sitl.latch_hold`; settling
+# onto its hold point, `apad_sitl.settling`).
+HullRest: TypeAlias = "Rest | ChargingRest | Cruise | LatchHold | Settling"
 
 
 class ApadState:

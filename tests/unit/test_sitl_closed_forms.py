@@ -11,7 +11,7 @@ the same instants, and the ideal-link aPad stepped a small part of the ticks.
 from __future__ import annotations
 
 import math
-from dataclasses import astuple, dataclass, field
+from dataclasses import astuple, dataclass, field, replace
 from typing import Any
 
 import pytest
@@ -195,3 +195,42 @@ def test_a_latch_hold_takes_the_timers_as_stepping_takes_them() -> None:
         stepped, n = after, n + 1
     assert hold.limit == n and 70 < n < 75  # 7.3 s in steps of 0.1 s (as the floats fall)
     assert hold.take(100, EnergyCounters()) == n and hold.primitive() == stepped  # to the bit
+
+
+@pytest.mark.parametrize("kind", ["goto", "dock"])
+def test_a_settling_hull_is_where_stepping_takes_it_step_by_step(kind: str) -> None:
+    """The closed form of the last metre (`apad_sitl.settling`) against `vehicle.step` itself, every step."""
+    from apad_sitl import primitives as prim
+    from apad_sitl import settling
+    from apad_sitl import vehicle as veh
+    from apad_sitl.latch_hold import closing_fixes
+    from apad_sitl.primitives import MusselFix
+
+    params, dt_s = ApadParams(), 0.1
+    fixes = {7: MusselFix(20.3, 9.9)}
+    primitive = prim.go_to(prim.PrimitiveState(), 20.0, 10.0)
+    before = VehicleState(x_m=19.94, y_m=10.04, vx_mps=0.03, vy_mps=-0.02, water_vx_mps=0.03, water_vy_mps=-0.02,
+                          heading_rad=2.0, battery_v=14.0, distance_travelled_m=100.0)
+    if kind == "dock":  # the latch closes as the hull settles
+        primitive, _ = prim.dock(replace(primitive, progress=prim.Progress.DONE), 1, 7, 19.94, 10.04, fixes, params)
+    state = veh.step(before, prim.velocity_setpoint(primitive, before, params), params, (0.0, 0.0), dt_s)
+    stepped = prim.step(primitive, state.x_m, state.y_m, fixes, params, dt_s)
+    found = settling.found(before, state, stepped, params, (0.0, 0.0), fixes, True, dt_s, closing_fixes(stepped, fixes))
+    assert found is not None
+    limit = found.limit
+    print(f"\n{kind}: {limit} steps in closed form")
+    assert limit == 98 if kind == "dock" else limit > 300  # a dock: up to the latch (10 s); else to 2e-9 m
+    primitive = stepped
+    for n in range(1, limit + 1):
+        state = veh.step(state, prim.velocity_setpoint(primitive, state, params), params, (0.0, 0.0), dt_s)
+        primitive = prim.step(primitive, state.x_m, state.y_m, fixes, params, dt_s)
+        found.steps = n
+        assert astuple(found.state()) == pytest.approx(astuple(state), rel=1e-9, abs=1e-12), n
+        assert found.primitive() == primitive  # the latch timer to the bit
+    if kind == "dock":  # the step after next latches: the closed form stopped short of it, a step to spare
+        progress = []
+        for _ in range(2):
+            state = veh.step(state, prim.velocity_setpoint(primitive, state, params), params, (0.0, 0.0), dt_s)
+            primitive = prim.step(primitive, state.x_m, state.y_m, fixes, params, dt_s)
+            progress.append(primitive.progress)
+        assert progress == [prim.Progress.IN_PROGRESS, prim.Progress.DONE]
