@@ -316,7 +316,7 @@ class SitlVehicle:
             return False
         physics = self.physics
         if physics is not None:
-            physics.settle()  # the ticks until now taken (and their time, which the handlers stamp)
+            physics.catch_up()  # the ticks until now taken (and their time, which the handlers stamp)
         # The batch path takes unsigned frames: with signing on, everything goes through the codec's check.
         bulk = self.transport.datagrams and not self.codec.signing
         for data in self._bulk_statuses(datagrams) if bulk else datagrams:

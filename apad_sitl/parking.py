@@ -105,7 +105,7 @@ class PhysicsTicks:
     def _parked(self) -> None:
         self.parked = True
         self.parks += 1
-        self._host.apad.pending = self.settle
+        self._host.apad.pending = self.catch_up
 
     def _step(self, last_us: int, now_us: int) -> None:
         host = self._host
@@ -122,20 +122,34 @@ class PhysicsTicks:
             return
         self._take_skipped()
         if self._rest_holds():
-            self._host.apad.pending = self.settle
+            self._host.apad.pending = self.catch_up
         else:  # what was handled or set since the last tick ended the rest: ticking again from the next
             self._rearm()
 
+    def catch_up(self) -> None:
+        """What the skipped ticks change is read (or written, or stamped). On the ideal link, where the hull is
+        read many times an instant while it cruises or settles in closed form, only if a tick is due: whether
+        the rest still holds changes only with a message or a setter, each of which settles in full (`poll`,
+        `ApadState.changed_while_parked`). Lockstep asks at every read, as it always has."""
+        if self.parked and (not self._closed_forms or self._due() > 0):
+            self.settle()
+
+    def _due(self) -> int:
+        """How many ticks would have run since the last taken (`settle`'s count)."""
+        sched, task = self._scheduler, self.task
+        running = sched.running
+        upto = sched.now_us if running is None or running > task.order else sched.now_us - 1
+        assert self.last_us is not None
+        return (upto - self.last_us) // task.period_us
+
     def _take_skipped(self) -> None:
-        host, sched, task = self._host, self._scheduler, self.task
+        host, task = self._host, self.task
         apad = host.apad
         apad.pending = None  # reading the hull below must not settle again
         last = self.last_us
         assert last is not None  # parked after a tick that stepped
-        running = sched.running
-        upto = sched.now_us if running is None or running > task.order else sched.now_us - 1
         period = task.period_us
-        n = (upto - last) // period
+        n = self._due()
         if n <= 0:
             return
         now_before, end = host.now_us, last + n * period
@@ -191,7 +205,7 @@ class PhysicsTicks:
 
     def ahead(self) -> RestAhead | None:
         """What the parked rest holds ahead of now (the ticks until now taken); None while ticking."""
-        self.settle()
+        self.catch_up()
         apad = self._host.apad
         rest = apad.rest
         if not self.parked or rest is None or isinstance(rest, BOUNDED):  # busy: the streams at their period

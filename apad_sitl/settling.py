@@ -157,6 +157,8 @@ def found(before: VehicleState, after: VehicleState, primitive: PrimitiveState, 
         return None
     if after.battery_v <= BATTERY_EMPTY_V or (after.vx_mps, after.vy_mps) != (after.water_vx_mps, after.water_vy_mps):
         return None
+    if math.hypot(after.water_vx_mps, after.water_vy_mps) > HEADING_MIN_SPEED_MPS:
+        return None  # the bow may still turn (and the modes' bound below could not hold): most steps of a move
     c = p.hold_kp_per_s * (1.0 + p.hold_kd)
     a11, a12, a21, a22 = 1.0 - dt_s * c, dt_s * p.hold_kd, c, -p.hold_kd
     tr, det = a11 + a22, a11 * a22 - a12 * a21
