@@ -234,3 +234,32 @@ def test_a_settling_hull_is_where_stepping_takes_it_step_by_step(kind: str) -> N
             primitive = prim.step(primitive, state.x_m, state.y_m, fixes, params, dt_s)
             progress.append(primitive.progress)
         assert progress == [prim.Progress.IN_PROGRESS, prim.Progress.DONE]
+
+
+@pytest.mark.parametrize("current", [(0.0, 0.0), (0.06, 0.08), (0.08, -0.06)], ids=["slack", "along", "across"])
+def test_a_cruise_is_where_stepping_takes_it_and_none_is_found_across_a_current(current: tuple[float, float]) -> None:
+    """A Go To's cruise (`apad_sitl.cruise`) against `vehicle.step` itself, every step; a current across the
+    track turns the setpoint as the hull goes (no steady cruise: stepped)."""
+    from apad_sitl import cruise
+    from apad_sitl import primitives as prim
+    from apad_sitl import vehicle as veh
+
+    params, dt_s = ApadParams(), 0.1
+    primitive = prim.go_to(prim.PrimitiveState(), 60.0, 80.0)  # along (0.6, 0.8) from the origin
+    state, found = VehicleState(battery_v=15.0), None
+    for _ in range(300):  # accelerating, then steady
+        before = state
+        state = veh.step(before, prim.velocity_setpoint(primitive, before, params), params, current, dt_s)
+        assert prim.step(primitive, state.x_m, state.y_m, {}, params, dt_s) is primitive
+        found = found or cruise.found(before, state, primitive, params, dt_s)
+        if found is not None:
+            break
+    if current == (0.08, -0.06):
+        assert found is None
+        return
+    assert found is not None and found.limit > 1_000
+    for n in range(1, found.limit + 1):
+        state = veh.step(state, prim.velocity_setpoint(primitive, state, params), params, current, dt_s)
+        if n % 97 == 0 or n == found.limit:
+            assert astuple(found.after(n)) == pytest.approx(astuple(state), rel=1e-12, abs=1e-9), n
+    assert prim.step(primitive, state.x_m, state.y_m, {}, params, dt_s).progress == prim.Progress.IN_PROGRESS
