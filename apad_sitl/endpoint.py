@@ -180,7 +180,7 @@ class SitlVehicle:
         self.event("start", **self._start_fields)
         name = f"apad{self.system_id}"
         self.physics = physics = PhysicsTicks(self, scheduler, self.physics_hz, f"{name}.physics", start_us,
-                                              self.park_at_rest)
+                                              self.park_at_rest, closed_forms=self.ideal_link)
         if self.ideal_link:  # the streams park with the physics, and wake with it
             physics.on_rearm = self.streams.wake
             self.apad.changed_while_parked = physics.settle  # ticking again if the change ended the rest
@@ -316,7 +316,7 @@ class SitlVehicle:
             return False
         physics = self.physics
         if physics is not None:
-            physics.settle()  # the ticks until now taken (and their time, which the handlers stamp)
+            physics.catch_up()  # the ticks until now taken (and their time, which the handlers stamp)
         # The batch path takes unsigned frames: with signing on, everything goes through the codec's check.
         bulk = self.transport.datagrams and not self.codec.signing
         for data in self._bulk_statuses(datagrams) if bulk else datagrams:

@@ -39,7 +39,7 @@ from typing import Protocol
 
 from apad_sitl.docking import MusselFixTable
 from apad_sitl.energy import EnergyMeter
-from apad_sitl.hull_step import rest_holds, rest_key, rest_steps, step_hull
+from apad_sitl.hull_step import BOUNDED, rest_holds, rest_steps, step_hull
 from apad_sitl.logs import VehicleLog
 from apad_sitl.modes import Modes
 from apad_sitl.rest import ChargingRest, Rest
@@ -64,10 +64,12 @@ class PhysicsTicks:
     """The physics task of one vehicle on `scheduler`, parked while its hull rests."""
 
     def __init__(self, host: TickHost, scheduler: Scheduler, rate_hz: float, name: str, start_us: int,
-                 park: bool = True) -> None:
-        """`park` False: a tick at every period, at rest too (what parking must equal)."""
+                 park: bool = True, closed_forms: bool = False) -> None:
+        """`park` False: a tick at every period, at rest too (what parking must equal). `closed_forms`: a busy
+        hull advanced in closed form too (the ideal link's: `hull_step.step_hull`)."""
         self._host = host
         self._park = park
+        self._closed_forms = closed_forms
         self._scheduler = scheduler
         self.task: Task = scheduler.every(1.0 / rate_hz, self.tick, name, start_us)
         self.last_us: int | None = None  # the last tick taken (run, or skipped and settled)
@@ -79,6 +81,9 @@ class PhysicsTicks:
     def tick(self, now_us: int) -> None:
         self.ticks += 1
         host = self._host
+        if self.parked:  # woken at a closed form's end: the ticks before this one taken in it, this one stepped
+            self._take_skipped()
+            self._unpark()
         host.now_us = now_us
         last, self.last_us = self.last_us, now_us
         if last is None:
@@ -86,11 +91,21 @@ class PhysicsTicks:
         self._step(last, now_us)
         apad = host.apad
         rest = apad.rest
-        if self._park and rest is not None and rest.steps and not _busy(apad):  # a rest held for a whole tick
+        if not self._park or rest is None or not rest.steps:  # parked only once a rest held for a whole tick
+            return
+        if isinstance(rest, BOUNDED):  # a closed form with an end: woken at the first tick it leaves to stepping
+            if rest.limit > rest.steps and self._may_park():
+                period = self.task.period_us
+                self._scheduler.reschedule(self.task, next_us=now_us + (rest.limit - rest.steps + 1) * period)
+                self._parked()
+        elif not _busy(apad):
             self._scheduler.reschedule(self.task, active=False)
-            self.parked = True
-            self.parks += 1
-            apad.pending = self.settle
+            self._parked()
+
+    def _parked(self) -> None:
+        self.parked = True
+        self.parks += 1
+        self._host.apad.pending = self.catch_up
 
     def _step(self, last_us: int, now_us: int) -> None:
         host = self._host
@@ -99,45 +114,76 @@ class PhysicsTicks:
         apad = host.apad
         if apad.params.fs_gcs_enable:
             host.modes.check_failsafe()
-        step_hull(apad, host.energy, host.mussels, apad.current_mps, (now_us - last_us) / US_PER_S)
+        step_hull(apad, host.energy, host.mussels, apad.current_mps, (now_us - last_us) / US_PER_S, self._closed_forms)
 
     def settle(self) -> None:
         """Take the ticks skipped so far (see the module's docstring); parked still if the rest holds."""
         if not self.parked:
             return
-        host, sched, task = self._host, self._scheduler, self.task
+        self._take_skipped()
+        if self._rest_holds():
+            self._host.apad.pending = self.catch_up
+        else:  # what was handled or set since the last tick ended the rest: ticking again from the next
+            self._rearm()
+
+    def catch_up(self) -> None:
+        """What the skipped ticks change is read (or written, or stamped). On the ideal link, where the hull is
+        read many times an instant while it cruises or settles in closed form, only if a tick is due: whether
+        the rest still holds changes only with a message or a setter, each of which settles in full (`poll`,
+        `ApadState.changed_while_parked`). Lockstep asks at every read, as it always has."""
+        if self.parked and (not self._closed_forms or self._due() > 0):
+            self.settle()
+
+    def _due(self) -> int:
+        """How many ticks would have run since the last taken (`settle`'s count)."""
+        sched, task = self._scheduler, self.task
+        running = sched.running
+        upto = sched.now_us if running is None or running > task.order else sched.now_us - 1
+        assert self.last_us is not None
+        return (upto - self.last_us) // task.period_us
+
+    def _take_skipped(self) -> None:
+        host, task = self._host, self.task
         apad = host.apad
         apad.pending = None  # reading the hull below must not settle again
         last = self.last_us
         assert last is not None  # parked after a tick that stepped
-        running = sched.running
-        upto = sched.now_us if running is None or running > task.order else sched.now_us - 1
         period = task.period_us
-        n = (upto - last) // period
-        if n > 0:
-            now_before, end = host.now_us, last + n * period
-            taken = rest_steps(apad, host.energy, rest_key(apad, apad.current_mps), period / US_PER_S, n)
-            if taken:
-                if apad.params.fs_gcs_enable:
-                    for t in sorted({last + period, last + taken * period}):  # the first and the last
-                        host.now_us = t
-                        host.modes.check_failsafe()
-                if host.log is not None and last // US_PER_S != (last + taken * period) // US_PER_S:
-                    host.log.flush()
-            # The rest's end (a charging battery come to full), or its key changed without a message: stepped.
-            for t in range(last + (taken + 1) * period, end + 1, period):
-                host.now_us = t
-                self._step(t - period, t)
-            host.now_us = max(now_before, end)
-            self.last_us = end
-        if self._rest_holds():
-            apad.pending = self.settle
-        else:  # what was handled or set since the last tick ended the rest: ticking again from the next
-            self._rearm()
+        n = self._due()
+        if n <= 0:
+            return
+        now_before, end = host.now_us, last + n * period
+        taken = rest_steps(apad, host.energy, host.mussels, apad.current_mps, period / US_PER_S, n)
+        if taken:
+            if apad.params.fs_gcs_enable:
+                for t in sorted({last + period, last + taken * period}):  # the first and the last
+                    host.now_us = t
+                    host.modes.check_failsafe()
+            if host.log is not None and last // US_PER_S != (last + taken * period) // US_PER_S:
+                host.log.flush()
+        # The rest's end (a charging battery come to full, a closed form's last step), or its key changed
+        # without a message: stepped.
+        for t in range(last + (taken + 1) * period, end + 1, period):
+            host.now_us = t
+            self._step(t - period, t)
+        host.now_us = max(now_before, end)
+        self.last_us = end
 
     def _rest_holds(self) -> bool:
-        apad, dt_s = self._host.apad, self.task.period_us / US_PER_S
-        return rest_holds(apad, rest_key(apad, apad.current_mps), dt_s) and not _busy(apad)
+        host = self._host
+        apad, dt_s = host.apad, self.task.period_us / US_PER_S
+        if not rest_holds(apad, host.mussels, apad.current_mps, dt_s):
+            return False
+        rest = apad.rest
+        if isinstance(rest, BOUNDED):
+            return rest.limit > rest.steps and self._may_park()
+        return not _busy(apad)
+
+    def _may_park(self) -> bool:
+        """Whether a closed form may run parked: the failsafe cannot act on it (it acts on a busy primitive,
+        and only once a GCS heard has gone silent; an ideal link's GCS sends no heartbeat)."""
+        apad = self._host.apad
+        return not (_busy(apad) and apad.params.fs_gcs_enable and self._host.modes.last_gcs_heartbeat_us is not None)
 
     def stop(self) -> None:
         """The vehicle closes: the ticks up to now taken, no more."""
@@ -148,18 +194,21 @@ class PhysicsTicks:
 
     def _rearm(self) -> None:
         assert self.last_us is not None
+        self._scheduler.reschedule(self.task, next_us=self.last_us + self.task.period_us, active=True)
+        self._unpark()
+
+    def _unpark(self) -> None:
         self.parked = False
         self._host.apad.pending = None
-        self._scheduler.reschedule(self.task, next_us=self.last_us + self.task.period_us, active=True)
         if self.on_rearm is not None:
             self.on_rearm()
 
     def ahead(self) -> RestAhead | None:
         """What the parked rest holds ahead of now (the ticks until now taken); None while ticking."""
-        self.settle()
+        self.catch_up()
         apad = self._host.apad
         rest = apad.rest
-        if not self.parked or rest is None:
+        if not self.parked or rest is None or isinstance(rest, BOUNDED):  # busy: the streams at their period
             return None
         if isinstance(rest, ChargingRest):  # no closed form: known only to come to full
             return RestAhead(replace(rest.state(), battery_v=BATTERY_FULL_V), None, self.last_us or 0, 0, 0, None)

@@ -22,6 +22,7 @@ sets `speed_override_mps` (read by the next Go To only, so plain), and the energ
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING, TypeAlias
 
 from apad_sitl.energy_counters import EnergyCounters
 from apad_sitl.params import ApadParams
@@ -30,9 +31,18 @@ from apad_sitl.rest import ChargingRest, Rest
 from apad_sitl.vehicle import VehicleState
 from apad_sitl.vocabulary import RoverMode
 
+if TYPE_CHECKING:
+    from apad_sitl.cruise import Cruise
+    from apad_sitl.latch_hold import LatchHold
+    from apad_sitl.settling import Settling
+
 PrimitiveListener = Callable[[PrimitiveState, PrimitiveState], None]  # (old, new)
 ModeListener = Callable[[int], None]  # the new mode
 ArmedListener = Callable[[bool], None]  # armed now
+# The hull advanced in closed form: at rest (`apad_sitl.rest`), or on the ideal link busy too (a Go To's
+# cruise, `apad_sitl.cruise`; latch timers running while it holds still, `apad_sitl.latch_hold`; settling
+# onto its hold point, `apad_sitl.settling`).
+HullRest: TypeAlias = "Rest | ChargingRest | Cruise | LatchHold | Settling"
 
 
 class ApadState:
@@ -43,7 +53,7 @@ class ApadState:
         self._current_mps = current_mps
         self._state = VehicleState()  # the hull: position, velocity, heading, battery
         # Not None: the hull rests at a fixed point and `state` is advanced in closed form (apad_sitl.rest).
-        self.rest: Rest | ChargingRest | None = None
+        self.rest: HullRest | None = None
         # Set while the physics task is parked at rest (`apad_sitl.parking`): takes the steps it skipped.
         self.pending: Callable[[], None] | None = None
         # Ideal-link mode (`apad_sitl.streams`): called after a setter changed the state while the physics
@@ -119,7 +129,10 @@ class ApadState:
 
     @property
     def primitive(self) -> PrimitiveState:
-        """The running primitive and the four slots; changed by `set_primitive` only."""
+        """The running primitive and the four slots; changed by `set_primitive` only (the latch timers a
+        parked physics task skipped taken first: `apad_sitl.latch_hold`)."""
+        if self.pending is not None:
+            self.pending()
         return self._primitive
 
     @property
