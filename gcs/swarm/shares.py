@@ -140,8 +140,8 @@ class SwarmWatch:
         if isinstance(self.clock, EventClock):
             seen: list[tuple[int, int, int]] = []
 
-            def on_time(now_us: int) -> None:  # looked at again only if what it reads changed
-                state = (self.registry.version, self.registry.mussels.version, len(self.retired))
+            def on_time(now_us: int) -> None:  # looked at again only if what it reads changed (its news)
+                state = (self.registry.news, self.registry.mussels.version, len(self.retired))
                 if now_us >= start_us and (not seen or seen[0] != state):
                     seen[:] = [state]
                     self.check(now_us)
