@@ -196,7 +196,7 @@ def speed(console: Console, repeat: int, cases: list[str]) -> None:
                     best[p] = o
         lo, ev = best["lockstep"], best["event"]
         mission_s = _seconds(base.duration)
-        table.add_row(label, f"{lo.wall_s:.2f}", f"{ev.wall_s:.3f}", f"{lo.wall_s / ev.wall_s:.0f}x",
+        table.add_row(label, f"{lo.wall_s:.2f}", f"{ev.wall_s:.3f}", f"{lo.wall_s / ev.wall_s:.1f}x",
                       f"{mission_s / ev.wall_s:,.0f}", f"{ev.rss_mb:.0f}")
     if "year" in cases:
         day = run_fresh(Job("bay120-sleep", None, 1, DAY, "event"))
