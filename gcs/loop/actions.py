@@ -19,7 +19,7 @@ from gcs.belief.duty import Duty
 from gcs.link.apad_api import CommandError, GeofenceError, Location
 from gcs.loop import wait_check
 from gcs.loop.control import EndReason, LoopControl, LoopLog, LoopStatus, MissionEnded, Phase
-from gcs.loop.fleet_knowledge import FleetKnowledge
+from gcs.loop.fleet_knowledge import READS_ALL, FleetKnowledge, Reads
 from gcs.loop.telemetry_pace import HOLDING_PHASES, PACE_WORTH_S, PLANNING_PHASES, TelemetryPace
 from gcs.swarm.shares import others_lapse_s, route_conflicts
 from missiontime import us_to_s
@@ -87,11 +87,11 @@ class ApadActions:
             # Accepted, but not one report on it (all lost, or the failsafe took over unheard):
             # send it again; a re-send of a Go To in force is answered, not restarted.
             if not self.wait_until(partial(self._goto_heard, mine), timeout_s=GOTO_HEARD_S,
-                                    interruptible=interruptible, others=False):
+                                    interruptible=interruptible, reads=Reads.OWN):
                 self._log("goto_unconfirmed", lat=target.lat, lon=target.lon, after_s=GOTO_HEARD_S)
                 continue
             if not self.wait_until(partial(self._goto_over, mine), timeout_s=trip_limit_s,
-                                    interruptible=interruptible, others=False):
+                                    interruptible=interruptible, reads=Reads.OWN):
                 self._log("goto_timeout", lat=target.lat, lon=target.lon, after_s=round(trip_limit_s, 1))
                 continue
             if self._replaced(mine):  # the operator commanded the aPad meanwhile: the loop takes it back
@@ -150,7 +150,7 @@ class ApadActions:
             return ours(Latch.LATCHED) or (failed and not ours(Latch.CLOSING))
 
         # Never abandon a dock half-way: the waits ignore the end of the mission.
-        self.wait_until(settled, self.settings.surfacing_timeout_s, interruptible=False)
+        self.wait_until(settled, self.settings.surfacing_timeout_s, interruptible=False, reads=Reads.OWN)
         for _ in range(self.settings.command_attempts * 4):  # a latch closes in seconds: this is minutes
             try:
                 s = self.api.fresh_slot(slot, self.apad_id)
@@ -159,7 +159,8 @@ class ApadActions:
                 continue
             if not (s.mussel_id == mussel_id and s.latch == Latch.CLOSING):
                 return s.mussel_id == mussel_id and s.latch == Latch.LATCHED
-            self.wait_until(lambda: not ours(Latch.CLOSING), self.settings.poll_s * 8, interruptible=False)
+            self.wait_until(lambda: not ours(Latch.CLOSING), self.settings.poll_s * 8, interruptible=False,
+                            reads=Reads.OWN)
         self._log("gave_up", what="dock confirmation", mussel=mussel_id, slot=slot)
         return ours(Latch.LATCHED)
 
@@ -180,7 +181,7 @@ class ApadActions:
                 except CommandError as exc:
                     self._log("command_failed", what=str(exc))
             self.wait_until(lambda: released() or self.knows.slot(slot).latch != Latch.RELEASING,
-                             timeout_s=self.settings.poll_s * 8, interruptible=False)
+                             timeout_s=self.settings.poll_s * 8, interruptible=False, reads=Reads.OWN)
         if released():
             return True
         self._log("undock_failed", mussel=mussel_id, slot=slot, why="the aPad keeps refusing; it stays on board")
@@ -249,17 +250,17 @@ class ApadActions:
 
     def wait_until(self, done: Callable[[], bool], timeout_s: float | None = None, interruptible: bool = True,
                    holding_for_s: float = 0.0, look_by: Callable[[], float | None] | None = None,
-                   others: bool = True) -> bool:
+                   reads: Reads = READS_ALL) -> bool:
         """Wait until `done`; False at `timeout_s`. What it waits for is declared: `done` reads what the GCS
         knows, so news (a report, an acknowledgement) can turn it true, and time alone from `look_by()` on
         (the first instant, mission s, a belief running between reports could: `gcs.loop.wake_times`;
         None: only news can). Lockstep and the field look at every `poll_s`, as a field script's sleep loop
         does (the reference); a platform that jumps from event to event wakes at news or `look_by`
-        instead, and `gcs.loop.wait_check` holds the declarations to what lockstep sees. `others` False: `done`
-        reads nothing of the other aPads (their reports are no news to it).
+        instead, and `gcs.loop.wait_check` holds the declarations to what lockstep sees. `reads`: what `done`
+        reads that only a message changes (`FleetKnowledge.news`); news of anything else does not wake it.
         With slow telemetry in a holding phase, or when it holds in place for about `holding_for_s` (above
         an aMussel on its way up) and that is worth two rounds of requests (`PACE_WORTH_S`)."""
-        news = self.knows.news if others else partial(self.knows.news, False)
+        news = self.knows.news if reads == READS_ALL else partial(self.knows.news, reads)
         if wait_check.ENABLED:
             check = wait_check.WaitCheck(news, self.clock, look_by, getattr(done, "__qualname__", "wait"))
             done = partial(check.looked, done)

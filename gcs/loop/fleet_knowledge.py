@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Hashable
+from enum import Flag, auto
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -61,6 +62,20 @@ def outlook(settings: LoopSettings, now_s: float) -> Outlook:
         charged_frac=mission.charged_threshold,
     )
 
+
+
+class Reads(Flag):
+    """What a wait's condition reads that only a message changes (`FleetKnowledge.news`): a platform that
+    jumps from event to event wakes it only for news of these (`gcs.loop.wait_check` holds it to that)."""
+
+    FLEET = auto()  # the aMussels' table: their states and batteries as reported
+    SHARES = auto()  # the swarm's shares and claims
+    OWN = auto()  # this aPad as heard: its mode, primitive's progress, slots, battery thresholds, link
+    OTHERS = auto()  # the other aPads, likewise
+    MOVES = auto()  # where the aPads are and how far their Go Tos have gone
+
+
+READS_ALL = Reads.FLEET | Reads.SHARES | Reads.OWN | Reads.OTHERS | Reads.MOVES
 
 class FleetKnowledge:
     """One aPad's view of the fleet: reads only (what the loop writes down is its `LoopBook`'s)."""
@@ -312,21 +327,24 @@ class FleetKnowledge:
         """Ids of the aMussels last reported in one of `states`."""
         return self.api.mussels.select(states)
 
-    def news(self, others: bool = True) -> Hashable:
+    def news(self, reads: Reads = READS_ALL) -> Hashable:
         """What the GCS holds that a wait can read and only a message changes, as one comparable value: the
         fleet's table (its version moves with every report), the share's claims and owners, every aPad as last
         heard (arrival stamps left out: a repeated report of the same thing is no news; its battery as the
         thresholds waits read, `VehicleRegistry.watch_battery`), and whether this aPad's link is up (it comes
-        back with a heartbeat). `others` False: this aPad alone of the aPads (a wait that reads no other's).
+        back with a heartbeat); of these, what `reads` names (a wait that reads less is woken by less).
         A wait's other changes are time's (`gcs.loop.wake_times`)."""
         registry = self.api.link.registry
-        vehicles = sorted(registry.vehicles.items()) if others else \
-            [(s, v) for s, v in registry.vehicles.items() if s == self.apad_id]
-        apads = tuple((sysid, v.custom_mode, v.armed, v.lat_deg, v.lon_deg, registry.battery_news(sysid, v.battery_v),
-                       v.charging, v.home, _primitive_news(v.primitive), tuple(v.slots.values()),
+        moves, own, others = Reads.MOVES in reads, Reads.OWN in reads, Reads.OTHERS in reads
+        vehicles = [(s, v) for s, v in sorted(registry.vehicles.items()) if (own if s == self.apad_id else others)]
+        apads = tuple((sysid, v.custom_mode, v.armed, (v.lat_deg, v.lon_deg) if moves else None,
+                       registry.battery_news(sysid, v.battery_v), v.charging, v.home,
+                       _primitive_news(v.primitive, moves), tuple(v.slots.values()),
                        None if v.expected is None else (v.expected.kind, v.expected.a, v.expected.b, v.expected.seen))
                       for sysid, v in vehicles)
-        return registry.mussels.version, 0 if self.shares is None else self.shares.version, apads, self.link_up()
+        return (registry.mussels.version if Reads.FLEET in reads else None,
+                (0 if self.shares is None else self.shares.version) if Reads.SHARES in reads else None,
+                apads, self.link_up() if Reads.OWN in reads else None)
 
     def link_up(self) -> bool:
         """The aPad heard within `LINK_LOST_S`."""
@@ -371,7 +389,8 @@ class FleetKnowledge:
         return self.shares is not None and not self.shares.holds(self.apad_id, mussel_id)
 
 
-def _primitive_news(p: PrimitiveView) -> tuple[object, ...]:
-    """A PRIMITIVE_STATUS as news: all it says but when it was stamped (a repeat is no news)."""
-    return (p.primitive, p.progress, p.target_lat_e7, p.target_lon_e7, p.distance_to_go_m, p.distance_travelled_m,
-            p.slot, p.mussel_id)
+def _primitive_news(p: PrimitiveView, moves: bool = True) -> tuple[object, ...]:
+    """A PRIMITIVE_STATUS as news: all it says but when it was stamped (a repeat is no news); `moves` False:
+    nor the distances a Go To runs down."""
+    distances = (p.distance_to_go_m, p.distance_travelled_m) if moves else ()
+    return (p.primitive, p.progress, p.target_lat_e7, p.target_lon_e7, *distances, p.slot, p.mussel_id)

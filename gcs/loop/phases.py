@@ -20,7 +20,7 @@ from gcs.loop.book import charging_pool
 from gcs.loop.control import Phase
 from gcs.loop.crew import Crew
 from gcs.loop.failed_docking import after_failed_docking, dock_again
-from gcs.loop.fleet_knowledge import FleetKnowledge
+from gcs.loop.fleet_knowledge import FleetKnowledge, Reads
 from gcs.loop.trip_energy import needs_home
 from gcs.loop.wake_times import all_charged_look_by, pool_look_by
 from gcs.strategies import CollectStrategy, PlanInput, StrategyError, plan
@@ -53,7 +53,8 @@ def idle_wait(crew: Crew) -> None:
         found = len(charging_pool(knows, crew.book))
         return found > 0 and found >= min(knows.pool_needed(mission.min_pool), free) and act.link_up()
 
-    act.wait_until(pool_full, look_by=functools.partial(pool_look_by, knows), others=False)
+    act.wait_until(pool_full, look_by=functools.partial(pool_look_by, knows),
+                   reads=Reads.FLEET | Reads.SHARES | Reads.OWN | Reads.MOVES)
 
 
 def plan_collection(crew: Crew) -> list[int]:
@@ -164,7 +165,8 @@ def collect(crew: Crew, route: list[int]) -> None:
             continue
         rise_s = knows.wake_in_s(mussel_id) + crew.settings.mussel_surfacing_s  # a sleeper's wake first
         if not act.wait_until(functools.partial(_floating_or_depleted, knows, mussel_id),
-                              knows.call_up_wait_s(mussel_id), interruptible=False, holding_for_s=rise_s):
+                              knows.call_up_wait_s(mussel_id), interruptible=False, holding_for_s=rise_s,
+                              reads=Reads.FLEET):
             if taken_over(crew, mussel_id):
                 continue
             crew.log("skip", mussel=mussel_id, why="did not surface", state=knows.state(mussel_id).name)
@@ -271,7 +273,8 @@ def charging_wait(crew: Crew) -> None:
     act.hold()
     strategy = crew.status.strategy
     act.wait_until(lambda: all(knows.charged(m, strategy) for m in knows.docked().values()),
-                   look_by=lambda: all_charged_look_by(knows, list(knows.docked().values()), strategy), others=False)
+                   look_by=lambda: all_charged_look_by(knows, list(knows.docked().values()), strategy),
+                   reads=Reads.FLEET | Reads.OWN)
 
 
 def plan_redeployment(crew: Crew, only: set[int] | None = None) -> list[tuple[int, int]]:

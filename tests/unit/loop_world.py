@@ -18,7 +18,7 @@ from gcs.belief.fleet_belief import Believed
 from gcs.link.apad_api import Location
 from gcs.link.telemetry import SlotView
 from gcs.loop.control import LoopSettings
-from gcs.loop.fleet_knowledge import outlook
+from gcs.loop.fleet_knowledge import READS_ALL, Reads, outlook
 from gcs.mission.world import loop_settings as world_loop_settings
 from gcs.scenario.reader import Scenario
 from gcs.strategies import Outlook
@@ -202,8 +202,8 @@ class ScriptedKnowledge:
     def link_up(self) -> bool:
         return self.world.link_up
 
-    def news(self, others: bool = True) -> Hashable:
-        """What the test set, as one value: a change of the world is news (one aPad: `others` changes nothing)."""
+    def news(self, reads: Reads = READS_ALL) -> Hashable:
+        """What the test set, as one value: a change of the world is news (whatever a wait `reads`)."""
         w = self.world
         return (tuple(sorted(w.states.items())), tuple(sorted(w.batteries.items())), tuple(w.slots.values()),
                 w.battery_v, w.charging_at_home, w.link_up)
