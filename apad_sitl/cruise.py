@@ -20,8 +20,8 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from apad_sitl.energy import HOME_STILL_MPS
 from apad_sitl.energy_counters import EnergyCounters
+from apad_sitl.home_charger import HOME_STILL_MPS
 from apad_sitl.params import ApadParams
 from apad_sitl.primitives import PrimitiveState, velocity_setpoint
 from apad_sitl.vehicle import BATTERY_EMPTY_V, HEADING_MIN_SPEED_MPS, VehicleState, drain_v, wrap_pi

@@ -29,14 +29,11 @@ from collections.abc import Iterable
 from dataclasses import replace
 
 from apad_sitl.energy_counters import EnergyCounters
-from apad_sitl.home_charger import home_charge_wh, volts_after
+from apad_sitl.home_charger import HOME_STILL_MPS, home_charge_wh, volts_after
 from apad_sitl.host import invalid_reason
 from apad_sitl.state import ApadState
 from apad_sitl.vehicle import BATTERY_FULL_V
 from apad_sitl.vocabulary import Latch
-
-HOME_STILL_MPS = 0.05  # slower than this over ground: the hull can be plugged in
-
 
 _ON_SLOT = (Latch.LATCHED, Latch.RELEASING)
 

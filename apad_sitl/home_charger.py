@@ -10,6 +10,8 @@ from __future__ import annotations
 from apad_sitl.params import ApadParams
 from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V, VOLT_RANGE
 
+HOME_STILL_MPS = 0.05  # slower than this over ground: the hull can be plugged in
+
 
 def home_charge_wh(battery_v: float, params: ApadParams, dt_s: float) -> float:
     """Wh the charger puts in over `dt_s` from `battery_v` (below full): its power, or what is left to full."""

@@ -17,16 +17,36 @@ from that step; the release status the charger meters by shows that step's batte
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from mavlink_dialect import mavlink
 from missiontime import Scheduler, Task
+from mussel_sim.apad_fixes import ApadFixes
 from mussel_sim.event_grid import EventGrid
-from mussel_sim.fleet_state import DOCKED
+from mussel_sim.fleet_orders import PendingOrders
+from mussel_sim.fleet_state import DOCKED, FleetInputs, FleetParams, FleetState
 from mussel_sim.next_change import steps_at_once
+from mussel_sim.recorder import Recorder
 
-if TYPE_CHECKING:
-    from mussel_sim.comms import FleetRunner
+
+class FleetRunner(Protocol):
+    """What the stepper uses of its runner (`mussel_sim.comms.FleetRunner`, which makes it)."""
+
+    state: FleetState
+    params: FleetParams
+    recorder: Recorder
+    apads: ApadFixes
+    orders: PendingOrders
+
+    def step_task(self, now_us: int) -> None: ...
+
+    def step_to(self, now_us: int, inputs: FleetInputs, periods: int = 1) -> None: ...
+
+    def publish_status_task(self, now_us: int) -> None: ...
+
+    def quiet_inputs(self) -> FleetInputs: ...
+
+    def take_inputs(self) -> FleetInputs: ...
 
 # Messages that queue something for the next step (or, a slot's report, ask the charger's report of it).
 _INPUTS = (mavlink.MAVLink_dock_slot_status_message, mavlink.MAVLink_amussel_command_message,
