@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import fcntl
 import json
+import math
 import os
 import pty
 import re
@@ -22,6 +23,9 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
+
+from mavlink_dialect import Codec, mavlink
+from mussel_sim.geo import LocalFrame
 
 MISSIONS = Path(__file__).resolve().parents[1] / "missions"
 
@@ -272,3 +276,19 @@ def restored_session(scenario: Any, folder: Path, saved: Any = None) -> Any:
     world = build_world(scenario, VirtualClock(start_us=saved.time_us), folder, LinkOptions(), mission_start_us=0,
                         append_logs=True)
     return MissionSession(world, files, saved, setup=checkpoint.setup_digest(scenario))
+
+
+def go_to_bytes(gcs: Codec, frame: LocalFrame, x_m: float, y_m: float) -> bytes:
+    """A Go To (DO_REPOSITION as COMMAND_INT, mode changed) to (`x_m`, `y_m`) of `frame`, as `gcs` encodes it."""
+    lat, lon = frame.to_geodetic(x_m, y_m)
+    return gcs.encode(mavlink.MAVLink_command_int_message(
+        1, 1, mavlink.MAV_FRAME_GLOBAL_INT, mavlink.MAV_CMD_DO_REPOSITION, 0, 0, -1.0,
+        mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE, 0.0, math.nan, round(float(lat) * 1e7), round(float(lon) * 1e7),
+        0.0))
+
+
+def command_bytes(gcs: Codec, command: int, *params: float) -> bytes:
+    """A COMMAND_LONG to system 1 with `params` (the rest 0), as `gcs` encodes it."""
+    p = list(params) + [0.0] * (7 - len(params))
+    return gcs.encode(mavlink.MAVLink_command_long_message(1, 1, command, 0, *p))
+

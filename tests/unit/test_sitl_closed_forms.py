@@ -10,11 +10,11 @@ the same instants, and the ideal-link aPad stepped a small part of the ticks.
 
 from __future__ import annotations
 
-import math
 from dataclasses import astuple, dataclass, field, replace
 from typing import Any
 
 import pytest
+from testkit import command_bytes, go_to_bytes
 
 from apad_sitl.cruise import Cruise
 from apad_sitl.endpoint import SitlVehicle
@@ -37,17 +37,8 @@ CRUISE = (10, 110)  # seconds of the first Go To's steady cruise, well inside it
 GPI = mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT
 
 
-def _go_to(gcs: Codec, x_m: float, y_m: float) -> bytes:
-    lat, lon = FRAME.to_geodetic(x_m, y_m)
-    return gcs.encode(mavlink.MAVLink_command_int_message(
-        1, 1, mavlink.MAV_FRAME_GLOBAL_INT, mavlink.MAV_CMD_DO_REPOSITION, 0, 0, -1.0,
-        mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE, 0.0, math.nan, round(float(lat) * 1e7), round(float(lon) * 1e7),
-        0.0))
 
 
-def _command(gcs: Codec, command: int, *params: float) -> bytes:
-    p = list(params) + [0.0] * (7 - len(params))
-    return gcs.encode(mavlink.MAVLink_command_long_message(1, 1, command, 0, *p))
 
 
 def _mussel(fleet: Codec, now_us: int) -> bytes:
@@ -83,9 +74,11 @@ def _run(ideal: bool) -> Run:
         if now_us % US_PER_S:
             return
         marks[t] = vehicle.physics.ticks if vehicle.physics is not None else 0
-        out = {GO: [_go_to(gcs, *FIRST)], DOCK_AT - 1: [_mussel(fleet, now_us)],
-               DOCK_AT: [_command(gcs, MAV_CMD_APAD_DOCK, 1, 7)], UNDOCK_AT: [_command(gcs, MAV_CMD_APAD_UNDOCK, 1, 7)],
-               SECOND_AT: [_go_to(gcs, *SECOND)], REPLACE_AT: [_go_to(gcs, *REPLACED)]}.get(t, [])
+        out = {GO: [go_to_bytes(gcs, FRAME, *FIRST)], DOCK_AT - 1: [_mussel(fleet, now_us)],
+               DOCK_AT: [command_bytes(gcs, MAV_CMD_APAD_DOCK, 1, 7)],
+               UNDOCK_AT: [command_bytes(gcs, MAV_CMD_APAD_UNDOCK, 1, 7)],
+               SECOND_AT: [go_to_bytes(gcs, FRAME, *SECOND)],
+               REPLACE_AT: [go_to_bytes(gcs, FRAME, *REPLACED)]}.get(t, [])
         for data in out:
             gcs_end.send(data)
 

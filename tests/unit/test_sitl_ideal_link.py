@@ -21,6 +21,7 @@ from itertools import pairwise
 from typing import Any
 
 import pytest
+from testkit import command_bytes, go_to_bytes
 
 from apad_sitl.by_exception import STAMPS, report_key, stream_of
 from apad_sitl.endpoint import SitlVehicle
@@ -48,21 +49,12 @@ REST = (300, 1_800)  # resting away from home, nothing asked: the window the tas
 AT_HOME_FULL = (6_000, END_S)  # held full at the home charger
 
 
-def _go_to(gcs: Codec, x_m: float, y_m: float) -> bytes:
-    lat, lon = FRAME.to_geodetic(x_m, y_m)
-    return gcs.encode(mavlink.MAVLink_command_int_message(
-        1, 1, mavlink.MAV_FRAME_GLOBAL_INT, mavlink.MAV_CMD_DO_REPOSITION, 0, 0, -1.0,
-        mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE, 0.0, math.nan, round(float(lat) * 1e7), round(float(lon) * 1e7),
-        0.0))
 
 
-def _command(gcs: Codec, command: int, *params: float) -> bytes:
-    p = list(params) + [0.0] * (7 - len(params))
-    return gcs.encode(mavlink.MAVLink_command_long_message(1, 1, command, 0, *p))
 
 
 def _rates(gcs: Codec, rates_hz: dict[int, float]) -> list[bytes]:
-    return [_command(gcs, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, msg_id, round(US_PER_S / hz))
+    return [command_bytes(gcs, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, msg_id, round(US_PER_S / hz))
             for msg_id, hz in rates_hz.items()]
 
 
@@ -94,11 +86,11 @@ def _run(ideal: bool) -> Run:
         if t == 1:
             out += _rates(gcs, MOVING_HZ)
         elif t == 5:
-            out.append(_go_to(gcs, 15.0, 0.0))
+            out.append(go_to_bytes(gcs, FRAME, 15.0, 0.0))
         elif t == 90:
             out += _rates(gcs, HOLDING_HZ)
         elif t == 1_800:
-            out.append(_command(gcs, mavlink.MAV_CMD_REQUEST_MESSAGE, SYS))
+            out.append(command_bytes(gcs, mavlink.MAV_CMD_REQUEST_MESSAGE, SYS))
         elif t == 2_400:  # a faster hotel drain, set over the link
             out.append(gcs.encode(mavlink.MAVLink_param_set_message(
                 1, 1, b"BATT_DRAIN_IDLE", 2.0, mavlink.MAV_PARAM_TYPE_REAL32)))
@@ -106,7 +98,7 @@ def _run(ideal: bool) -> Run:
             vehicle.params = replace(vehicle.params, batt_drain_idle_vph=0.5)
         elif t == 4_000:
             out += _rates(gcs, {GPI: 2.0, PRIM: 1.0})
-            out.append(_go_to(gcs, 0.0, 0.0))
+            out.append(go_to_bytes(gcs, FRAME, 0.0, 0.0))
         elif t == 4_100:
             out += _rates(gcs, HOLDING_HZ)
         for data in out:

@@ -15,6 +15,8 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from testkit import go_to_bytes
+
 from apad_sitl.endpoint import SitlVehicle
 from apad_sitl.params import ApadParams
 from apad_sitl.vehicle import BATTERY_FULL_V, VehicleState
@@ -27,12 +29,6 @@ FRAME = LocalFrame(*HOME)
 END_S = 4_000.0
 
 
-def _go_to(gcs: Codec, x_m: float, y_m: float) -> bytes:
-    lat, lon = FRAME.to_geodetic(x_m, y_m)
-    return gcs.encode(mavlink.MAVLink_command_int_message(
-        1, 1, mavlink.MAV_FRAME_GLOBAL_INT, mavlink.MAV_CMD_DO_REPOSITION, 0, 0, -1.0,
-        mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE, 0.0, math.nan, round(float(lat) * 1e7), round(float(lon) * 1e7),
-        0.0))
 
 
 @dataclass
@@ -82,14 +78,14 @@ def _run(park: bool, log_dir: Path) -> Run:
             gcs_end.send(gcs.encode(mavlink.MAVLink_heartbeat_message(
                 mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0, 3)))
         if t == 60:
-            gcs_end.send(_go_to(gcs, 10.0, 30.0))
+            gcs_end.send(go_to_bytes(gcs, FRAME, 10.0, 30.0))
         if t == 90:
             gcs_end.send(gcs.encode(mavlink.MAVLink_param_set_message(
                 1, 1, b"FS_GCS_TIMEOUT", 4.0, mavlink.MAV_PARAM_TYPE_REAL32)))
         if t == 130:  # the link is lost: the aPad sets off, and the failsafe holds it
-            gcs_end.send(_go_to(gcs, 10.0, 10.0))
+            gcs_end.send(go_to_bytes(gcs, FRAME, 10.0, 10.0))
         if t == 250:
-            gcs_end.send(_go_to(gcs, 0.0, 0.0))  # to the home charger, to be held full there for hours
+            gcs_end.send(go_to_bytes(gcs, FRAME, 0.0, 0.0))  # to the home charger, to be held full there for hours
         if t in (30.2, 45.7, 3_000.3):  # resting, between its streams: away from home, then held full at home
             asker.asked += 1
         run.sent.extend(gcs_end.receive())
