@@ -276,8 +276,12 @@ class VirtualClock:
         sched.drain()
         while self.run_next(target_us):
             pass
+        self.moving_to(target_us)
         self._now_us = sched.now_us = max(self._now_us, target_us)
         sched.drain()
+
+    def moving_to(self, t_us: int) -> None:
+        """Time is about to move on to `t_us` (nothing at it has run yet); an `EventClock` integrates there."""
 
     def run_next(self, target_us: int | None) -> bool:
         """Run the next instant with a task due, if it is not after `target_us` (None: whenever it is);
@@ -287,6 +291,7 @@ class VirtualClock:
         if due is None or (target_us is not None and due > target_us):
             return False
         # Tasks already overdue (added with an old start) run now; time never goes back.
+        self.moving_to(due)
         self._now_us = max(self._now_us, due)
         sched.run_due(self._now_us)
         return True

@@ -57,26 +57,10 @@ class EventClock(VirtualClock):
         since the last move held all along (nothing changes between instants)."""
         self._on_time.append(hook)
 
-    def _moving_to(self, t_us: int) -> None:
+    def moving_to(self, t_us: int) -> None:
         if t_us > self.now_us:
             for hook in self._on_time:
                 hook(t_us)
-
-    def run_next(self, target_us: int | None) -> bool:
-        due = self.scheduler.next_due_us()
-        if due is None or (target_us is not None and due > target_us):
-            return False
-        self._moving_to(due)
-        return super().run_next(target_us)
-
-    def advance_to(self, target_us: int) -> None:
-        sched = self.scheduler
-        sched.now_us = self.now_us
-        sched.drain()
-        while self.run_next(target_us):
-            pass
-        self._moving_to(target_us)
-        super().advance_to(target_us)  # nothing due by now: moves the time and delivers what is left
 
     def hears(self, source: Callable[[], int]) -> None:
         """Count `source` (a counter that only grows) as news: it moves when the GCS learns something."""

@@ -121,24 +121,19 @@ class VehicleRegistry:
         # Bumped on every change a wait could read: all of `version`'s but a battery's that crosses no watched
         # threshold (`watch_battery`); the event platform's waits look at this news (missiontime.event_clock).
         self.news = 0
-        self._battery_watch: dict[int, list[Callable[[float], bool]]] = {}
+        self._battery_watch: dict[int, dict[str, Callable[[float], bool]]] = {}
 
-    def watch_battery(self, system_id: int, holds: Callable[[float], bool]) -> None:
-        """A wait reads whether `holds(battery_v)` of aPad `system_id` (the mission's end, a charge done): a
-        report that changes it is news; one that only moves the volts between such thresholds is not."""
-        self._battery_watch.setdefault(system_id, []).append(holds)
+    def watch_battery(self, system_id: int, what: str, holds: Callable[[float], bool]) -> None:
+        """A wait reads whether `holds(battery_v)` of aPad `system_id` (`what`: the mission's end, a charge
+        done; watched once, whoever asks again): a report that changes it is news; one that only moves the
+        volts between such thresholds is not."""
+        self._battery_watch.setdefault(system_id, {})[what] = holds
 
     def battery_news(self, system_id: int, battery_v: float | None) -> tuple[bool, ...] | None:
         """What a wait can read of aPad `system_id`'s battery: each watched threshold, held or not."""
         if battery_v is None:
             return None
-        return tuple(holds(battery_v) for holds in self._battery_watch.get(system_id, ()))
-
-    def _quiet_battery(self, system_id: int, before: float | None, after: float | None) -> bool:
-        """Whether a battery report from `before` to `after` volts changes nothing a wait reads."""
-        if before is None or after is None:
-            return before == after
-        return all(holds(before) == holds(after) for holds in self._battery_watch.get(system_id, ()))
+        return tuple(holds(battery_v) for holds in self._battery_watch.get(system_id, {}).values())
 
     def silent_us(self, view: VehicleView, now_us: int) -> int:
         """How long the aPad of `view` has been silent: since its last heartbeat; 0 over the ideal link,
@@ -206,7 +201,7 @@ class VehicleRegistry:
                 if record.voltage_v is not None:
                     view.battery_v = record.voltage_v
                 view.battery_pct = record.remaining_pct
-                quiet = self._quiet_battery(system_id, before, view.battery_v)
+                quiet = self.battery_news(system_id, before) == self.battery_news(system_id, view.battery_v)
             case Charging():
                 view.charging = record.charging
             case Home():

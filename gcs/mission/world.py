@@ -145,9 +145,9 @@ class World:
         a = next(a for a in s.apads if apad_id is None or a.system_id == apad_id)
         settings = loop_settings(s, a, sorted(self.homes))
         registry = self.link.registry  # what of the aPad's battery its waits read: the mission's end, a charge done
-        registry.watch_battery(a.system_id, functools.partial(operator.ge, settings.battery_end_v))
+        registry.watch_battery(a.system_id, "mission end", functools.partial(operator.ge, settings.battery_end_v))
         if settings.energy is not None:
-            registry.watch_battery(a.system_id, settings.energy.charged)
+            registry.watch_battery(a.system_id, "charged", settings.energy.charged)
         clock = clock or self.clock
         api = self.api if clock is self.clock else self.api.on_clock(clock)
         loop = EnergySharingLoop(api, clock, settings, self.homes, a.system_id, self.events, control, shares,
