@@ -14,6 +14,7 @@ Pure but for the scheduler's place in time, which `next_on_grid` reads.
 
 from __future__ import annotations
 
+import bisect
 from collections.abc import Callable, Sequence
 from typing import Any, Protocol, cast
 
@@ -75,13 +76,7 @@ def first_change(differs: Callable[[int], bool], k_end: int) -> int:
     lo, hi = 0, 1
     while hi < k_end and not differs(hi):
         lo, hi = hi, min(2 * hi, k_end)
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if differs(mid):
-            hi = mid
-        else:
-            lo = mid
-    return hi
+    return lo + 1 + bisect.bisect_left(range(lo + 1, hi), True, key=differs)  # differs(hi) is known (or given)
 
 
 def next_on_grid(task: Task, scheduler: Scheduler) -> int:

@@ -22,6 +22,7 @@ Pure: no clock, no I/O; `dt_s` is the physics step the rest was found at.
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import replace
 
@@ -107,14 +108,7 @@ class Rest:
         hi = max(1, math.ceil(estimate) + 1)
         while not flat(hi) and hi < NEVER_STEPS:
             hi *= 2
-        lo = -1  # flat(-1) is false: the battery then is above its start (drain > 0)
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            if flat(mid):
-                hi = mid
-            else:
-                lo = mid
-        return max(hi, 0)
+        return bisect.bisect_left(range(hi), True, key=flat)  # hi itself: flat(hi), or NEVER_STEPS reached
 
 
 class ChargingRest:
