@@ -6,8 +6,9 @@ nowhere else, each step covering the periods since the last at once (`fleet.step
 `next_change`), and publishes the statuses right after each step, by exception with no keep-alive
 (the same rules and send path as lockstep's, so the GCS gets the same objects). The next step is
 rescheduled after each one: at the end of what the model may take at once, the recorder's day's end,
-the mission's last step; an input (a command, a sleep order, a slot's report, a wake-up ping, an aPad's
-position while an aMussel rides on one) brings it forward to the first step instant after it.
+the mission's last step; an input (a command, a sleep order, a slot's report, a wake-up ping) brings it
+forward to the first step instant after it. An aPad's position is not an input: an aMussel riding on it
+(docked) follows it at the model's next step, not each second (docs/platforms.md).
 
 Before an input is queued the model is brought to lockstep's last step instant (`catch_up`, a step with
 no input): the input's own step then covers one period with the queued inputs, as lockstep's does (a
@@ -24,7 +25,7 @@ from missiontime import Scheduler, Task
 from mussel_sim.apad_fixes import ApadFixes
 from mussel_sim.event_grid import EventGrid
 from mussel_sim.fleet_orders import PendingOrders
-from mussel_sim.fleet_state import DOCKED, FleetInputs, FleetParams, FleetState
+from mussel_sim.fleet_state import FleetInputs, FleetParams, FleetState
 from mussel_sim.next_change import steps_at_once
 from mussel_sim.recorder import Recorder
 
@@ -114,16 +115,12 @@ class EventSteps:
         if to_us > r.state.time_us:
             self._quiet_step(to_us)
 
-    def _is_input(self, msg: mavlink.MAVLink_message | None) -> bool:
-        if msg is None or isinstance(msg, _INPUTS):
-            return True
-        if isinstance(msg, mavlink.MAVLink_global_position_int_message):  # a move matters to a rider only
-            r = self.runner
-            s = r.state
-            heard = (msg.lat / 1e7, msg.lon / 1e7)
-            return (r.apads.deg.get(int(msg.get_srcSystem())) != heard
-                    and bool(s.surface_held.any() or (s.state == DOCKED).any()))
-        return False
+    @staticmethod
+    def _is_input(msg: mavlink.MAVLink_message | None) -> bool:
+        # Not an aPad's position: a docked aMussel goes where its aPad was last heard at the model's next step
+        # (lockstep's goes each second), which an input, a timer or a band brings; where it matters, at its
+        # release (a slot's report, an input), it is there.
+        return msg is None or isinstance(msg, _INPUTS)
 
     def input_coming(self, msg: mavlink.MAVLink_message | None) -> None:
         """Before a valid message (None: one heard acoustically) acts: the model brought up to date."""
