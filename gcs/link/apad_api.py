@@ -202,14 +202,13 @@ class ApadApi:
     def _expecting(self, sysid: int, kind: Primitive, a: int = 0, b: int = 0) -> Iterator[None]:
         """Expect the primitive about to be commanded; a refusal puts back the one expected before
         (nothing changed on the aPad, so whoever waits on that one goes on waiting on it)."""
-        view = self.link.vehicles[sysid]
-        before = view.expected
+        before = self.link.vehicles[sysid].expected
         self.link.registry.expect(sysid, kind, a, b)
         try:
             yield
         except CommandError as exc:
             if exc.result is not None:
-                view.expected = before
+                self.link.registry.expect_again(sysid, before)
             raise
 
     def fresh_slot(self, slot: int, apad_id: int | None = None, timeout_s: float = 2.0, attempts: int = 5) -> SlotView:

@@ -121,6 +121,12 @@ class VehicleRegistry:
         # Bumped on every change a wait could read: all of `version`'s but a battery's that crosses no watched
         # threshold (`watch_battery`); the event platform's waits look at this news (missiontime.event_clock).
         self.news = 0
+        # Per aPad, counters that move with every change of what a wait reads of it (`marks`): `changed` all
+        # but where it is, `moved` where it is and how far its Go To has gone. Cheap to compare, so a wait
+        # builds what it reads only when one moved (`gcs.loop.fleet_knowledge.FleetKnowledge.news`).
+        self.changed: dict[int, int] = {}
+        self.moved: dict[int, int] = {}
+        self.restores = 0
         self._battery_watch: dict[int, dict[str, Callable[[float], bool]]] = {}
 
     def watch_battery(self, system_id: int, what: str, holds: Callable[[float], bool]) -> None:
@@ -128,6 +134,7 @@ class VehicleRegistry:
         done; watched once, whoever asks again): a report that changes it is news; one that only moves the
         volts between such thresholds is not."""
         self._battery_watch.setdefault(system_id, {})[what] = holds
+        self._changed(system_id)
 
     def battery_news(self, system_id: int, battery_v: float | None) -> tuple[bool, ...] | None:
         """What a wait can read of aPad `system_id`'s battery: each watched threshold, held or not."""
@@ -175,18 +182,24 @@ class VehicleRegistry:
             view.custom_mode, view.armed = record.custom_mode, record.armed
             self.version += 1
             self.news += 1
+            self._changed(system_id)
             return None
         view = self.vehicles.get(system_id)
         if view is None:
             return None  # not (yet) a vehicle: its heartbeat makes it one
-        quiet = False
+        still = False  # a battery report that crosses no watched threshold: no news at all
+        moves_only = False  # news only to a wait that reads the moves (`marks`)
         match record:
             case Position():
                 view.lat_deg, view.lon_deg = record.lat_deg, record.lon_deg
                 if record.heading_deg is not None:
                     view.heading_deg = record.heading_deg
+                moves_only = True
             case PrimitiveView():
                 self._check_boot(view, record.time_us, now_us)
+                expected = view.expected
+                moves_only = (primitive_news(view.primitive, False) == primitive_news(record, False)
+                              and (expected is None or expected.seen or not expected.matches(record)))
                 view.primitive = record
                 if view.expected is not None and view.expected.matches(record):
                     view.expected.seen = True
@@ -201,7 +214,7 @@ class VehicleRegistry:
                 if record.voltage_v is not None:
                     view.battery_v = record.voltage_v
                 view.battery_pct = record.remaining_pct
-                quiet = self.battery_news(system_id, before) == self.battery_news(system_id, view.battery_v)
+                still = self.battery_news(system_id, before) == self.battery_news(system_id, view.battery_v)
             case Charging():
                 view.charging = record.charging
             case Home():
@@ -212,8 +225,20 @@ class VehicleRegistry:
                 view.statustext.append(record.text)
                 del view.statustext[:-STATUSTEXT_KEPT]
         self.version += 1
-        self.news += 0 if quiet else 1
+        self.news += 0 if still else 1
+        if isinstance(record, Position | PrimitiveView):
+            self.moved[system_id] = self.moved.get(system_id, 0) + 1
+        if not (still or moves_only):
+            self._changed(system_id)
         return None
+
+    def _changed(self, system_id: int) -> None:
+        self.changed[system_id] = self.changed.get(system_id, 0) + 1
+
+    def marks(self, system_id: int, moves: bool) -> tuple[int, int]:
+        """Counters that move whenever what a wait reads of aPad `system_id` may have changed (`moves`: where it
+        is and how far its Go To has gone, too): unchanged, it has not."""
+        return self.changed.get(system_id, 0), self.moved.get(system_id, 0) if moves else 0
 
     def count_frame(self, system_id: int, component_id: int, seq: int) -> None:
         """A frame taken from a transport: count it, and the frames its sequence number says were lost
@@ -252,10 +277,16 @@ class VehicleRegistry:
         self.fleet_heard_us = saved.fleet_heard_us
         self.version += 1
         self.news += 1
+        self.restores += 1
 
     def expect(self, system_id: int, kind: Primitive, a: int = 0, b: int = 0) -> None:
         """We are about to command `kind` on this aPad: its reports count once they are about it."""
-        self.vehicles[system_id].expected = Expectation(kind, a, b)
+        self.expect_again(system_id, Expectation(kind, a, b))
+
+    def expect_again(self, system_id: int, expected: Expectation | None) -> None:
+        """Put `expected` back as what we last commanded (a refused command leaves the one before)."""
+        self.vehicles[system_id].expected = expected
+        self._changed(system_id)
 
     def _goto_sent(self, goto: GoToSent) -> None:
         """Count the paper's cost once per new target (a retransmission carries the same one)."""
@@ -266,3 +297,10 @@ class VehicleRegistry:
         view.last_goto_e7 = target
         view.goto_cost_m += float(distance_m(view.lat_deg, view.lon_deg, goto.lat_e7 / DEG_E7, goto.lon_e7 / DEG_E7))
         self.version += 1
+
+
+def primitive_news(p: PrimitiveView, moves: bool = True) -> tuple[object, ...]:
+    """A PRIMITIVE_STATUS as news: all it says but when it was stamped (a repeat is no news); `moves` False:
+    nor the distances a Go To runs down."""
+    distances = (p.distance_to_go_m, p.distance_travelled_m) if moves else ()
+    return (p.primitive, p.progress, p.target_lat_e7, p.target_lon_e7, *distances, p.slot, p.mussel_id)

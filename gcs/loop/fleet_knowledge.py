@@ -24,7 +24,8 @@ from gcs.belief.fleet_belief import Believed
 from gcs.belief.foresight import foreseen_battery
 from gcs.belief.real_fleet import MAX_REPORT_AGE_S, RealFleet
 from gcs.link.apad_api import ApadApi, Location
-from gcs.link.telemetry import PrimitiveView, SlotView
+from gcs.link.registry import primitive_news
+from gcs.link.telemetry import SlotView
 from gcs.loop.control import LoopSettings
 from gcs.loop.fleet_beliefs import FleetBeliefs
 from gcs.results.accounting import SURFACE_DEPTH_M
@@ -102,6 +103,7 @@ class FleetKnowledge:
         self._default_duty = Duty(discharge_profile(settings.mussel_discharge).rate_per_min)
         self._default_charge = charge_profile(settings.mussel_charge)
         self._beliefs = FleetBeliefs(api, clock, self.orders, acoustic is not None, self.drain_per_s, self.battery)
+        self._news: dict[Reads, tuple[Hashable, Hashable]] = {}  # reads -> (the registry's marks, the news)
 
     # --- the charging pool ----------------------------------------------------------------------
 
@@ -333,18 +335,26 @@ class FleetKnowledge:
         heard (arrival stamps left out: a repeated report of the same thing is no news; its battery as the
         thresholds waits read, `VehicleRegistry.watch_battery`), and whether this aPad's link is up (it comes
         back with a heartbeat); of these, what `reads` names (a wait that reads less is woken by less).
-        A wait's other changes are time's (`gcs.loop.wake_times`)."""
+        A wait's other changes are time's (`gcs.loop.wake_times`). Built again only when the registry's
+        counters say what it reads may have changed (`VehicleRegistry.marks`): a wait asks at every instant."""
         registry = self.api.link.registry
         moves, own, others = Reads.MOVES in reads, Reads.OWN in reads, Reads.OTHERS in reads
+        mark = (registry.mussels.version if Reads.FLEET in reads else None,
+                (0 if self.shares is None else self.shares.version) if Reads.SHARES in reads else None,
+                tuple(registry.marks(s, moves) for s in registry.vehicles if (own if s == self.apad_id else others)),
+                registry.restores, self.link_up() if own else None)
+        cached = self._news.get(reads)
+        if cached is not None and cached[0] == mark:
+            return cached[1]
         vehicles = [(s, v) for s, v in sorted(registry.vehicles.items()) if (own if s == self.apad_id else others)]
         apads = tuple((sysid, v.custom_mode, v.armed, (v.lat_deg, v.lon_deg) if moves else None,
                        registry.battery_news(sysid, v.battery_v), v.charging, v.home,
-                       _primitive_news(v.primitive, moves), tuple(v.slots.values()),
+                       primitive_news(v.primitive, moves), tuple(v.slots.values()),
                        None if v.expected is None else (v.expected.kind, v.expected.a, v.expected.b, v.expected.seen))
                       for sysid, v in vehicles)
-        return (registry.mussels.version if Reads.FLEET in reads else None,
-                (0 if self.shares is None else self.shares.version) if Reads.SHARES in reads else None,
-                apads, self.link_up() if Reads.OWN in reads else None)
+        value = (mark[0], mark[1], apads, mark[-1])
+        self._news[reads] = (mark, value)
+        return value
 
     def link_up(self) -> bool:
         """The aPad heard within `LINK_LOST_S`."""
@@ -388,9 +398,3 @@ class FleetKnowledge:
         that one (no sink: it is being fetched)."""
         return self.shares is not None and not self.shares.holds(self.apad_id, mussel_id)
 
-
-def _primitive_news(p: PrimitiveView, moves: bool = True) -> tuple[object, ...]:
-    """A PRIMITIVE_STATUS as news: all it says but when it was stamped (a repeat is no news); `moves` False:
-    nor the distances a Go To runs down."""
-    distances = (p.distance_to_go_m, p.distance_travelled_m) if moves else ()
-    return (p.primitive, p.progress, p.target_lat_e7, p.target_lon_e7, *distances, p.slot, p.mussel_id)
