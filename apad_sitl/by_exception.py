@@ -5,6 +5,12 @@ from the last one sent of that stream, time stamps aside (`report_key`), at the 
 period as the GCS set it: the GCS then knows at every instant what a stream sending every period
 would have told it, and is told nothing twice. A stream of DOCK_SLOT_STATUS is one per slot.
 
+The battery's volts differ in steps of `BATTERY_STEP_MV`: a report goes when they leave the step they
+were in (a dead band, as DIS's dead-reckoning thresholds), so the GCS's battery is within a step of
+what a stream sending every period would say. A resting aPad's millivolts change every few seconds,
+each change a report, with nothing a wait reads changing between (the mission loop's budgets and
+thresholds are volts, not millivolts).
+
 While the hull rests with its physics task parked, a stream's next report is the first instant of
 its grid at which its message would differ (`first_change`, over the rest's closed form); none, and
 it is parked until the rest ends. `next_on_grid` puts a stream back on the grid it never left.
@@ -24,6 +30,10 @@ from missiontime import Scheduler, Task
 
 # Fields that stamp a message with the time it was sent: they differ at every send, and say nothing new.
 STAMPS = frozenset({"time_boot_ms", "time_usec", "time_us", "time_unix_usec"})
+BATTERY_STEP_MV = 10  # the battery's dead band: 0.2 % of the pack's 5.5 V
+# Fields of millivolts (a list: the first, the pack's voltage; the rest are UINT16_MAX) in steps of BATTERY_STEP_MV.
+_STEPPED = frozenset({(mavlink.MAVLINK_MSG_ID_SYS_STATUS, "voltage_battery"),
+                      (mavlink.MAVLINK_MSG_ID_BATTERY_STATUS, "voltages")})
 _fields: dict[int, tuple[str, ...]] = {}  # message id -> its fields but the stamps
 
 
@@ -52,12 +62,23 @@ class Resting(Protocol):
 
 
 def report_key(msg: mavlink.MAVLink_message) -> tuple[Any, ...]:
-    """What a message tells, time stamps aside: two messages with equal keys report the same."""
+    """What a message tells, time stamps aside and its battery in steps: equal keys report the same."""
     msg_id = msg.get_msgId()
     fields = _fields.get(msg_id)
     if fields is None:
         fields = _fields[msg_id] = tuple(f for f in msg.get_fieldnames() if f not in STAMPS)
+    if msg_id in _STEPPED_IDS:
+        return tuple(_stepped(getattr(msg, f)) if (msg_id, f) in _STEPPED else getattr(msg, f) for f in fields)
     return tuple(getattr(msg, f) for f in fields)
+
+
+_STEPPED_IDS = frozenset(msg_id for msg_id, _ in _STEPPED)
+
+
+def _stepped(mv: int | list[int]) -> int | tuple[int, ...]:
+    if isinstance(mv, list):
+        return (mv[0] // BATTERY_STEP_MV, *mv[1:])
+    return mv // BATTERY_STEP_MV
 
 
 def stream_of(msg: mavlink.MAVLink_message) -> tuple[int, int]:

@@ -54,7 +54,7 @@ def step_hull(apad: ApadState, energy: EnergyMeter, mussels: Mapping[int, Mussel
     elif apad.state.battery_v == before.battery_v:  # the charger put back exactly what the step drained
         apad.rest = rest_mod.Rest(apad.state, p, dt_s, key, refill_wh=home_wh)
     elif energy.counters.charging:  # still at the charger, charging: the battery alone changes
-        apad.rest = rest_mod.ChargingRest(apad.state, p, dt_s, key)
+        apad.rest = rest_mod.ChargingRest(apad.state, p, dt_s, key, closed=closed_forms)
 
 
 def _find_closed_form(apad: ApadState, energy: EnergyMeter, mussels: Mapping[int, MusselFix],

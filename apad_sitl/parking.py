@@ -210,7 +210,7 @@ class PhysicsTicks:
         rest = apad.rest
         if not self.parked or rest is None or isinstance(rest, BOUNDED):  # busy: the streams at their period
             return None
-        if isinstance(rest, ChargingRest):  # no closed form: known only to come to full
+        if isinstance(rest, ChargingRest) and not rest.closed:  # known only to come to full, step by step
             return RestAhead(replace(rest.state(), battery_v=BATTERY_FULL_V), None, self.last_us or 0, 0, 0, None)
         assert self.last_us is not None
         still = rest.still_from()
@@ -225,8 +225,8 @@ class RestAhead:
     """A parked hull's rest from `last_us` (its last tick taken, `steps` into the rest) on.
 
     `end` is the hull once the rest has done all it can (drained flat, charged full, or as now); it
-    gets there at `still_us`, or at an instant with no closed form (None: a charging rest, whose
-    battery rises step by step, `rest.ChargingRest`). `hull_at` is the hull at an instant ahead,
+    gets there at `still_us`, or at an instant with no closed form (None: a charging rest in lockstep,
+    whose battery rises step by step, `rest.ChargingRest`). `hull_at` is the hull at an instant ahead,
     in the closed form (`rest.Rest.after`) the ticks would leave; only where `still_us` is known.
     """
 
@@ -235,7 +235,7 @@ class RestAhead:
     last_us: int
     steps: int
     period_us: int
-    rest: Rest | None
+    rest: Rest | ChargingRest | None
 
     def hull_at(self, t_us: int) -> VehicleState:
         """The hull after the ticks up to `t_us` (every tick at or before it: read after the physics task's

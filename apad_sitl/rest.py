@@ -15,7 +15,10 @@ adds to the counters step by step, so they are what stepping makes to the last b
 
 At its home charger below full, the hull is still and only the battery changes: a `ChargingRest`
 takes each step as a few float operations (the drain of `vehicle.step` at rest, then the charger's
-step from `home_charger`), the same floats stepping makes, until the battery is full.
+step from `home_charger`), the same floats stepping makes, until the battery is full. On the ideal
+link (`closed`) it takes the steps before the last one in closed form too: each is the same rise (the
+charger's power less the hotel drain), a product for a sum, to float rounding; the step that tops the
+battery up is stepped.
 
 Pure: no clock, no I/O; `dt_s` is the physics step the rest was found at.
 """
@@ -29,7 +32,7 @@ from dataclasses import replace
 from apad_sitl.energy_counters import EnergyCounters
 from apad_sitl.home_charger import home_charge_wh, volts_after
 from apad_sitl.params import ApadParams
-from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V, VehicleState, drain_v
+from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V, VOLT_RANGE, VehicleState, drain_v
 
 NEVER_STEPS = 2**62  # `Rest.still_from` of a drain that would take longer than any mission: ages of steps
 
@@ -118,20 +121,41 @@ class ChargingRest:
     `Rest`). Hours of charging cost a few float operations a step, not a physics step.
     """
 
-    __slots__ = ("_cache", "_drain_v", "_params", "battery_v", "dt_s", "key", "origin", "steps")
+    __slots__ = ("_cache", "_charge_wh", "_drain_v", "_params", "_rise_v", "battery_v", "closed", "dt_s", "key",
+                 "origin", "steps")
 
-    def __init__(self, origin: VehicleState, params: ApadParams, dt_s: float, key: tuple[object, ...] = ()) -> None:
+    def __init__(self, origin: VehicleState, params: ApadParams, dt_s: float, key: tuple[object, ...] = (),
+                 closed: bool = False) -> None:
         self.origin = origin
         self.dt_s = dt_s
         self.key = key
         self.steps = 0
         self.battery_v = origin.battery_v
+        self.closed = closed  # the steps before the last in closed form (the ideal link's)
         self._params = params
         self._drain_v = drain_v(params, origin.thrust_mps2, dt_s)
+        self._charge_wh = params.home_charge_w * dt_s / 3600.0  # a step's charge below full (`home_charge_wh`)
+        self._rise_v = self._charge_wh / params.batt_capacity_wh * VOLT_RANGE - self._drain_v
         self._cache = (0, origin)
+
+    def _whole_steps(self, v: float) -> int:
+        """Steps from `v` at the charger's whole power that leave the battery below full (a margin short of
+        the last, which the float rounding of the product could otherwise move)."""
+        if self._rise_v <= 0.0 or not BATTERY_EMPTY_V < v < BATTERY_FULL_V:
+            return 0
+        return max(0, math.ceil((BATTERY_FULL_V - v) / self._rise_v) - 2)
 
     def take(self, n: int, counters: EnergyCounters) -> int:
         """Up to `n` more steps; fewer (the number taken) if a step would not charge: full, or flat."""
+        if self.closed:
+            whole = min(n, self._whole_steps(self.battery_v))
+            self.battery_v += whole * self._rise_v
+            counters.home_wh += whole * self._charge_wh
+            self.steps += whole
+            return whole + self._stepped(n - whole, counters)
+        return self._stepped(n, counters)
+
+    def _stepped(self, n: int, counters: EnergyCounters) -> int:
         v, p, dt_s, drain = self.battery_v, self._params, self.dt_s, self._drain_v
         for taken in range(n):
             drained = max(BATTERY_EMPTY_V, v - drain)
@@ -151,3 +175,15 @@ class ChargingRest:
             cached = replace(self.origin, battery_v=self.battery_v)
             self._cache = (self.steps, cached)
         return cached
+
+    def after(self, n: int) -> VehicleState:
+        """The hull after `n` steps of the rest (`n` at least those taken) in the closed form: full once its
+        whole-power steps are done (the few stepped after them top it up); changes nothing."""
+        ahead, whole = max(0, n - self.steps), self._whole_steps(self.battery_v)
+        v = self.battery_v + ahead * self._rise_v if ahead <= whole else BATTERY_FULL_V
+        return replace(self.origin, battery_v=min(BATTERY_FULL_V, v))
+
+    def still_from(self) -> int:
+        """The step count from which the battery is full (the closed form's estimate: the whole-power steps
+        and the few stepped after them)."""
+        return self.steps + self._whole_steps(self.battery_v) + 3
