@@ -117,3 +117,19 @@ def random_drift_m(
 ) -> NDArray[np.float64]:
     """Per-axis random displacement `(2, n)` (east row, north row), U(-half_width, half_width)."""
     return rng.uniform(-half_width_m, half_width_m, size=(2, n))
+
+
+DRIFT_BLOCK_STEPS = 1024  # steps of draws made at once by `summed_drift_m`: bounded memory over a long step
+
+
+def summed_drift_m(
+    rng: np.random.Generator, n: int, half_width_m: float, steps: int
+) -> NDArray[np.float64]:
+    """`random_drift_m` of `steps` steps in a row, summed `(2, n)`: the draws of so many one-step calls in
+    their order (a `Generator` fills an array in the order it would fill the calls' arrays), so a long step
+    leaves each aMussel where that many steps leave it, to float rounding, and the stream where they leave it."""
+    total = np.zeros((2, n))
+    for start in range(0, steps, DRIFT_BLOCK_STEPS):
+        block = min(DRIFT_BLOCK_STEPS, steps - start)
+        total += rng.uniform(-half_width_m, half_width_m, size=(block, 2, n)).sum(axis=0)
+    return total

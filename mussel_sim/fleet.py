@@ -30,7 +30,6 @@ its battery gave out (at the surface if it was floating). Uptime is the recorder
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 from functools import cache
 
@@ -40,7 +39,7 @@ from numpy.typing import NDArray
 from missiontime import US_PER_S
 from mussel_sim.battery import step_battery
 from mussel_sim.behaviour import step_battery_profiles
-from mussel_sim.drift import NoCurrent, random_drift_m
+from mussel_sim.drift import NoCurrent, random_drift_m, summed_drift_m
 from mussel_sim.fleet_sleep import Sleepers, apply_orders
 from mussel_sim.fleet_state import (
     ACTIVE,
@@ -165,8 +164,9 @@ def step(
 
     Exact for any `dt_s` over which nothing changes discontinuously (`mussel_sim.next_change`): the
     battery and transit timers are linear, wakes and samples counted in closed form. The random drift's
-    half-width is per step of `step_period_s`: a longer step spreads by sqrt(dt_s / step_period_s), as
-    many small ones would (variance-preserving); None: per step whatever its length (lockstep's steps).
+    half-width is per step of `step_period_s`: a longer step draws the drift of each of its steps and moves
+    by their sum, as many small ones would, draw for draw (`drift.summed_drift_m`); None: one step whatever
+    its length (lockstep's steps).
     A current moves an aMussel by its velocity at the step's start: exact for a uniform current, an
     Euler step of the whole `dt_s` for a gridded one."""
     ids = state.ids
@@ -231,11 +231,10 @@ def step(
         x += ve * dt_s
         y += vn * dt_s
     if params.drift_half_width_m > 0:
-        # Always 2n draws, docked or not: the random stream does not depend on what happened.
+        # Always 2n draws a step, docked or not: the random stream does not depend on what happened.
         half = params.drift_half_width_m
-        if step_period_s is not None and dt_s != step_period_s:
-            half *= math.sqrt(dt_s / step_period_s)
-        drift = random_drift_m(rng, state.n, half)
+        steps = 1 if step_period_s is None else max(1, round(dt_s / step_period_s))
+        drift = random_drift_m(rng, state.n, half) if steps == 1 else summed_drift_m(rng, state.n, half, steps)
         x += drift[0]
         y += drift[1]
     docked = docked_mask.nonzero()[0]

@@ -88,16 +88,22 @@ def test_sleepers_over_days_at_once_count_every_wake_and_sample() -> None:
     assert (long.samples_due >= 71).all() and (long.samples_taken == long.samples_due).all()
 
 
-def test_drift_spreads_a_long_step_as_its_periods_and_one_period_as_lockstep() -> None:
+def test_a_long_steps_drift_is_its_periods_draw_for_draw_and_one_period_is_lockstep() -> None:
     params = FleetParams()
     state = fleet([0.9] * 2000, params)
     one = step(state, NO_INPUTS, params, np.random.default_rng(7), 1.0, 1.0)[0]
     lock = step(state, NO_INPUTS, params, np.random.default_rng(7), 1.0)[0]
     assert one.x_m.tobytes() == lock.x_m.tobytes()
-    long = step(state, NO_INPUTS, params, np.random.default_rng(7), 100.0, 1.0)[0]
-    many = singles(state, params, 100)
-    ratio = np.std(long.x_m - state.x_m) / np.std(many.x_m - state.x_m)
-    assert 0.9 < ratio < 1.1
+    for k in (2, 100, 2500):  # 2500: more than one block of draws (`drift.DRIFT_BLOCK_STEPS`)
+        rng_long, rng_many = np.random.default_rng(7), np.random.default_rng(7)
+        long = step(state, NO_INPUTS, params, rng_long, float(k), 1.0)[0]
+        many = state
+        for _ in range(k):
+            many = step(many, NO_INPUTS, params, rng_many, 1.0)[0]
+        np.testing.assert_allclose(long.x_m, many.x_m, rtol=0.0, atol=1e-9)
+        np.testing.assert_allclose(long.y_m, many.y_m, rtol=0.0, atol=1e-9)
+        assert not np.allclose(long.x_m, state.x_m, rtol=0.0, atol=1e-4)  # it did drift
+        assert rng_long.bit_generator.state == rng_many.bit_generator.state  # and left the stream where they do
 
 
 # --- next_change: exact ---------------------------------------------------------------------------------
