@@ -338,7 +338,8 @@ class FleetRunner:
 
     def _act(self, msg: mavlink.MAVLink_message, src: int) -> None:
         if isinstance(msg, mavlink.MAVLink_global_position_int_message):
-            self.apads.deg[src] = (msg.lat / DEG_E7, msg.lon / DEG_E7)
+            heard_us = None if self.event_steps is None or self._scheduler is None else self._scheduler.now_us
+            self.apads.hear(src, (msg.lat / DEG_E7, msg.lon / DEG_E7), heard_us)
         elif isinstance(msg, mavlink.MAVLink_dock_slot_status_message):
             released = self.orders.slot_status(src, msg.slot, msg.mussel_id, msg.latch)
             if self.reports.keepalive_us:
@@ -371,13 +372,14 @@ class FleetRunner:
 
     # --- internals --------------------------------------------------------------------------------------
 
-    def quiet_inputs(self) -> FleetInputs:
-        """A step's inputs with nothing queued taken: the aPads' positions only."""
-        return FleetInputs.make(apads=self.apads.for_step(self.state, False))
+    def quiet_inputs(self, step_us: int | None = None) -> FleetInputs:
+        """A step's inputs with nothing queued taken: the aPads' positions only (heard before `step_us`)."""
+        return FleetInputs.make(apads=self.apads.for_step(self.state, False, step_us))
 
-    def take_inputs(self) -> FleetInputs:
-        """The queued inputs for the next step (the queue is empty after), with the aPads' positions."""
-        return self.orders.take(self.apads.for_step(self.state, self.orders.pending))
+    def take_inputs(self, step_us: int | None = None) -> FleetInputs:
+        """The queued inputs for the next step (the queue is empty after), with the aPads' positions (heard
+        before `step_us`)."""
+        return self.orders.take(self.apads.for_step(self.state, self.orders.pending, step_us))
 
     def _report(self, events: StepEvents) -> None:
         if not (events.surface_refused_out_of_range_ids.size or events.surface_refused_depleted_ids.size):

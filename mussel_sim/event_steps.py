@@ -45,9 +45,9 @@ class FleetRunner(Protocol):
 
     def publish_status_task(self, now_us: int) -> None: ...
 
-    def quiet_inputs(self) -> FleetInputs: ...
+    def quiet_inputs(self, step_us: int | None = None) -> FleetInputs: ...
 
-    def take_inputs(self) -> FleetInputs: ...
+    def take_inputs(self, step_us: int | None = None) -> FleetInputs: ...
 
 # Messages that queue something for the next step (or, a slot's report, ask the charger's report of it).
 _INPUTS = (mavlink.MAVLink_dock_slot_status_message, mavlink.MAVLink_amussel_command_message,
@@ -81,14 +81,14 @@ class EventSteps:
                 if r.orders.pending and now_us - r.state.time_us > period:
                     self._quiet_step(now_us - period)  # the inputs' step is one period, as lockstep's
                 self.steps += 1
-                r.step_to(now_us, r.take_inputs(), (now_us - r.state.time_us) // period)
+                r.step_to(now_us, r.take_inputs(now_us), (now_us - r.state.time_us) // period)
         r.publish_status_task(now_us)
         self._schedule()
 
     def _quiet_step(self, to_us: int) -> None:
         r = self.runner
         self.steps += 1
-        r.step_to(to_us, r.quiet_inputs(), (to_us - r.state.time_us) // self.grid.period_us)
+        r.step_to(to_us, r.quiet_inputs(to_us), (to_us - r.state.time_us) // self.grid.period_us)
         r.publish_status_task(to_us)
 
     def _schedule(self) -> None:
