@@ -78,7 +78,6 @@ __all__ = ["FLEET_COMPONENT_ID", "FLEET_SYSTEM_ID", "MODEL_STEP_S", "SURFACE_DEP
 DEG_E7 = 1e7
 STATUSTEXT_MAX = 50
 
-
 # Where a co-located router takes whole batches: (message id, frames, columns by wire field name).
 BatchSink = Callable[[int, list[bytes], dict[str, Any]], None]
 
@@ -233,6 +232,8 @@ class FleetRunner:
         if rows is not None:  # some are asleep (or under water, acoustic), or foreseen: the others only
             ids, x, y, depth, u, state = ids[rows], x[rows], y[rows], depth[rows], u[rows], state[rows]
         lat, lon = self.frame.to_geodetic(x, y)
+        if self.event_steps is not None:
+            self.event_steps.keepalive.said(rows, time_us)
         self._send_batch(hot.AMUSSEL_STATUS, {
             "time_us": time_us, "mussel_id": ids, "lat": np.round(lat * DEG_E7).astype(np.int64),
             "lon": np.round(lon * DEG_E7).astype(np.int64), "depth": depth, "battery": u,

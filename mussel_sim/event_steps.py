@@ -20,12 +20,17 @@ from __future__ import annotations
 
 from typing import Protocol
 
+import numpy as np
+
 from mavlink_dialect import mavlink
-from missiontime import Scheduler, Task
+from missiontime import Scheduler, Task, seconds_to_us
 from mussel_sim.apad_fixes import ApadFixes
+from mussel_sim.comms_config import CommsConfig
 from mussel_sim.event_grid import EventGrid
 from mussel_sim.fleet_orders import PendingOrders
 from mussel_sim.fleet_state import FleetInputs, FleetParams, FleetState
+from mussel_sim.geo import LocalFrame
+from mussel_sim.keepalive_positions import KeepAlivePositions
 from mussel_sim.next_change import steps_at_once
 from mussel_sim.recorder import Recorder
 
@@ -35,6 +40,9 @@ class FleetRunner(Protocol):
 
     state: FleetState
     params: FleetParams
+    rng: np.random.Generator
+    config: CommsConfig
+    frame: LocalFrame
     recorder: Recorder
     apads: ApadFixes
     orders: PendingOrders
@@ -59,6 +67,9 @@ class EventSteps:
 
     def __init__(self, runner: FleetRunner, scheduler: Scheduler, grid: EventGrid) -> None:
         self.runner = runner
+        cfg = runner.config  # the positions lockstep's keep-alive would have told the GCS:
+        self.keepalive = KeepAlivePositions(runner.state.n, seconds_to_us(cfg.status_keepalive_s), grid.period_us,
+                                            runner.frame, cfg.wifi_at_surface_only)
         self.scheduler = scheduler
         self.grid = grid
         self._coming = False  # the message acting now is an input (`input_coming`)
@@ -81,6 +92,7 @@ class EventSteps:
                 if r.orders.pending and now_us - r.state.time_us > period:
                     self._quiet_step(now_us - period)  # the inputs' step is one period, as lockstep's
                 self.steps += 1
+                self.keepalive.before_step(r.state, now_us, r.rng, r.params)
                 r.step_to(now_us, r.take_inputs(now_us), (now_us - r.state.time_us) // period)
         r.publish_status_task(now_us)
         self._schedule()
@@ -88,6 +100,7 @@ class EventSteps:
     def _quiet_step(self, to_us: int) -> None:
         r = self.runner
         self.steps += 1
+        self.keepalive.before_step(r.state, to_us, r.rng, r.params)
         r.step_to(to_us, r.quiet_inputs(to_us), (to_us - r.state.time_us) // self.grid.period_us)
         r.publish_status_task(to_us)
 
@@ -114,6 +127,11 @@ class EventSteps:
             to_us = min(to_us, self.task.next_us - self.grid.period_us)
         if to_us > r.state.time_us:
             self._quiet_step(to_us)
+
+    def refresh_positions(self, now_us: int) -> None:
+        """The GCS reads the aMussels' positions: hand it what lockstep's keep-alive would have by now."""
+        r = self.runner
+        self.keepalive.refresh(now_us, r.state, r.rng, r.params)
 
     @staticmethod
     def _is_input(msg: mavlink.MAVLink_message | None) -> bool:

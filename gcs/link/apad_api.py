@@ -136,6 +136,7 @@ class ApadApi:
 
     def get_location(self, mussel_id: int) -> Location:
         """Last received position of an aMussel."""
+        self.link.registry.positions_at(self.clock.now_us)
         try:
             return self.mussels[mussel_id].location
         except KeyError:

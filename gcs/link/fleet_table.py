@@ -111,6 +111,16 @@ class MusselTable(Mapping[int, MusselView]):
         self.version += 1
         return rejected
 
+    def moved(self, ids: NDArray[np.integer], lat_e7: NDArray[np.int64], lon_e7: NDArray[np.int64]) -> None:
+        """Where aMussels already heard are now, all else as reported (the event platform's ideal link hands
+        over the positions lockstep's keep-alive repeats carry: `mussel_sim.keepalive_positions`). Not news: a
+        wait reads positions only when it looks, and they are brought up to date then (`version` kept: what
+        is derived from the rest of the table stands)."""
+        known = np.isin(ids, self.ids)
+        rows = self._rows_of(np.asarray(ids)[known])
+        self.lat_e7[rows], self.lon_e7[rows] = lat_e7[known], lon_e7[known]
+        self._views.clear()
+
     def load(self, saved: MusselTable) -> None:
         """Take a saved table's contents (a resumed mission); whoever holds this table keeps it."""
         self.__dict__.update(saved.__dict__)

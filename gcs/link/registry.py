@@ -127,7 +127,14 @@ class VehicleRegistry:
         self.changed: dict[int, int] = {}
         self.moved: dict[int, int] = {}
         self.restores = 0
+        # The event platform's ideal link: called with the time before the aMussels' positions are read.
+        self.refresh_positions: Callable[[int], None] | None = None
         self._battery_watch: dict[int, dict[str, Callable[[float], bool]]] = {}
+
+    def positions_at(self, now_us: int) -> None:
+        """The aMussels' positions are about to be read at `now_us`: brought to what the GCS knows then."""
+        if self.refresh_positions is not None:
+            self.refresh_positions(now_us)
 
     def watch_battery(self, system_id: int, what: str, holds: Callable[[float], bool]) -> None:
         """A wait reads whether `holds(battery_v)` of aPad `system_id` (`what`: the mission's end, a charge

@@ -252,6 +252,9 @@ def build_world(
     if isinstance(clock, EventClock):  # its waits look when the GCS hears anything
         clock.hears(lambda: link.registry.news)
         clock.hears(lambda: link.registry.mussels.version)
+        if fleet.event_steps is not None:  # and it reads the aMussels where lockstep's keep-alive would say
+            link.registry.refresh_positions = fleet.event_steps.refresh_positions
+            fleet.event_steps.keepalive.deliver = link.registry.mussels.moved
     world.mute_logs(muted_logs)
     if scenario.acoustic.enabled:
         world.acoustic = AcousticNetwork.build(

@@ -193,6 +193,7 @@ class SwarmWatch:
         counts = {a: len(shares.partition.shares.get(a, [])) for a in apads}
         known = sum(len(ids) for ids in shares.partition.shares.values()) + len(new)
         room = math.ceil(max(known, self.fleet_size) / len(apads))  # an even share of the whole fleet
+        self.registry.positions_at(self.clock.now_us)
         rows = table.rows(new)
         x, y = self.frame.to_local(table.lat_e7[rows] / 1e7, table.lon_e7[rows] / 1e7)
         joiners: dict[int, int] = {}
@@ -210,6 +211,7 @@ class SwarmWatch:
     def reshare(self, usable: frozenset[int]) -> None:
         """Partition every aMussel heard among `usable` (positions as last reported)."""
         table = self.registry.mussels
+        self.registry.positions_at(self.clock.now_us)
         ids = np.array(sorted(table), np.int64)
         rows = table.rows(ids)
         x, y = self.frame.to_local(table.lat_e7[rows] / 1e7, table.lon_e7[rows] / 1e7)
