@@ -69,7 +69,7 @@ def test_map_and_table_appear_and_q_leaves_the_apad_holding() -> None:
 
 def test_pause_stops_the_loop_and_resume_restarts_it() -> None:
     async def scenario() -> None:
-        app, runner = make_app()
+        app, runner = make_app(speed=200.0)  # what is waited for is mission time
         async with app.run_test(size=SIZE) as pilot:
             await wait_for(pilot, lambda: bool(runner.world and events_of(runner, "call_up")))
             await press(pilot, "p")
@@ -78,8 +78,8 @@ def test_pause_stops_the_loop_and_resume_restarts_it() -> None:
             await pilot.pause(0.3)  # the loop reaches its next wait and stays there
             assert runner.snapshot is not None
             n_events, t0 = len(runner.world.events.events), runner.snapshot.t_s
-            await pilot.pause(1.5)  # 60 s of mission time at 40x
-            assert len(runner.world.events.events) == n_events  # the loop did nothing
+            await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.t_s > t0 + 60)
+            assert len(runner.world.events.events) == n_events  # the loop did nothing for 60 s of mission time
             assert runner.snapshot.t_s > t0 + 10  # while the world (aPad, fleet) ran on
             assert "PAUSED" in screen_text(app)
             await press(pilot, "p")
