@@ -76,8 +76,10 @@ REGISTRY: dict[str, Entry] = {
     run.SEEDS20: Entry("runs", run.run_seeds20, ci="vil run --seeds 2 --duration 2m",
                        why="120 missions of 40 minutes are 7 minutes of CPU; 2 drawn fleets of 2 minutes keep the "
                            "shape (both scenarios, the three strategies, n per row)"),
-    lnk.SITL: Entry("links", lnk.run_sitl_listing1, ci=lnk.SITL + " --param DOCK_TIME=1",
-                    why="the dock's 10 s of latching are idle wall time; a 1-s latch docks the same way"),
+    lnk.SITL: Entry("links", lnk.run_sitl_listing1,
+                    ci=lnk.SITL + " --param DOCK_TIME=1 --param SPEED_MAX=2.0 --param ACCEL_MAX=1.0",
+                    why="the dock's 10 s of latching and the sail at 0.5 m/s are idle wall time; a brisk aPad "
+                        "(tests/sitl/test_listing1.py's) with a 1-s latch sails and docks the same way"),
     lnk.LISTING1: Entry("links", lnk.run_sitl_listing1, ci=lnk.LISTING1 + " --distance 2",
                         why="aMussel 24 rests 10 m away, 20 s of sailing at 0.5 m/s (31 s of wall time, idle); 2 m "
                             "is the same listing in 9 s"),
