@@ -150,9 +150,11 @@ REGISTRY: dict[str, Entry] = {
                            why="seven runs twice, one of them bay120-sleep's day, are five minutes of CPU: 3 minutes "
                                "each (bay120's 40 minutes too), once, print the same rows"),
     tls.PLATFORMS: Entry("tools", tls.run_platforms,
-                         ci=tls.PLATFORMS + " --part agreement --seeds 1 --scenarios pool12 --strategies greedy",
+                         ci=tls.PLATFORMS + " --part agreement --seeds 1 --scenarios pool12 --strategies greedy "
+                                               "--jobs 1",
                          why="every scenario and strategy on 20 seeds, the days and the year are an hour of CPU: one "
-                             "seed of pool12 greedy on both platforms prints the agreement table's row"),
+                             "seed of pool12 greedy on both platforms prints the agreement table's row (in one "
+                             "worker process: a second one's start costs more than it saves for two missions)"),
     tls.STARTUP: Entry("tools", tls.run_startup, ci=tls.STARTUP + " --repeat 1",
                        why="best of 5 fresh processes each; one shows the same rows"),
     # README: Long missions
