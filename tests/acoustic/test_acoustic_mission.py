@@ -9,6 +9,7 @@ retried, reports lost and counted, knowledge ages, and still nothing is lost.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import re
 import shutil
@@ -45,10 +46,15 @@ def acoustic_run(tmp_path: Path, minutes: float, **channel: float) -> Run:
     return scenario, result, Path(result.out_dir)
 
 
+class _Copied(Exception):
+    """The run into `whole` stops once its folder is copied (nobody reads the rest of it)."""
+
+
 def run_copied_at_a_checkpoint(scenario: Scenario, whole: Path, crashed: Path, at_s: float,
-                               monkeypatch: pytest.MonkeyPatch) -> int:
-    """Run `scenario` whole into `whole`, and copy its folder to `crashed` as a crash right after its
-    first checkpoint at or past `at_s` leaves it; that checkpoint's mission time (us)."""
+                               monkeypatch: pytest.MonkeyPatch, to_the_end: bool = True) -> int:
+    """Run `scenario` into `whole` (to its end, or without `to_the_end` only until the copy), and copy its
+    folder to `crashed` as a crash right after its first checkpoint at or past `at_s` leaves it; that
+    checkpoint's mission time (us)."""
     real_save, taken = checkpoint.save, []
 
     def save_and_copy(files: checkpoint.CheckpointFiles, ckpt: checkpoint.Checkpoint) -> None:
@@ -56,9 +62,12 @@ def run_copied_at_a_checkpoint(scenario: Scenario, whole: Path, crashed: Path, a
         if ckpt.time_us >= at_s * 1e6 and not taken:
             taken.append(ckpt.time_us)
             shutil.copytree(whole, crashed)
+            if not to_the_end:
+                raise _Copied
 
     monkeypatch.setattr(checkpoint, "save", save_and_copy)
-    run_mission(scenario, whole)
+    with contextlib.suppress(_Copied):
+        run_mission(scenario, whole)
     monkeypatch.setattr(checkpoint, "save", real_save)
     assert taken
     return taken[0]
@@ -201,7 +210,7 @@ def test_an_acoustic_mission_restored_from_a_checkpoint_hears_on_and_loses_nothi
     # empty) on what the restored registry last heard: it must hear on, call up on, and lose nothing.
     scenario = POOL.with_overrides(duration_s=900.0)  # restored while charging, the next collection after
     whole, crashed = tmp_path / "whole", tmp_path / "crashed"
-    saved_us = run_copied_at_a_checkpoint(scenario, whole, crashed, 240.0, monkeypatch)
+    saved_us = run_copied_at_a_checkpoint(scenario, whole, crashed, 240.0, monkeypatch, to_the_end=False)
     result = run_restored(scenario, crashed)
     a = result.acoustic
     resumed_s = 900.0 - saved_us / 1e6
@@ -221,7 +230,7 @@ def test_a_restored_mission_plans_on_the_sleep_orders_sent_before_the_crash(
     # order went (not the always-on profile's, 14x faster), and not ordered to sleep a second time.
     scenario = POOL.with_overrides(strategy="keep_alive")  # the 40 minutes: a shorter mission orders fewer
     whole, crashed = tmp_path / "whole", tmp_path / "crashed"
-    run_copied_at_a_checkpoint(scenario, whole, crashed, 600.0, monkeypatch)
+    run_copied_at_a_checkpoint(scenario, whole, crashed, 600.0, monkeypatch, to_the_end=False)
     saved = checkpoint.CheckpointFiles(RunFolder(crashed).checkpoint).read()
     asleep = {m for m, duty in saved.loop_statuses[1].orders.duties.items() if duty.asleep}
     assert len(asleep) >= 2 and set(saved.loop_statuses[1].orders.changed) >= asleep

@@ -76,7 +76,10 @@ REGISTRY: dict[str, Entry] = {
     run.SEEDS20: Entry("runs", run.run_seeds20, ci="vil run --seeds 2 --duration 2m",
                        why="120 missions of 40 minutes are 7 minutes of CPU; 2 drawn fleets of 2 minutes keep the "
                            "shape (both scenarios, the three strategies, n per row)"),
-    lnk.SITL: Entry("links", lnk.run_sitl_listing1),
+    lnk.SITL: Entry("links", lnk.run_sitl_listing1,
+                    ci=lnk.SITL + " --param DOCK_TIME=1 --param SPEED_MAX=2.0 --param ACCEL_MAX=1.0",
+                    why="the dock's 10 s of latching and the sail at 0.5 m/s are idle wall time; a brisk aPad "
+                        "(tests/sitl/test_listing1.py's) with a 1-s latch sails and docks the same way"),
     lnk.LISTING1: Entry("links", lnk.run_sitl_listing1, ci=lnk.LISTING1 + " --distance 2",
                         why="aMussel 24 rests 10 m away, 20 s of sailing at 0.5 m/s (31 s of wall time, idle); 2 m "
                             "is the same listing in 9 s"),
@@ -143,13 +146,15 @@ REGISTRY: dict[str, Entry] = {
                             why="three days of missions are twenty minutes of CPU: pool12's hour against its 40 "
                                 "minutes prints the same lines"),
     tls.QUIET_FLOOR: Entry("tools", tls.run_quiet_floor,
-                           ci=tls.QUIET_FLOOR + " --day-h 0.05 --hours 0.05 --repeat 1",
+                           ci=tls.QUIET_FLOOR + " --short-h 0.05 --day-h 0.05 --hours 0.05 --repeat 1",
                            why="seven runs twice, one of them bay120-sleep's day, are five minutes of CPU: 3 minutes "
-                               "each, once, print the same rows"),
+                               "each (bay120's 40 minutes too), once, print the same rows"),
     tls.PLATFORMS: Entry("tools", tls.run_platforms,
-                         ci=tls.PLATFORMS + " --part agreement --seeds 1 --scenarios pool12 --strategies greedy",
+                         ci=tls.PLATFORMS + " --part agreement --seeds 1 --scenarios pool12 --strategies greedy "
+                                               "--jobs 1",
                          why="every scenario and strategy on 20 seeds, the days and the year are an hour of CPU: one "
-                             "seed of pool12 greedy on both platforms prints the agreement table's row"),
+                             "seed of pool12 greedy on both platforms prints the agreement table's row (in one "
+                             "worker process: a second one's start costs more than it saves for two missions)"),
     tls.STARTUP: Entry("tools", tls.run_startup, ci=tls.STARTUP + " --repeat 1",
                        why="best of 5 fresh processes each; one shows the same rows"),
     # README: Long missions

@@ -10,6 +10,7 @@ import os
 import shutil
 import subprocess
 import sys
+import zipfile
 from pathlib import Path
 
 import pandas as pd
@@ -91,20 +92,9 @@ def test_a_sweep_of_a_strategy_file_on_a_local_cluster_and_on_separate_workers(t
 
 
 def test_a_strategy_from_an_installed_packages_entry_point(tmp_path: Path) -> None:
-    package = tmp_path / "src"
-    (package / "slackpkg").mkdir(parents=True)
-    shutil.copy(EXAMPLE, package / "slackpkg" / "__init__.py")
-    (package / "slackpkg" / "stranger.py").write_text(
-        "def plan(inp, weights):\n    return {a: [9999] for a in inp.apads}\n")
-    (package / "pyproject.toml").write_text(
-        '[build-system]\nrequires = ["setuptools"]\nbuild-backend = "setuptools.build_meta"\n'
-        '[project]\nname = "slackpkg"\nversion = "0.1"\n'
-        '[project.entry-points."vil.strategies"]\nslack = "slackpkg:slack_first"\n'
-        'stranger = "slackpkg.stranger:plan"\n'
-        '[tool.setuptools]\npackages = ["slackpkg"]\n')
     site = tmp_path / "site"
-    pip = subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--target", str(site),
-                          str(package)], capture_output=True, text=True, timeout=300)
+    pip = subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--no-index", "--target",
+                          str(site), str(_slackpkg_wheel(tmp_path))], capture_output=True, text=True, timeout=300)
     assert pip.returncode == 0, pip.stderr
     env = {**ENV, "PYTHONPATH": f"{ROOT}{os.pathsep}{site}"}
     done = vil(tmp_path, "run", "pool12", "--strategy", "slack", *SHORT, env=env)
@@ -113,6 +103,27 @@ def test_a_strategy_from_an_installed_packages_entry_point(tmp_path: Path) -> No
     assert result["strategy"] == "slack"
     bad = vil(tmp_path, "run", "pool12", "--strategy", "stranger", *SHORT, env=env)  # planned before the start
     assert bad.returncode == 2 and "planned aMussel 9999, which is not a candidate" in bad.stderr, bad.stderr
+
+
+def _slackpkg_wheel(folder: Path) -> Path:
+    """The package slackpkg as a wheel, its two strategies entry points of vil.strategies. Written here, not built
+    from a pyproject.toml: pip builds a source tree in an isolated environment it first installs setuptools
+    into (3 s, and the package index); a wheel it only unpacks, entry_points.txt and all, as it does any."""
+    wheel = folder / "slackpkg-0.1-py3-none-any.whl"
+    info = "slackpkg-0.1.dist-info"
+    files = {
+        "slackpkg/__init__.py": EXAMPLE.read_text(),
+        "slackpkg/stranger.py": "def plan(inp, weights):\n    return {a: [9999] for a in inp.apads}\n",
+        f"{info}/METADATA": "Metadata-Version: 2.1\nName: slackpkg\nVersion: 0.1\n",
+        f"{info}/WHEEL": "Wheel-Version: 1.0\nGenerator: tests\nRoot-Is-Purelib: true\nTag: py3-none-any\n",
+        f"{info}/entry_points.txt": ("[vil.strategies]\nslack = slackpkg:slack_first\n"
+                                     "stranger = slackpkg.stranger:plan\n"),
+    }
+    with zipfile.ZipFile(wheel, "w") as archive:
+        for name, text in files.items():
+            archive.writestr(name, text)
+        archive.writestr(f"{info}/RECORD", "".join(f"{name},,\n" for name in [*files, f"{info}/RECORD"]))
+    return wheel
 
 
 BAD = {

@@ -55,8 +55,27 @@ def test_bad_input_is_a_vil_error_of_one_line(tmp_path: Path) -> None:
     assert not list(tmp_path.iterdir())  # nothing started
 
 
+# The default run's variant of the notebook: its missions shorter (the runs 5 of their 20 minutes, the sweep's
+# 2 of its 10), the same cells and calls; the long run (pytest -m long) runs it as written.
+SHORTER = {'duration="20m"': 'duration="5m"', 'mission.duration = "10m"': 'mission.duration = "2m"'}
+
+
 def test_the_example_notebook_runs_from_top_to_bottom(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    _run_notebook(tmp_path, monkeypatch, SHORTER)
+
+
+@pytest.mark.long
+def test_the_example_notebook_as_written(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    _run_notebook(tmp_path, monkeypatch, {})
+
+
+def _run_notebook(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, replaced: dict[str, str]) -> None:
     notebook = nbformat.read(NOTEBOOK, as_version=4)
+    sources = [cell.source for cell in notebook.cells if cell.cell_type == "code"]
+    for old, new in replaced.items():
+        assert any(old in source for source in sources), f"the notebook no longer says {old}"
+        for cell in notebook.cells:
+            cell.source = cell.source.replace(old, new)
     client = NotebookClient(notebook, timeout=600, kernel_name="python3",
                             resources={"metadata": {"path": str(tmp_path)}})
     monkeypatch.setenv("PYTHONPATH", str(ROOT))  # the kernel is a process of its own

@@ -2,7 +2,8 @@
 
 The console runs as the operator runs it: its own process on a pseudo-terminal (Textual's real
 terminal driver draws into it; the test reads and discards the drawing, and presses q like a
-person). The world is the embedded SITL aPad on a paced lockstep clock, 200x real time.
+person). The world is the embedded SITL aPad on a paced lockstep clock, 500x real time
+(what is watched is mission time: a faster pace only leaves the process less time asleep).
 
 Checked: the resumed mission goes on from the last checkpoint's mission time in the same folder, each
 event is in events.jsonl once (and each aPad event and .tlog frame once, in time order), the aMussels
@@ -34,7 +35,7 @@ from mussel_sim.vocabulary import MusselState
 pytestmark = [pytest.mark.sitl, pytest.mark.slow, pytest.mark.tui]
 
 VIL = [sys.executable, "-m", "gcs.cli"]
-GCS = ["gcs", "--sitl", "--speed", "200"]
+GCS = ["gcs", "--sitl", "--speed", "500"]
 ROOT = Path(__file__).resolve().parents[2]
 RUN = Path("runs") / "console-pool12-run1"
 WALL_TIMEOUT_S = 120.0

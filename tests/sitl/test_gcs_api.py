@@ -60,11 +60,11 @@ class World:
         here = self.api.position(self.apad_id)
         return float(distance_m(here.lat, here.lon, target.lat, target.lon))
 
-    def wait_primitive(self, timeout_s: float = 300.0) -> Progress:
+    def wait_primitive(self, timeout_s: float = 300.0, period_s: float = 0.5) -> Progress:
         deadline = self.clock.time() + timeout_s
         while self.api.primitive_status(self.apad_id) == Progress.IN_PROGRESS:
             assert self.clock.time() < deadline, "primitive never finished"
-            self.clock.sleep(0.5)
+            self.clock.sleep(period_s)
         return self.api.primitive_status(self.apad_id)
 
 
@@ -246,11 +246,13 @@ def test_over_real_udp_in_real_time() -> None:
     try:
         target = offset(0.0, 0.9)  # aMussel 11 is within reach from here
         w.api.go_to(target, radius=0.5)
-        assert w.wait_primitive(timeout_s=10) == Progress.DONE
+        assert w.wait_primitive(timeout_s=10) == Progress.DONE  # (the position heard lags the status a little)
         assert w.apad_distance_to(target) <= 0.5
         w.api.docking(True, 4, 11)
-        assert w.wait_primitive(timeout_s=10) == Progress.DONE
-        w.clock.sleep(1.2)
+        assert w.wait_primitive(timeout_s=10, period_s=0.05) == Progress.DONE  # looked at every 50 ms, not 0.5 s
+        deadline = w.clock.time() + 5.0  # the slot's next DOCK_SLOT_STATUS (1 Hz) names aMussel 11
+        while w.api.slots(w.apad_id)[3].mussel_id != 11 and w.clock.time() < deadline:
+            w.clock.sleep(0.05)
         assert w.api.slots(w.apad_id)[3].mussel_id == 11
         assert w.link.codec.stats.sent > 0 and w.vehicle.codec.stats.bad_data == 0
     finally:

@@ -26,6 +26,8 @@ from mussel_sim.geo import LocalFrame, distance_m
 
 pytestmark = pytest.mark.sitl
 ROOT = Path(__file__).resolve().parents[2]
+# Brisk aPads (test_listing1.py's): the Go Tos are the same, at 2 m/s instead of 0.5 (seconds of wall time idle).
+BRISK = ["--param", "SPEED_MAX=2.0", "--param", "ACCEL_MAX=1.0"]
 
 
 def test_one_gcs_drives_two_sitl_processes_over_udp(tmp_path: Path) -> None:
@@ -34,7 +36,8 @@ def test_one_gcs_drives_two_sitl_processes_over_udp(tmp_path: Path) -> None:
     procs = [
         subprocess.Popen(
             [sys.executable, "-m", "apad_sitl", "--listen", f"udp:127.0.0.1:{port}", "--sysid", str(a.system_id),
-             "--home", f"{a.home_lat_deg},{a.home_lon_deg}", "--duration", "60s", "--log-dir", str(tmp_path)],
+             "--home", f"{a.home_lat_deg},{a.home_lon_deg}", "--duration", "60s", "--log-dir", str(tmp_path),
+             *BRISK],
             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         for port, a in zip(ports, scenario.apads, strict=True)
     ]

@@ -4,6 +4,7 @@ worker` processes gives the same rows (but the wall times)."""
 from __future__ import annotations
 
 import io
+from collections.abc import Iterator
 from pathlib import Path
 
 import pandas as pd
@@ -26,20 +27,27 @@ mission.theta = 60
 """
 
 
+@pytest.fixture(scope="module")
+def scheduler(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    """One `dask scheduler` with its two `dask worker` processes for the file's sweeps: starting them is
+    seconds of imports, and a worker keeps nothing of one sweep's missions for the next."""
+    with dask_processes(tmp_path_factory.mktemp("dask")) as address:
+        yield address
+
+
 def figures(out: Path) -> pd.DataFrame:
     rows = pd.read_parquet(out / "results.parquet")
     return rows.drop(columns=[c for c in rows.columns if c.endswith("wall_s")])
 
 
-def same_rows_on_both(tmp_path: Path, text: str, local_processes: bool) -> pd.DataFrame:
+def same_rows_on_both(tmp_path: Path, text: str, local_processes: bool, address: str) -> pd.DataFrame:
     (tmp_path / "spec.toml").write_text(text)
     spec = load_spec(tmp_path / "spec.toml")
     cells = make_cells(spec)
     console = Console(file=io.StringIO())
     local = sweep(spec, cells, tmp_path / "local", console, workers=2 if local_processes else 1,
                   processes=local_processes)
-    with dask_processes(tmp_path) as address:
-        remote = sweep(spec, cells, tmp_path / "remote", console, scheduler=address)
+    remote = sweep(spec, cells, tmp_path / "remote", console, scheduler=address)
     assert local.ran == remote.ran == len(cells) and not local.failed and not remote.failed
     rows = figures(tmp_path / "local")
     pd.testing.assert_frame_equal(rows, figures(tmp_path / "remote"))
@@ -47,30 +55,33 @@ def same_rows_on_both(tmp_path: Path, text: str, local_processes: bool) -> pd.Da
     return rows
 
 
-def test_a_separate_scheduler_and_two_workers_give_the_local_rows(tmp_path: Path) -> None:
+def test_a_separate_scheduler_and_two_workers_give_the_local_rows(tmp_path: Path, scheduler: str) -> None:
     """CI variant: two missions long enough to collect, the local cluster in this process (the local
     cluster's worker processes, as `vil sweep` starts them, are tests/plugins' and test_sweep_interrupt's)."""
     rows = same_rows_on_both(tmp_path, SPEC.format(strategies='["cautious", "greedy"]', seeds="1-1", duration="6m"),
-                             local_processes=False)
+                             local_processes=False, address=scheduler)
     assert len(rows) == 2 and (rows["cost_m"] > 0).any()
 
 
 @pytest.mark.slow
 @pytest.mark.long
-def test_a_separate_scheduler_and_two_workers_give_the_local_rows_of_real_missions(tmp_path: Path) -> None:
+def test_a_separate_scheduler_and_two_workers_give_the_local_rows_of_real_missions(tmp_path: Path,
+                                                                                  scheduler: str) -> None:
     """Six missions long enough to collect, the local cluster as `vil sweep` starts it (processes);
     make test runs the CI variant above (a second cluster start and six missions: the suite's time)."""
     rows = same_rows_on_both(tmp_path, SPEC.format(strategies='["cautious", "greedy"]', seeds="1-3", duration="6m"),
-                             local_processes=True)
+                             local_processes=True, address=scheduler)
     assert len(rows) == 6 and (rows["cost_m"] > 0).any()
 
 
-def test_an_event_platform_sweep_gives_the_local_rows_on_a_separate_scheduler(tmp_path: Path) -> None:
+def test_an_event_platform_sweep_gives_the_local_rows_on_a_separate_scheduler(tmp_path: Path,
+                                                                             scheduler: str) -> None:
     """`platform = "event"` in a spec (issue 37): every cell runs on the event platform, on a local cluster and
-    on a separately started scheduler with workers alike, and its rows say so."""
-    text = SPEC.format(strategies='["cautious", "greedy"]', seeds="1-2", duration="40m") + '\n'
+    on a separately started scheduler with workers alike, and its rows say so. Missions of 6 minutes, as above:
+    every cell collects (cost > 0) in them, and 40 took 8 s of the suite's time for nothing more checked."""
+    text = SPEC.format(strategies='["cautious", "greedy"]', seeds="1-2", duration="6m") + '\n'
     text = text.replace('seeds = "1-2"', 'seeds = "1-2"\nplatform = "event"')
-    rows = same_rows_on_both(tmp_path, text, local_processes=False)
+    rows = same_rows_on_both(tmp_path, text, local_processes=False, address=scheduler)
     assert len(rows) == 4 and (rows["cost_m"] > 0).all()
     platform = [c for c in rows.columns if c.endswith("platform")]
     assert platform and set(rows[platform[0]]) == {"event"}, list(rows.columns)

@@ -35,14 +35,18 @@ def test_a_resumed_console_shows_the_history_and_releases_the_docked_before_call
 ) -> None:
     real_save = checkpoint.save
 
+    class Crash(Exception):
+        """The mission stops at its first checkpoint past the crash, as a killed process would."""
+
     def save_until_the_crash(files: CheckpointFiles, ckpt: checkpoint.Checkpoint) -> None:
-        if ckpt.time_us <= CRASH_AT_S * 1e6:
-            real_save(files, ckpt)
+        if ckpt.time_us > CRASH_AT_S * 1e6:
+            raise Crash
+        real_save(files, ckpt)
 
     monkeypatch.setattr(checkpoint, "save", save_until_the_crash)
-    monkeypatch.setattr(CheckpointFiles, "remove", CheckpointFiles.close)
     scenario = load_scenario(POOL12)
-    run_mission(scenario, tmp_path)
+    with pytest.raises(Crash):
+        run_mission(scenario, tmp_path)
     monkeypatch.undo()
     files = CheckpointFiles(tmp_path / CHECKPOINT)
     saved = files.read()
@@ -51,7 +55,7 @@ def test_a_resumed_console_shows_the_history_and_releases_the_docked_before_call
               if s == MusselState.DOCKED}
     assert docked and saved.time_us > (CRASH_AT_S - checkpoint.LOCKSTEP_CHECKPOINT_PERIOD_S) * 1e6
 
-    runner = ConsoleRunner(ConsoleConfig(scenario, sitl="memory", speed=40.0, out_dir=tmp_path, start_paused=True,
+    runner = ConsoleRunner(ConsoleConfig(scenario, sitl="memory", speed=200.0, out_dir=tmp_path, start_paused=True,
                                          epoch_us=LOCKSTEP_EPOCH_US, resume=ResumePoint(files, saved)))
     app = LiveConsole(runner)
 

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from testkit import read_jsonl, scenario_variant
-from tui_helpers import screen_text, wait_for
+from tui_helpers import press, screen_text, wait_for
 
 from gcs.console.app import LiveConsole
 from gcs.console.confirm import ConfirmQuit
@@ -56,7 +56,7 @@ def test_a_silent_apad_shows_link_lost_within_3_s_of_mission_time() -> None:
             assert lost["link"] == "aPad 1" and float(lost["t_s"]) <= fail_at_s + LOST_S + 0.2  # mission time
             assert all(h.level == Level.OK for h in runner.link_status[1:])  # the fleet stream goes on
             assert "LIVE" not in screen_text(app)
-            await pilot.press("Q")  # quits although the aPad cannot acknowledge the hold
+            await press(pilot, "Q")  # quits although the aPad cannot acknowledge the hold
             await wait_for(pilot, lambda: not app.is_running)
         assert runner.finished.is_set() and not app.world_thread.is_alive()
 
@@ -69,13 +69,13 @@ def test_override_then_a_refused_dock_hands_back_to_the_loop_and_q_still_quits(t
         async with app.run_test(size=SIZE) as pilot:
             await wait_for(pilot, lambda: bool(runner.world and kinds(runner, "call_up")))
             called = int(kinds(runner, "call_up")[0]["mussel"])
-            await pilot.press("o")
+            await press(pilot, "o")
             await wait_for(pilot, lambda: bool(kinds(runner, "operator")) and runner.control.paused)
             await wait_for(pilot, lambda: app.fleet.row_count == 12)
             far = 12 if called != 12 else 1
             app.fleet.select_mussel(far)
             await wait_for(pilot, lambda: app.fleet.selected_mussel() == far)
-            await pilot.press("d")
+            await press(pilot, "d")
             await wait_for(pilot, lambda: bool(kinds(runner, "refused")))
             (refused,) = kinds(runner, "refused")
             assert refused["action"] == "dock" and refused["mussel"] == far
@@ -83,10 +83,10 @@ def test_override_then_a_refused_dock_hands_back_to_the_loop_and_q_still_quits(t
             await wait_for(pilot, lambda: "out of docking reach" in screen_text(app))
             # The loop takes the aPad back where it was (a Go To the override replaced is sent again:
             # `goto_resent`) and docks the aMussel it called up, instead of waiting out its bounds.
-            await pilot.press("p")
+            await press(pilot, "p")
             await wait_for(pilot, lambda: any(d["mussel"] == called for d in kinds(runner, "docked")), timeout_s=20)
             assert not kinds(runner, "goto_timeout") and not kinds(runner, "gave_up")
-            await pilot.press("Q")
+            await press(pilot, "Q")
             await wait_for(pilot, lambda: not app.is_running)
         assert runner.finished.is_set() and not app.world_thread.is_alive()
         logged = read_jsonl(tmp_path / "events.jsonl")
@@ -103,22 +103,22 @@ def test_q_and_ctrl_c_ask_while_amussels_float_and_quit_within_the_bound(tmp_pat
         app, runner = make_app(tmp_path, speed=8.0)  # slow enough to pause before the aMussel is docked
         async with app.run_test(size=SIZE) as pilot:
             await wait_for(pilot, lambda: bool(runner.world and kinds(runner, "call_up")))
-            await pilot.press("o")  # the loop paused: the aMussel it called up floats until it resumes
+            await press(pilot, "o")  # the loop paused: the aMussel it called up floats until it resumes
             await wait_for(pilot, lambda: runner.control.paused and runner.snapshot is not None and bool(
                 np.isin(runner.snapshot.state, [MusselState.SURFACING, MusselState.FLOATING]).any()))
-            await pilot.press("q")
+            await press(pilot, "q")
             await wait_for(pilot, lambda: isinstance(app.screen, ConfirmQuit))
             assert "aMussels are at the surface" in screen_text(app)
-            await pilot.press("n")
+            await press(pilot, "n")
             await wait_for(pilot, lambda: not isinstance(app.screen, ConfirmQuit))
             assert app.is_running and not runner.finished.is_set()
-            await pilot.press("ctrl+c")  # an operator's reflex: the same question as q, not Textual's toast
+            await press(pilot, "ctrl+c")  # an operator's reflex: the same question as q, not Textual's toast
             await wait_for(pilot, lambda: isinstance(app.screen, ConfirmQuit))
-            await pilot.press("ctrl+c")  # pressed again while it asks: it still waits for the answer
+            await press(pilot, "ctrl+c")  # pressed again while it asks: it still waits for the answer
             await pilot.pause(0.2)
             assert isinstance(app.screen, ConfirmQuit) and len(app.screen_stack) == 2 and app.is_running
             pressed = time.monotonic()
-            await pilot.press("y")
+            await press(pilot, "y")
             await wait_for(pilot, lambda: not app.is_running)
             print(f"quit took {time.monotonic() - pressed:.3f} s of wall time")  # measured, not asserted
         assert runner.finished.is_set() and not app.world_thread.is_alive() and runner.error is None
@@ -139,7 +139,7 @@ def test_ctrl_q_quits_like_q_and_the_clock_stops_at_the_missions_end(tmp_path: P
             await wait_for(pilot, lambda: "mission ended" in screen_text(app) and "its time is up" in screen_text(app))
             await pilot.pause(0.5)  # 20 s of mission time: the world runs on, the mission clock does not
             assert runner.snapshot.t_s == end_s and 30.0 <= end_s < 32.0
-            await pilot.press("ctrl+q")
+            await press(pilot, "ctrl+q")
             await wait_for(pilot, lambda: not app.is_running)
         assert runner.finished.is_set() and not app.world_thread.is_alive()
 

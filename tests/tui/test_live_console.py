@@ -11,7 +11,7 @@ import re
 from pathlib import Path
 
 import pytest
-from tui_helpers import screen_text, wait_for
+from tui_helpers import press, screen_text, wait_for
 
 from apad_sitl.vocabulary import Primitive
 from gcs.cli.main import main
@@ -49,14 +49,14 @@ def test_map_and_table_appear_and_q_leaves_the_apad_holding() -> None:
             assert "Map" in text and "◆" in text and "●" in text  # area, aPad, aMussels
             assert "battery %" in text and "uptime %" in text
             assert "loop paused" in text
-            await pilot.press("question_mark")
+            await press(pilot, "question_mark")
             await pilot.pause(0.1)
             assert "Override: hold" in screen_text(app) and "esc closes" in screen_text(app)
             assert "arrow keys" in " ".join(screen_text(app).split())  # what g, d and u act on
-            await pilot.press("escape")
+            await press(pilot, "escape")
             await pilot.pause(0.1)
             assert "esc closes" not in screen_text(app)
-            await pilot.press("q")
+            await press(pilot, "q")
             await wait_for(pilot, runner.finished.is_set)
             await pilot.pause(0.2)
         assert not app.is_running
@@ -69,20 +69,20 @@ def test_map_and_table_appear_and_q_leaves_the_apad_holding() -> None:
 
 def test_pause_stops_the_loop_and_resume_restarts_it() -> None:
     async def scenario() -> None:
-        app, runner = make_app()
+        app, runner = make_app(speed=200.0)  # what is waited for is mission time
         async with app.run_test(size=SIZE) as pilot:
             await wait_for(pilot, lambda: bool(runner.world and events_of(runner, "call_up")))
-            await pilot.press("p")
+            await press(pilot, "p")
             await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.paused)
             assert runner.control.paused
             await pilot.pause(0.3)  # the loop reaches its next wait and stays there
             assert runner.snapshot is not None
             n_events, t0 = len(runner.world.events.events), runner.snapshot.t_s
-            await pilot.pause(1.5)  # 60 s of mission time at 40x
-            assert len(runner.world.events.events) == n_events  # the loop did nothing
+            await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.t_s > t0 + 60)
+            assert len(runner.world.events.events) == n_events  # the loop did nothing for 60 s of mission time
             assert runner.snapshot.t_s > t0 + 10  # while the world (aPad, fleet) ran on
             assert "PAUSED" in screen_text(app)
-            await pilot.press("p")
+            await press(pilot, "p")
             await wait_for(pilot, lambda: len(runner.world.events.events) > n_events)
             assert not runner.control.paused
             runner.request_quit(now=True)
@@ -97,7 +97,7 @@ def test_override_sends_hold_to_the_sitl() -> None:
         async with app.run_test(size=SIZE) as pilot:
             await wait_for(pilot, lambda: runner.world is not None and runner.world.vehicle is not None
                            and runner.world.vehicle.primitive.kind == Primitive.GOTO)
-            await pilot.press("o")
+            await press(pilot, "o")
             vehicle = runner.world.vehicle
             await wait_for(pilot, lambda: vehicle.primitive.kind == Primitive.HOLD and vehicle.mode == HOLD_MODE)
             assert runner.control.paused and app.paused
@@ -117,13 +117,13 @@ def test_strategy_switch_takes_effect_at_the_next_planning_step() -> None:
             await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.apad_lat_deg is not None)
             first = load_scenario(POOL12).mission.collect_strategy
             wanted = COLLECT[(COLLECT.index(first) + 1) % len(COLLECT)]
-            await pilot.press("s")
+            await press(pilot, "s")
             assert runner.control.strategy == wanted
             # At 160 columns the pending switch reads whole, and the events pane says it once.
             await wait_for(pilot, lambda: re.search(rf"next plan strategy {wanted} *│", screen_text(app)) is not None)
             await wait_for(pilot, lambda: f"operator strategy -> {wanted}" in screen_text(app))
             assert not events_of(runner, "plan_collection")  # nothing planned yet: the switch is pending
-            await pilot.press("p")
+            await press(pilot, "p")
             await wait_for(pilot, lambda: bool(events_of(runner, "plan_collection")))
             assert events_of(runner, "strategy_switch") == [{"old": first, "new": wanted}]
             assert events_of(runner, "plan_collection")[0]["strategy"] == wanted
@@ -141,7 +141,7 @@ def test_quit_now_mid_collection_holds_and_accounts_for_the_surfaced() -> None:
         app, runner = make_app()
         async with app.run_test(size=SIZE) as pilot:
             await wait_for(pilot, lambda: bool(runner.world and events_of(runner, "call_up")))
-            await pilot.press("Q")
+            await press(pilot, "Q")
             await wait_for(pilot, runner.finished.is_set, timeout_s=10)
         assert runner.error is None
         world = runner.world
@@ -164,23 +164,23 @@ def test_manual_go_to_dock_and_undock_of_the_selected_amussel() -> None:
             await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.hist_t_s.size > 1)
             await wait_for(pilot, lambda: app.fleet.row_count == 12)
             app.fleet.focus()
-            await pilot.press("down", "down")  # aMussel 3
+            await press(pilot, "down", "down")  # aMussel 3
             await wait_for(pilot, lambda: app.fleet.selected_mussel() == 3)
-            await pilot.press("g")
+            await press(pilot, "g")
             vehicle = runner.world.vehicle
             await wait_for(pilot, lambda: vehicle.primitive.kind == Primitive.GOTO)
             home = runner.world.homes[3]  # the go-to target is where aMussel 3 was last heard
             lat, lon = vehicle.frame.to_geodetic(vehicle.primitive.target_x_m, vehicle.primitive.target_y_m)
             assert abs(float(lat) - home.lat) < 2e-5 and abs(float(lon) - home.lon) < 2e-5
             await wait_for(pilot, lambda: vehicle.primitive.progress.name == "DONE", timeout_s=30)
-            await pilot.press("d")
+            await press(pilot, "d")
             await wait_for(pilot, lambda: any(s.mussel_id == 3 and s.latch.name == "LATCHED"
                                               for s in vehicle.primitive.slots), timeout_s=30)
             await wait_for(pilot, lambda: runner.snapshot is not None and runner.snapshot.slots[0].mussel_id == 3)
             assert "docked" in screen_text(app)
-            await pilot.press("u")
+            await press(pilot, "u")
             await wait_for(pilot, lambda: all(s.mussel_id == 0 for s in vehicle.primitive.slots), timeout_s=30)
-            await pilot.press("Q")
+            await press(pilot, "Q")
             await wait_for(pilot, runner.finished.is_set, timeout_s=30)
         assert runner.error is None and runner.world.vehicle.mode == HOLD_MODE
 
@@ -205,7 +205,7 @@ def test_messages_the_link_refuses_are_counted_on_screen() -> None:
             await pilot.pause(0.3)
             text = screen_text(app)
             assert "refused" in text and "spoofed_source:HEARTBEAT" in text
-            await pilot.press("q")
+            await press(pilot, "q")
             await wait_for(pilot, runner.finished.is_set)
 
     asyncio.run(scenario())
