@@ -161,7 +161,7 @@ REGISTRY: dict[str, Entry] = {
     run.SLEEP_DAY: Entry("runs", run.run_sleep_day, ci="vil run missions/bay120-sleep.toml --duration 6m",
                          why="the day is 5 minutes of CPU: 6 minutes show the flag over the file's 40 and a fleet "
                              "asleep (the long run runs the day and checks every aMussel alive at its end)"),
-    run.EVENT_DAY: Entry("runs", run.run_event_day, ci="vil run bay120-sleep --duration 2h --platform event",
+    run.EVENT_DAY: Entry("runs", run.run_event_day, ci="vil run bay120-sleep --duration 1h --platform event",
                          why="two of the day's hours show the platform named, no .tlog and the fleet alive; the long "
                              "run runs the day"),
     # README: A scenario of your own
