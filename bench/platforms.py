@@ -5,7 +5,7 @@ Three parts, each a table (all by default, or one with --part):
   agreement  every shipped scenario with every shipped strategy, --seeds fleets drawn from the seeds,
              40 minutes on both platforms: the mean of avg and min uptime, cost and dockings on each,
              their differences against the bounds below, and the seeds whose first collection plan
-             differs (a plan is a route of aMussel ids)
+             differs (each aPad's first route of aMussel ids, by aPad: several may plan at one instant)
   long       --long-seeds seeds of 24 h for pool12, bay120 and bay120-sleep: mean uptime, how many
              aMussels ran flat (the verdict: none, or some) and wall time on each
   speed      each platform's wall time and the ratio, one run at a time in a fresh process: pool12 40
@@ -65,7 +65,7 @@ class Outcome:
     cost: float
     dockings: int
     depleted: int
-    first_plan: tuple[int, ...] | None
+    first_plan: tuple[tuple[int, tuple[int, ...]], ...]  # each aPad's first collection plan, by aPad
     wall_s: float
     rss_mb: float
 
@@ -81,16 +81,18 @@ def run_job(job: Job) -> Outcome:
                     platform=job.platform, out=out)
         wall = time.perf_counter() - start
         raw = r.raw
-        plan, dockings = None, 0
+        plans: dict[int, tuple[int, ...]] = {}  # several aPads planning at one instant log in either order
+        dockings = 0
         with (r.folder / "events.jsonl").open() as events:
             for line in events:
                 e = json.loads(line)
-                if e["event"] == "plan_collection" and plan is None:
-                    plan = tuple(e.get("route", ()))
+                if e["event"] == "plan_collection":
+                    plans.setdefault(e.get("apad", 0), tuple(e.get("route", ())))
                 dockings += e["event"] == "docked"
     depleted = sum(1 for m in raw.mussels if m.first_depleted_s is not None)
     rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    return Outcome(job, raw.uptime["avg"], raw.uptime["min"], raw.cost_m, dockings, depleted, plan, wall, rss_mb)
+    return Outcome(job, raw.uptime["avg"], raw.uptime["min"], raw.cost_m, dockings, depleted,
+                   tuple(sorted(plans.items())), wall, rss_mb)
 
 
 def run_all(jobs: list[Job], n_jobs: int) -> list[Outcome]:
