@@ -34,6 +34,7 @@ BATTERY_STEP_MV = 10  # the battery's dead band: 0.2 % of the pack's 5.5 V
 # Fields of millivolts (a list: the first, the pack's voltage; the rest are UINT16_MAX) in steps of BATTERY_STEP_MV.
 _STEPPED = frozenset({(mavlink.MAVLINK_MSG_ID_SYS_STATUS, "voltage_battery"),
                       (mavlink.MAVLINK_MSG_ID_BATTERY_STATUS, "voltages")})
+_STEPPED_IDS = frozenset(msg_id for msg_id, _ in _STEPPED)
 _fields: dict[int, tuple[str, ...]] = {}  # message id -> its fields but the stamps
 
 
@@ -70,9 +71,6 @@ def report_key(msg: mavlink.MAVLink_message) -> tuple[Any, ...]:
     if msg_id in _STEPPED_IDS:
         return tuple(_stepped(getattr(msg, f)) if (msg_id, f) in _STEPPED else getattr(msg, f) for f in fields)
     return tuple(getattr(msg, f) for f in fields)
-
-
-_STEPPED_IDS = frozenset(msg_id for msg_id, _ in _STEPPED)
 
 
 def _stepped(mv: int | list[int]) -> int | tuple[int, ...]:

@@ -35,6 +35,9 @@ from apad_sitl.params import ApadParams
 from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V, VOLT_RANGE, VehicleState, drain_v
 
 NEVER_STEPS = 2**62  # `Rest.still_from` of a drain that would take longer than any mission: ages of steps
+# A closed charging rest's steps short of full left to stepping: the float rounding of its product cannot
+# carry the battery past full, and the step that tops it up is the charger's own arithmetic.
+TOP_UP_STEPS = 2
 
 
 def at_rest(before: VehicleState, after: VehicleState) -> bool:
@@ -143,7 +146,7 @@ class ChargingRest:
         the last, which the float rounding of the product could otherwise move)."""
         if self._rise_v <= 0.0 or not BATTERY_EMPTY_V < v < BATTERY_FULL_V:
             return 0
-        return max(0, math.ceil((BATTERY_FULL_V - v) / self._rise_v) - 2)
+        return max(0, math.ceil((BATTERY_FULL_V - v) / self._rise_v) - TOP_UP_STEPS)
 
     def take(self, n: int, counters: EnergyCounters) -> int:
         """Up to `n` more steps; fewer (the number taken) if a step would not charge: full, or flat."""
@@ -186,4 +189,4 @@ class ChargingRest:
     def still_from(self) -> int:
         """The step count from which the battery is full (the closed form's estimate: the whole-power steps
         and the few stepped after them)."""
-        return self.steps + self._whole_steps(self.battery_v) + 3
+        return self.steps + self._whole_steps(self.battery_v) + TOP_UP_STEPS + 1

@@ -47,13 +47,10 @@ class ApadFixes:
         """The aPads' positions in metres for the next step of `state` (`commands_pending`: it takes some;
         `step_us`: its instant, which takes what was heard before it); read-only (the step's inputs are made
         from it)."""
-        if self._later:
-            taken = [(sid, fix) for at, sid, fix in self._later if step_us is None or at < step_us]
-            self.deg.update(taken)
-            if len(taken) < len(self._later):
-                self._later = [late for late in self._later if step_us is not None and late[0] >= step_us]
-            else:
-                self._later = []
+        if self._later:  # heard in time order: those before the step are the first
+            due = [late for late in self._later if step_us is None or late[0] < step_us]
+            self.deg.update((sid, fix) for _, sid, fix in due)
+            del self._later[:len(due)]
         if not (commands_pending or self._rides(state.state, state.surface_held)):
             return self._m
         key = tuple(sorted(self.deg.items()))

@@ -85,9 +85,10 @@ class KeepAlivePositions:
                          np.round(np.atleast_1d(lon) * 1e7).astype(np.int64))
 
     def _rows(self, state: FleetState, w: int, theta: float) -> NDArray[np.intp]:
-        speaking = publish_rows(state, theta, w - self.period_us, w)
-        mask = np.zeros(state.n, bool) if speaking is not None else np.ones(state.n, bool)
+        speaking = publish_rows(state, theta, w - self.period_us, w)  # None: all
+        mask = np.ones(state.n, bool)
         if speaking is not None:
+            mask[:] = False
             mask[speaking] = True
         mask &= (state.state != DOCKED) & (state.state != MusselState.DEPLETED) & (self.said_us < w)
         if self.at_surface_only:
