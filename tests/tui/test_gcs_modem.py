@@ -2,9 +2,8 @@
 `vil modem --sea`'s water over real UDP: the console heard through the serial unit, called up through it,
 and the called aMussel rose. Wall clock (the unit keeps real time); driven headless with Pilot.
 
-The whole 40-minute mission is the closing note's must-show run; here its first quarter minute, to the
-first acknowledged call-up, with the slot size and pool docs/acoustic.md allows (`scenario_file`). The
-refusals of the flags are one line each.
+The whole 40-minute mission is the closing note's must-show run; here its first minute, to the first
+acknowledged call-up. The refusals of the flags are one line each.
 """
 
 from __future__ import annotations
@@ -13,10 +12,11 @@ import asyncio
 import signal
 import subprocess
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from testkit import free_udp_port, scenario_variant, start_vil_modem
+from testkit import free_udp_port, start_vil_modem
 from tui_helpers import wait_for
 
 from gcs.cli.main import main
@@ -27,24 +27,13 @@ from mussel_sim.vocabulary import MusselState
 
 pytestmark = [pytest.mark.sitl, pytest.mark.tui]
 
-CALLED_BOUND_S = 120.0  # wall seconds to the first call-up acknowledged: the first plan, the aPad's slot (11 s)
+CALLED_BOUND_S = 120.0  # wall seconds to the first call-up acknowledged: the first plan, the aPad's slot (17 s)
 
 
 @pytest.fixture()
-def scenario_file(tmp_path: Path) -> Path:
-    """pool12-acoustic as docs/acoustic.md offers it, slots sized for the 31-byte report (a frame of 11.9 s,
-    not 17.3: the aPad's slot, the last, comes 5 s sooner), and a pool of one: the first candidate heard is
-    called up (the shipped 4 idle the first 10 s of wall time). The console and the unit read the same file."""
-    return scenario_variant("pool12-acoustic", tmp_path / "pool12-acoustic.toml", {
-        "min_pool = 4": "min_pool = 1",
-        "enabled = true": "enabled = true\nmax_packet_bytes = 31",
-    })
-
-
-@pytest.fixture()
-def sea_modem(scenario_file: Path) -> Iterator[tuple[str, str, subprocess.Popen[str]]]:
+def sea_modem() -> Iterator[tuple[str, str, subprocess.Popen[str]]]:
     sea = f"udp:127.0.0.1:{free_udp_port()}"
-    device, proc = start_vil_modem("--scenario", str(scenario_file), "--sea", sea)
+    device, proc = start_vil_modem("--scenario", "pool12-acoustic", "--sea", sea)
     yield device, sea, proc
     if proc.poll() is None:
         proc.send_signal(signal.SIGINT)
@@ -52,9 +41,12 @@ def sea_modem(scenario_file: Path) -> Iterator[tuple[str, str, subprocess.Popen[
 
 
 def test_the_gcs_hears_and_calls_up_through_a_serial_unit(
-        sea_modem: tuple[str, str, subprocess.Popen[str]], scenario_file: Path, tmp_path: Path) -> None:
+        sea_modem: tuple[str, str, subprocess.Popen[str]], tmp_path: Path) -> None:
     device, sea, proc = sea_modem
-    runner = ConsoleRunner(ConsoleConfig(load_scenario(scenario_file), sitl="memory",
+    shipped = load_scenario("missions/pool12-acoustic.toml")
+    # A pool of one: the first candidate heard is called up (the shipped 4 idle the first 10 s of wall time).
+    scenario = replace(shipped, mission=replace(shipped.mission, min_pool=1))
+    runner = ConsoleRunner(ConsoleConfig(scenario, sitl="memory",
                                          modem=device, sea=sea, out_dir=tmp_path / "run"))
     app = LiveConsole(runner)
 
