@@ -90,11 +90,13 @@ def test_ctrl_c_past_an_hour_says_the_mission_time_in_hours_and_the_summary_too(
 
 def test_resuming_with_other_settings_is_one_line_before_anything_runs(tmp_path: Path) -> None:
     folder = RunFolder(tmp_path / "out" / "pool12-cautious-seed1-run1")
-    code, _ = ctrl_c_after_checkpoint([*VIL, "pool12", "--out", "out"], tmp_path, ENV, folder.checkpoint, 300.0,
-                                      WALL_TIMEOUT_S)
+    # 3 h, not the scenario's 40 min: on an idle machine pool12's 40 min can end before the Ctrl-C lands
+    code, _ = ctrl_c_after_checkpoint([*VIL, "pool12", "--duration", "3h", "--out", "out"], tmp_path, ENV,
+                                      folder.checkpoint, 300.0, WALL_TIMEOUT_S)
     assert code == 130
     kept = folder.checkpoint.read_bytes()
-    done = subprocess.run([*VIL, "pool12", "--out", "out", "--loss", "0.1", "--resume"], cwd=tmp_path,
+    done = subprocess.run([*VIL, "pool12", "--duration", "3h", "--out", "out", "--loss", "0.1", "--resume"],
+                          cwd=tmp_path,
                           capture_output=True, text=True, timeout=WALL_TIMEOUT_S, env=ENV)
     assert done.returncode == 2, done.stderr
     assert "Traceback" not in done.stderr and done.stderr.count("\n") == 1, done.stderr
