@@ -22,6 +22,7 @@ from dataclasses import replace
 
 from apad_sitl.energy_counters import EnergyCounters
 from apad_sitl.home_charger import HOME_STILL_MPS
+from apad_sitl.hull_at import HullAt
 from apad_sitl.params import ApadParams
 from apad_sitl.primitives import PrimitiveState, velocity_setpoint
 from apad_sitl.vehicle import BATTERY_EMPTY_V, HEADING_MIN_SPEED_MPS, VehicleState, drain_v, wrap_pi
@@ -40,7 +41,7 @@ class Cruise:
     `steps` counts the steps of `dt_s` taken since, at most `limit`; `state()` is the hull after them.
     """
 
-    __slots__ = ("_cache", "_drain_v", "_ds_m", "_dx_m", "_dy_m", "dt_s", "key", "limit", "origin", "steps")
+    __slots__ = ("_drain_v", "_ds_m", "_dx_m", "_dy_m", "_hull", "dt_s", "key", "limit", "origin", "steps")
 
     def __init__(self, origin: VehicleState, params: ApadParams, dt_s: float, limit: int,
                  key: tuple[object, ...] = ()) -> None:
@@ -52,7 +53,7 @@ class Cruise:
         self._dx_m, self._dy_m = origin.vx_mps * dt_s, origin.vy_mps * dt_s  # as `vehicle.step` moves it
         self._ds_m = math.hypot(origin.vx_mps, origin.vy_mps) * dt_s
         self._drain_v = drain_v(params, origin.thrust_mps2, dt_s)
-        self._cache = (0, origin)
+        self._hull = HullAt(origin)
 
     def take(self, n: int, counters: EnergyCounters) -> int:
         """Up to `n` more steps, no further than `limit`: how many it took (the energy counters do not
@@ -62,11 +63,7 @@ class Cruise:
         return taken
 
     def state(self) -> VehicleState:
-        steps, cached = self._cache
-        if steps != self.steps:
-            cached = self.after(self.steps)
-            self._cache = (self.steps, cached)
-        return cached
+        return self._hull.at(self.steps, self.after)
 
     def after(self, n: int) -> VehicleState:
         """The hull after `n` steps of the cruise (n <= `limit`); changes nothing."""

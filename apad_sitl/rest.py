@@ -31,6 +31,7 @@ from dataclasses import replace
 
 from apad_sitl.energy_counters import EnergyCounters
 from apad_sitl.home_charger import home_charge_wh, volts_after
+from apad_sitl.hull_at import HullAt
 from apad_sitl.params import ApadParams
 from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V, VOLT_RANGE, VehicleState, drain_v
 
@@ -58,7 +59,7 @@ class Rest:
     `steps` counts the physics steps of `dt_s` taken since; `state()` is the hull after them.
     """
 
-    __slots__ = ("_cache", "_drain_v", "dt_s", "key", "origin", "refill_wh", "steps")
+    __slots__ = ("_drain_v", "_hull", "dt_s", "key", "origin", "refill_wh", "steps")
 
     def __init__(self, origin: VehicleState, params: ApadParams, dt_s: float, key: tuple[object, ...] = (),
                  refill_wh: float | None = None) -> None:
@@ -69,7 +70,7 @@ class Rest:
         # Not None: held full at the home charger, which puts back this much each step (nothing drains).
         self.refill_wh = refill_wh
         self._drain_v = 0.0 if refill_wh is not None else drain_v(params, origin.thrust_mps2, dt_s)
-        self._cache = (0, origin)
+        self._hull = HullAt(origin)
 
     def take(self, n: int, counters: EnergyCounters) -> int:
         """`n` more steps (the home charger's top-ups added to `counters` one by one, as stepping adds
@@ -82,12 +83,7 @@ class Rest:
 
     def state(self) -> VehicleState:
         """The hull after `steps` more steps: the battery drained `steps` times, clamped at empty."""
-        steps, cached = self._cache
-        if steps == self.steps:
-            return cached
-        state = self.after(self.steps)
-        self._cache = (self.steps, state)
-        return state
+        return self._hull.at(self.steps, self.after)
 
     def after(self, n: int) -> VehicleState:
         """The hull after `n` steps of the rest (what `state` is once `steps` is `n`); changes nothing."""
@@ -124,8 +120,19 @@ class ChargingRest:
     `Rest`). Hours of charging cost a few float operations a step, not a physics step.
     """
 
-    __slots__ = ("_cache", "_charge_wh", "_drain_v", "_params", "_rise_v", "battery_v", "closed", "dt_s", "key",
-                 "origin", "steps")
+    __slots__ = (
+        "_charge_wh",
+        "_drain_v",
+        "_hull",
+        "_params",
+        "_rise_v",
+        "battery_v",
+        "closed",
+        "dt_s",
+        "key",
+        "origin",
+        "steps",
+    )
 
     def __init__(self, origin: VehicleState, params: ApadParams, dt_s: float, key: tuple[object, ...] = (),
                  closed: bool = False) -> None:
@@ -139,7 +146,7 @@ class ChargingRest:
         self._drain_v = drain_v(params, origin.thrust_mps2, dt_s)
         self._charge_wh = params.home_charge_w * dt_s / 3600.0  # a step's charge below full (`home_charge_wh`)
         self._rise_v = self._charge_wh / params.batt_capacity_wh * VOLT_RANGE - self._drain_v
-        self._cache = (0, origin)
+        self._hull = HullAt(origin)
 
     def _whole_steps(self, v: float) -> int:
         """Steps from `v` at the charger's whole power that leave the battery below full (a margin short of
@@ -173,11 +180,7 @@ class ChargingRest:
         return n
 
     def state(self) -> VehicleState:
-        steps, cached = self._cache
-        if steps != self.steps:
-            cached = replace(self.origin, battery_v=self.battery_v)
-            self._cache = (self.steps, cached)
-        return cached
+        return self._hull.at(self.steps, lambda _: replace(self.origin, battery_v=self.battery_v))
 
     def after(self, n: int) -> VehicleState:
         """The hull after `n` steps of the rest (`n` at least those taken) in the closed form: full once its

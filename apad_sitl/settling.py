@@ -28,6 +28,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import replace
 
 from apad_sitl.energy_counters import EnergyCounters
+from apad_sitl.hull_at import HullAt
 from apad_sitl.latch_hold import LatchTimers
 from apad_sitl.params import ApadParams
 from apad_sitl.primitives import MusselFix, PrimitiveState
@@ -46,7 +47,7 @@ class Settling:
     `primitive()` the primitive.
     """
 
-    __slots__ = ("_cache", "_lam", "_modes", "_odo", "_p", "_sq", "_t0", "dt_s", "fixes", "key", "limit", "origin",
+    __slots__ = ("_hull", "_lam", "_modes", "_odo", "_p", "_sq", "_t0", "dt_s", "fixes", "key", "limit", "origin",
                  "steps", "timers")
 
     def __init__(self, origin: VehicleState, primitive: PrimitiveState, params: ApadParams, dt_s: float,
@@ -67,7 +68,7 @@ class Settling:
         self._t0 = (primitive.target_x_m, primitive.target_y_m)
         self._odo = (0, origin.distance_travelled_m)
         self._sq = _thrust_squares(params, dt_s, lam, modes)
-        self._cache = (0, origin)
+        self._hull = HullAt(origin)
 
     def take(self, n: int, counters: EnergyCounters) -> int:
         """Up to `n` more steps, no further than `limit`: how many it took (nothing is charged or passed)."""
@@ -79,11 +80,7 @@ class Settling:
         return self.timers.after(self.steps)
 
     def state(self) -> VehicleState:
-        steps, cached = self._cache
-        if steps != self.steps:
-            cached = self.after(self.steps)
-            self._cache = (self.steps, cached)
-        return cached
+        return self._hull.at(self.steps, self.after)
 
     def _axis(self, n: int) -> tuple[float, float, float, float]:
         """(e east, e north, w east, w north) after `n` steps."""
