@@ -4,7 +4,8 @@ The vehicle core (endpoint.py) calls `step_hull` at the physics rate with the pa
 models stay pure (vehicle, primitives, rest, cruise, latch_hold), and the energy meter takes its share
 of each step. With `closed_forms` (the ideal link's) a busy hull is advanced in closed form too: a Go
 To's steady cruise (`cruise.Cruise`) and a hull held still while latch timers run
-(`latch_hold.LatchHold`), each up to the last step before something could change otherwise.
+(`latch_hold.LatchHold`), each up to the last step before something could change otherwise, and where
+no equation holds, the hull stepped ahead (`track.Track`).
 """
 
 from __future__ import annotations
@@ -16,14 +17,15 @@ from apad_sitl import latch_hold as hold_mod
 from apad_sitl import primitives as prim
 from apad_sitl import rest as rest_mod
 from apad_sitl import settling as settling_mod
+from apad_sitl import track as track_mod
 from apad_sitl import vehicle as veh
 from apad_sitl.energy import EnergyMeter
 from apad_sitl.primitives import MusselFix
 from apad_sitl.state import ApadState
 
 # The closed forms that end at a step of their own (`limit`), after which the hull is stepped.
-BOUNDED = (cruise_mod.Cruise, hold_mod.LatchHold, settling_mod.Settling)
-_TIMED = (hold_mod.LatchHold, settling_mod.Settling)  # the closed forms that run latch timers
+BOUNDED = (cruise_mod.Cruise, hold_mod.LatchHold, settling_mod.Settling, track_mod.Track)
+_TIMED = (hold_mod.LatchHold, settling_mod.Settling, track_mod.Track)  # the closed forms that run latch timers
 
 
 def step_hull(apad: ApadState, energy: EnergyMeter, mussels: Mapping[int, MusselFix],
@@ -73,12 +75,14 @@ def _find_closed_form(apad: ApadState, energy: EnergyMeter, mussels: Mapping[int
             if hold.limit > 1:
                 apad.rest = hold
         return  # else a rest, if any (`step_hull`)
-    found: cruise_mod.Cruise | settling_mod.Settling | None = None
+    found: cruise_mod.Cruise | settling_mod.Settling | track_mod.Track | None = None
     if new is primitive:
         found = cruise_mod.found(before, state, new, p, dt_s, key)
     if found is None:
         found = settling_mod.found(before, state, new, p, current_mps, mussels, p.home_charge_w > 0.0, dt_s, fixes,
                                    key)
+    if found is None and not energy.counters.charging:  # no equation holds: stepped ahead
+        found = track_mod.found(state, new, p, current_mps, mussels, fixes, dt_s, key)
     apad.rest = found
 
 

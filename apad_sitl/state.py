@@ -35,14 +35,15 @@ if TYPE_CHECKING:
     from apad_sitl.cruise import Cruise
     from apad_sitl.latch_hold import LatchHold
     from apad_sitl.settling import Settling
+    from apad_sitl.track import Track
 
 PrimitiveListener = Callable[[PrimitiveState, PrimitiveState], None]  # (old, new)
 ModeListener = Callable[[int], None]  # the new mode
 ArmedListener = Callable[[bool], None]  # armed now
 # The hull advanced in closed form: at rest (`apad_sitl.rest`), or on the ideal link busy too (a Go To's
 # cruise, `apad_sitl.cruise`; latch timers running while it holds still, `apad_sitl.latch_hold`; settling
-# onto its hold point, `apad_sitl.settling`).
-HullRest: TypeAlias = "Rest | ChargingRest | Cruise | LatchHold | Settling"
+# onto its hold point, `apad_sitl.settling`; stepped ahead where no equation holds, `apad_sitl.track`).
+HullRest: TypeAlias = "Rest | ChargingRest | Cruise | LatchHold | Settling | Track"
 
 
 class ApadState:
