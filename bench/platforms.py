@@ -19,7 +19,8 @@ A row outside them is marked MISS. Asserts nothing (a benchmark); the machine's 
 within the hour, so the speed rows run one at a time, interleaved, each the best of --repeat.
 
     .venv/bin/python bench/platforms.py [--part agreement|long|speed] [--seeds 20] [--long-seeds 5]
-        [--scenarios pool12,bay24] [--strategies cautious,greedy] [--jobs 2] [--repeat 1]
+        [--scenarios pool12,bay24] [--strategies cautious,greedy] [--leave-out stress240:rolling] [--jobs 2]
+        [--repeat 1]
         [--speed-cases pool12,sleep-day,capacity,year]
 """
 
@@ -33,7 +34,7 @@ import statistics
 import tempfile
 import time
 from collections.abc import Iterable
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 
 from rich.console import Console
@@ -119,37 +120,54 @@ def mark(ok: bool) -> str:
     return "" if ok else " [red]MISS[/]"
 
 
-def agreement(console: Console, scenarios: list[str], strategies: list[str], seeds: int, n_jobs: int) -> None:
-    jobs = [Job(sc, st, seed, SHORT, p) for sc in scenarios for st in strategies for seed in range(1, seeds + 1)
-            for p in PLATFORMS]
+def agreement(console: Console, scenarios: list[str], strategies: list[str], seeds: int, n_jobs: int,
+              leave_out: frozenset[tuple[str, str]] = frozenset()) -> None:
+    """Each row is printed as its last mission ends (a sitting cut short keeps what it ran), then the table."""
+    pairs = [(sc, st) for sc in scenarios for st in strategies if (sc, st) not in leave_out]
+    jobs = [Job(sc, st, seed, SHORT, p) for sc, st in pairs for seed in range(1, seeds + 1) for p in PLATFORMS]
+    left: dict[tuple[str, str], int] = {pair: seeds * len(PLATFORMS) for pair in pairs}
+    done: dict[tuple[str, str], list[Outcome]] = {pair: [] for pair in pairs}
+    rows: dict[tuple[str, str], list[str]] = {}
     start = time.perf_counter()
-    done = run_all(jobs, n_jobs)
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(n_jobs, mp_context=context) as pool:
+        for future in as_completed([pool.submit(run_job, job) for job in jobs]):
+            outcome = future.result()
+            pair = (outcome.job.scenario, outcome.job.strategy or "")
+            done[pair].append(outcome)
+            left[pair] -= 1
+            if not left[pair]:
+                rows[pair] = _agreement_row(done[pair])
+                console.print(f"[{time.perf_counter() - start:.0f} s] {pair[0]} {pair[1]}: " + " | ".join(rows[pair]))
     table = Table(title=f"Agreement: {seeds} seeds of {SHORT} per scenario and strategy, fleets drawn "
                         f"({time.perf_counter() - start:.0f} s on {n_jobs} processes)")
     for column in ("scenario", "strategy", "avg % L / E (diff)", "min % L / E (diff)", "cost m L / E (diff)",
                    "dockings L / E", "plans same", "wall s L / E"):
         table.add_column(column, justify="left" if column in ("scenario", "strategy") else "right")
-    for sc in scenarios:
-        for st in strategies:
-            rows = {p: [o for o in done if o.job.scenario == sc and o.job.strategy == st and o.job.platform == p]
-                    for p in PLATFORMS}
-            lo, ev = rows["lockstep"], rows["event"]
-            avg = [statistics.fmean(o.avg for o in r) for r in (lo, ev)]
-            low = [statistics.fmean(o.min for o in r) for r in (lo, ev)]
-            cost = [statistics.fmean(o.cost for o in r) for r in (lo, ev)]
-            docks = [statistics.fmean(o.dockings for o in r) for r in (lo, ev)]
-            same = sum(a.first_plan == b.first_plan for a, b in zip(lo, ev, strict=True))
-            cost_ok = abs(cost[1] - cost[0]) <= COST_FRAC * max(cost[0], 1e-9) or cost[0] == cost[1]
-            table.add_row(
-                sc, st,
-                f"{avg[0]:.2f} / {avg[1]:.2f} ({avg[1] - avg[0]:+.2f}){mark(abs(avg[1] - avg[0]) <= AVG_PP)}",
-                f"{low[0]:.2f} / {low[1]:.2f} ({low[1] - low[0]:+.2f}){mark(abs(low[1] - low[0]) <= MIN_PP)}",
-                f"{cost[0]:.1f} / {cost[1]:.1f} ({_pct(cost)}){mark(cost_ok)}",
-                f"{docks[0]:.1f} / {docks[1]:.1f}",
-                f"{same}/{len(lo)}{mark(same >= PLAN_SHARE * len(lo))}",
-                f"{sum(o.wall_s for o in lo):.1f} / {sum(o.wall_s for o in ev):.1f}",
-            )
+    for pair in pairs:
+        table.add_row(*pair, *rows[pair])
     console.print(table)
+    if leave_out:
+        console.print("left out: " + ", ".join(f"{sc} {st}" for sc, st in sorted(leave_out)))
+
+
+def _agreement_row(outcomes: list[Outcome]) -> list[str]:
+    """One scenario and strategy: each figure on both platforms (seed by seed in seed order), marked where it misses."""
+    lo, ev = ([o for o in sorted(outcomes, key=lambda o: o.job.seed) if o.job.platform == p] for p in PLATFORMS)
+    avg = [statistics.fmean(o.avg for o in r) for r in (lo, ev)]
+    low = [statistics.fmean(o.min for o in r) for r in (lo, ev)]
+    cost = [statistics.fmean(o.cost for o in r) for r in (lo, ev)]
+    docks = [statistics.fmean(o.dockings for o in r) for r in (lo, ev)]
+    same = sum(a.first_plan == b.first_plan for a, b in zip(lo, ev, strict=True))
+    cost_ok = abs(cost[1] - cost[0]) <= COST_FRAC * max(cost[0], 1e-9) or cost[0] == cost[1]
+    return [
+        f"{avg[0]:.2f} / {avg[1]:.2f} ({avg[1] - avg[0]:+.2f}){mark(abs(avg[1] - avg[0]) <= AVG_PP)}",
+        f"{low[0]:.2f} / {low[1]:.2f} ({low[1] - low[0]:+.2f}){mark(abs(low[1] - low[0]) <= MIN_PP)}",
+        f"{cost[0]:.1f} / {cost[1]:.1f} ({_pct(cost)}){mark(cost_ok)}",
+        f"{docks[0]:.1f} / {docks[1]:.1f}",
+        f"{same}/{len(lo)}{mark(same >= PLAN_SHARE * len(lo))}",
+        f"{sum(o.wall_s for o in lo):.1f} / {sum(o.wall_s for o in ev):.1f}",
+    ]
 
 
 def _pct(pair: list[float]) -> str:
@@ -226,6 +244,8 @@ def main() -> None:
     parser.add_argument("--long-seeds", type=int, default=5)
     parser.add_argument("--scenarios", help="comma list (default: every shipped scenario)")
     parser.add_argument("--strategies", help="comma list (default: every shipped strategy)")
+    parser.add_argument("--leave-out", help="comma list of scenario:strategy pairs the agreement part skips "
+                                            "(named under its table)")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--repeat", type=int, default=1)
     parser.add_argument("--speed-cases", default=",".join([*SPEED_CASES, "year"]),
@@ -235,8 +255,9 @@ def main() -> None:
     console = Console(width=200)
     scenarios, strategies = shipped()
     if "agreement" in parts:
+        leave_out = frozenset((pair.partition(":")[0], pair.partition(":")[2]) for pair in _names(args.leave_out, ()))
         agreement(console, _names(args.scenarios, scenarios), _names(args.strategies, strategies), args.seeds,
-                  args.jobs)
+                  args.jobs, leave_out)
     if "long" in parts:
         long_runs(console, args.long_seeds, args.jobs)
     if "speed" in parts:
