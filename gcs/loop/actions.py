@@ -199,8 +199,8 @@ class ApadActions:
                   state=self.knows.state(mussel_id).name)
 
     def hold(self) -> bool:
-        """Hold position here (a command: False at its bound, logged)."""
-        return self.command(self.api.hold)
+        """Hold position here (a command to this loop's aPad: False at its bound, logged)."""
+        return self.command(self.api.hold, self.apad_id)
 
     def tell_to_sink(self, mussel_id: int) -> bool:
         """Tell an aMussel to go down, not waiting to see it leave (a simulated one, a local party: the

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -153,3 +154,25 @@ def test_an_amussel_docked_on_another_apad_is_believed_charging_until_a_slot_let
         assert knows.battery(mussel) > released
     finally:
         world.close()
+
+
+def test_each_loop_commands_only_its_own_apad(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every command a swarm's loop sends goes to its own aPad. A loop's `hold` (idle and charging waits, home)
+    used to go to the API's default aPad, 1: aPad 2 waiting for its aMussels to charge stopped aPad 1 mid
+    Go To, which then sent its Go To again ("goto_resent", 25 times in bay120 keep_alive seed 1)."""
+    from gcs.link.command_protocol import CommandClient
+
+    sent: list[tuple[str, int]] = []
+    for name in ("send_long", "send_int"):
+        original = getattr(CommandClient, name)
+
+        def spy(self: CommandClient, target: int, *args: Any, _original: Any = original, **kwargs: Any) -> Any:
+            sent.append((threading.current_thread().name, target))
+            return _original(self, target, *args, **kwargs)
+
+        monkeypatch.setattr(CommandClient, name, spy)
+    r = run_mission(load_scenario("pool12x2").with_overrides(duration_s=900.0))
+    assert all(a["dockings"] >= 2 for a in r.apads)  # both loops worked: docked, charged, held
+    by_loop = {(thread, target) for thread, target in sent if thread.startswith("process-apad")}
+    assert {thread for thread, _ in by_loop} == {"process-apad1", "process-apad2"}
+    assert by_loop == {(f"process-apad{target}", target) for _, target in by_loop}
