@@ -67,27 +67,29 @@ _OWN_WAY = _lookup((MusselState.DOCKED, MusselState.DEPLETED))  # not run forwar
 
 def believed_rows(battery_frac: NDArray[np.float64], time_us: NDArray[np.int64], state: NDArray[np.integer],
                   simulated: NDArray[np.bool_], now_us: int, drain_per_s: NDArray[np.float64],
-                  anchors: Anchors | None) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+                  anchors: Anchors, acoustic: bool) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """(belief, exact) per table row at `now_us`: where `exact`, the battery `FleetKnowledge.battery` gives, to
     the bit; elsewhere (a docked or a real aMussel) the report's, for the scalar to replace. `anchors`: the
-    loop's sleep orders in an acoustic scenario (an aMussel under water is heard now and then); None: every
-    simulated aMussel reports over WiFi."""
+    loop's sleep orders (a run-down starts at one later than the report); `acoustic`: an aMussel under water
+    is heard now and then (run down by the second), else every simulated one is run forward in model steps."""
     belief = battery_frac.copy()
     own_way = _OWN_WAY[state]
     exact = simulated & ~(state == MusselState.DOCKED)
-    underwater = simulated & _UNDERWATER[state] if anchors is not None else np.zeros_like(simulated)
+    underwater = simulated & _UNDERWATER[state] if acoustic else np.zeros_like(simulated)
     stepped = simulated & ~own_way & ~underwater
+    later = anchors.us > time_us
     if stepped.any():  # `foreseen_battery` of a deployed one: whole model steps, none at all within a step
-        frac = battery_frac[stepped]
-        steps = np.maximum(now_us - time_us[stepped], 0) // MODEL_STEP_US
+        ordered = later[stepped]
+        frac = np.where(ordered, anchors.frac[stepped], battery_frac[stepped])
+        steps = np.where(ordered, np.maximum(now_us // MODEL_STEP_US - anchors.us[stepped] // MODEL_STEP_US, 0),
+                         np.maximum(now_us - time_us[stepped], 0) // MODEL_STEP_US)
         run = np.maximum(frac - steps * drain_per_s[stepped] * MODEL_STEP_S, 0.0)
         belief[stepped] = np.where(steps == 0, frac, run)
-    if anchors is not None and underwater.any():  # `believed_battery`: from the report or a later order's anchor
+    if underwater.any():  # `believed_battery`: from the report or a later order's anchor
         report_us = time_us[underwater]
         anchor_us = anchors.us[underwater]
-        later = anchor_us > report_us
-        since_us = np.where(later, anchor_us, report_us)
-        start = np.where(later, anchors.frac[underwater], battery_frac[underwater])
+        since_us = np.where(later[underwater], anchor_us, report_us)
+        start = np.where(later[underwater], anchors.frac[underwater], battery_frac[underwater])
         belief[underwater] = np.maximum(
             start - drain_per_s[underwater] * np.maximum(now_us - since_us, 0) / US_PER_S, 0.0)
     return belief, exact

@@ -8,6 +8,10 @@ of an aPad, eq. (2) by its charge profile; depleted, as reported. Whole steps, n
 any instant the GCS believes what the last report of a fleet reporting every step would have said, so
 the planner's decisions fall where they fell then (to float rounding: the report is float32).
 
+A sleep order sent since the report (`anchor`: when, and the battery believed then) changed the drain from
+the fleet's first step after it: the old duty's run ends there and the new one's begins, so the belief does
+not depend on how long ago the aMussel last spoke (a sleeper speaks only at its wakes).
+
 Pure: the caller passes the report, the time and the models.
 """
 
@@ -31,6 +35,12 @@ EXACT_STEPS = 64  # stretches up to this many steps are taken step by step (`cha
 def steps_since(report_us: int, now_us: int) -> int:
     """The model's whole steps from a report made at `report_us` to `now_us`."""
     return max(now_us - report_us, 0) // MODEL_STEP_US
+
+
+def steps_after(order_us: int, now_us: int) -> int:
+    """The model's steps after an order heard at `order_us` up to `now_us`: its steps fall on whole multiples
+    of the step (the first after the order takes it)."""
+    return max(now_us // MODEL_STEP_US - order_us // MODEL_STEP_US, 0)
 
 
 def charged_forward(battery: float, steps: int, charge: ChargeProfile, theta: float) -> float:
@@ -57,14 +67,21 @@ def charged_forward(battery: float, steps: int, charge: ChargeProfile, theta: fl
 
 
 def foreseen_battery(view: MusselView, now_us: int, drain_per_s: float, charge: ChargeProfile, theta: float,
-                     released_us: int | None = None) -> float:
+                     released_us: int | None = None, anchor: tuple[int, float] | None = None) -> float:
     """The battery a report made now would carry: `view` run forward in whole model steps, drained at
     `drain_per_s` (never below 0); one DOCKED charged by `charge`, up to `released_us` if a slot has let
     go of it since (the fleet takes a release at its next step, which drains: every step up to the
-    release's instant charged it, every one after drains it).
+    release's instant charged it, every one after drains it). `anchor`: (mission us, battery) believed when
+    a sleep order last changed its duty; a deployed one's run at `drain_per_s` (the new duty's) starts
+    there if the order came after the report (the module's docstring).
     """
+    if view.state == MusselState.DEPLETED:
+        return view.battery_frac
+    if anchor is not None and anchor[0] > view.time_us and view.state != MusselState.DOCKED:
+        steps = steps_after(anchor[0], now_us)
+        return max(anchor[1] - steps * drain_per_s * MODEL_STEP_S, 0.0) if steps else anchor[1]
     steps = steps_since(view.time_us, now_us)
-    if steps == 0 or view.state == MusselState.DEPLETED:
+    if steps == 0:
         return view.battery_frac
     battery, drained = view.battery_frac, steps
     if view.state == MusselState.DOCKED:

@@ -42,10 +42,10 @@ class LoopBook:
             knows.homes[mussel_id] = knows.location(mussel_id)
 
     def ordered(self, mussel_id: int, duty: Duty) -> None:
-        """A sleep order was sent: plan with it from now on (one heard now and then, acoustically or a
-        real aMussel, was believed run down at the old duty until now, and at the new one from here)."""
+        """A sleep order was sent: plan with it from now on (one heard was believed run down at the old duty
+        until now, and at the new one from here: `OrdersSent.changed`, the anchor a belief runs on from)."""
         knows = self.knows
-        if knows.heard_now_and_then(mussel_id):
+        if knows.heard(mussel_id):
             self.orders.changed[mussel_id] = (knows.clock.now_us, knows.battery(mussel_id))
         self.orders.duties[mussel_id] = duty
         self.orders.sent += 1

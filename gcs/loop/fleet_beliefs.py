@@ -33,7 +33,7 @@ class FleetBeliefs:
                  drain_per_s: Callable[[int], float], battery: Callable[[int], float]) -> None:
         self.api, self.clock, self.orders, self.acoustic = api, clock, orders, acoustic
         self.drain_per_s, self.battery = drain_per_s, battery
-        self._duties: tuple[tuple[object, int], NDArray[np.float64], Anchors | None] | None = None
+        self._duties: tuple[tuple[object, int], NDArray[np.float64], Anchors] | None = None
         self._rows: tuple[tuple[object, int, int, int], Rows] | None = None
         self._of: dict[tuple[MusselState, ...], Believed] = {}  # at the rows' key, selections all exact
 
@@ -41,16 +41,16 @@ class FleetBeliefs:
         """Each table row's aMussel's drain per mission second (`drain_per_s`)."""
         return self._row_duties()[0]
 
-    def _row_duties(self) -> tuple[NDArray[np.float64], Anchors | None]:
-        """Each row's drain and (acoustic) anchor, made again only when the table grew (or was restored: its
-        ids are another array) or a sleep order changed a duty."""
+    def _row_duties(self) -> tuple[NDArray[np.float64], Anchors]:
+        """Each row's drain and anchor (`OrdersSent.changed`), made again only when the table grew (or was
+        restored: its ids are another array) or a sleep order changed a duty."""
         t = self.api.mussels
         key = (t.ids, self.orders.sent)
         cached = self._duties
         if cached is None or cached[0][0] is not t.ids or cached[0][1] != key[1]:
             ids = t.ids.tolist()
             drains = np.array([self.drain_per_s(m) for m in ids], np.float64)
-            anchors = Anchors.of(ids, self.orders.changed) if self.acoustic else None
+            anchors = Anchors.of(ids, self.orders.changed)
             cached = self._duties = key, drains, anchors
         return cached[1], cached[2]
 
@@ -63,7 +63,7 @@ class FleetBeliefs:
         if cached is not None and cached[0][0] is t.ids and cached[0][1:] == key[1:]:
             return cached[1]
         drains, anchors = self._row_duties()
-        made = believed_rows(t.battery_frac, t.time_us, t.state, t.simulated, now_us, drains, anchors)
+        made = believed_rows(t.battery_frac, t.time_us, t.state, t.simulated, now_us, drains, anchors, self.acoustic)
         self._rows, self._of = (key, made), {}
         return made
 

@@ -281,7 +281,7 @@ class FleetKnowledge:
                 if let_go_us is not None and let_go_us >= view.time_us:
                     released_us = let_go_us
             return foreseen_battery(view, self.clock.now_us, self.drain_per_s(mussel_id), self.charge(mussel_id),
-                                    self.settings.mission.theta, released_us)
+                                    self.settings.mission.theta, released_us, self.orders.changed.get(mussel_id))
         if self.real is not None and mussel_id in self.real.heard_us:
             on_slot = mussel_id in self.docked().values()
             return self.real.estimate(mussel_id, self.clock.now_us, on_slot, self.drain_per_min(mussel_id),

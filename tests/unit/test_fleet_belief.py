@@ -70,8 +70,8 @@ def test_every_exact_row_is_the_scalar_belief_to_the_bit(rows: list[tuple[Mussel
     time_us = np.array([r[3] for r in rows], np.int64)
     drain = np.array([r[4] for r in rows], np.float64)
     changed = {k: r[5] for k, r in enumerate(rows) if r[5] is not None}
-    anchors = Anchors.of(range(len(rows)), changed) if acoustic else None
-    belief, exact = believed_rows(frac, time_us, state, simulated, now_us, drain, anchors)
+    anchors = Anchors.of(range(len(rows)), changed)
+    belief, exact = believed_rows(frac, time_us, state, simulated, now_us, drain, anchors, acoustic)
     for k, (s, sim, battery, report_us, per_s, anchor) in enumerate(rows):
         assert exact[k] == (sim and s != MusselState.DOCKED)  # a docked or a real one: the scalar's
         if not exact[k]:
@@ -80,7 +80,7 @@ def test_every_exact_row_is_the_scalar_belief_to_the_bit(rows: list[tuple[Mussel
         if acoustic and s in UNDERWATER:
             want = believed_battery(view, now_us, per_s, anchor)
         else:
-            want = foreseen_battery(view, now_us, per_s, CHARGE, THETA)
+            want = foreseen_battery(view, now_us, per_s, CHARGE, THETA, None, anchor)
         assert bits([belief[k]]) == bits([want]), (k, rows[k])
 
 
@@ -98,25 +98,26 @@ def test_thousands_of_rows_run_down_part_way_are_the_scalar_to_the_bit(acoustic:
     later = rng.random(n) < 0.3
     changed = {k: (int(time_us[k] + (1 if later[k] else -1) * rng.integers(1, 10**9)), float(rng.random()))
                for k in range(n) if rng.random() < 0.5}
-    belief, exact = believed_rows(frac, time_us, state, simulated, now_us, drain,
-                                  Anchors.of(range(n), changed) if acoustic else None)
+    belief, exact = believed_rows(frac, time_us, state, simulated, now_us, drain, Anchors.of(range(n), changed),
+                                  acoustic)
     want = []
     for k in np.flatnonzero(exact).tolist():
         view = MusselView(k + 1, 0, 0, 0.0, float(frac[k]), 4000, MusselState(int(state[k])), True, int(time_us[k]))
         per_s = float(drain[k])
         want.append(believed_battery(view, now_us, per_s, changed.get(k)) if acoustic and view.state in UNDERWATER
-                    else foreseen_battery(view, now_us, per_s, CHARGE, THETA))
+                    else foreseen_battery(view, now_us, per_s, CHARGE, THETA, None, changed.get(k)))
     assert bits(belief[exact]) == bits(want)
     assert 0 < int((belief[exact] > 0).sum()) < exact.sum()  # some run flat, most part way
 
 
 def test_a_row_reported_within_its_step_stands_and_one_run_flat_holds_at_zero() -> None:
     state = np.array([MusselState.ACTIVE, MusselState.ACTIVE, MusselState.DEPLETED], np.uint8)
+    none = Anchors.of(range(3), {})
     belief, exact = believed_rows(np.array([0.5, 0.001, 0.3]), np.array([0, 0, 0], np.int64), state,
-                                  np.ones(3, bool), MODEL_STEP_US - 1, np.full(3, 0.01), None)
+                                  np.ones(3, bool), MODEL_STEP_US - 1, np.full(3, 0.01), none, False)
     assert belief.tolist() == [0.5, 0.001, 0.3] and exact.all()
     belief, _ = believed_rows(np.array([0.5, 0.001, 0.3]), np.array([0, 0, 0], np.int64), state,
-                              np.ones(3, bool), 10 * MODEL_STEP_US, np.full(3, 0.01), None)
+                              np.ones(3, bool), 10 * MODEL_STEP_US, np.full(3, 0.01), none, False)
     assert bits(belief) == bits([0.5 - 10 * 0.01 * 1.0, 0.0, 0.3])
 
 
@@ -124,7 +125,7 @@ def test_an_anchor_older_than_the_report_is_not_used() -> None:
     anchors = Anchors(np.array([5 * US_PER_S, NO_ANCHOR_US], np.int64), np.array([0.9, 0.0]))
     belief, _ = believed_rows(np.array([0.5, 0.5]), np.array([10 * US_PER_S, 10 * US_PER_S], np.int64),
                               np.array([MusselState.ACTIVE] * 2, np.uint8), np.ones(2, bool), 20 * US_PER_S,
-                              np.full(2, 0.001), anchors)
+                              np.full(2, 0.001), anchors, True)
     assert belief[0] == belief[1] == 0.5 - 0.001 * 10_000_000 / US_PER_S
 
 

@@ -103,3 +103,20 @@ def test_a_long_stretch_costs_a_few_operations_not_one_per_step() -> None:
     object.__setattr__(counting, "rates_per_min", Counting(CHARGE.rates_per_min))
     charged_forward(0.0, 50_000, counting, THETA)
     assert len(calls) < 3 * 2 * 64  # per band: its closed form and the steps near its edge
+
+
+@pytest.mark.parametrize("last_spoke_s", [100, 583, 631])
+def test_after_a_sleep_order_the_belief_does_not_depend_on_when_the_amussel_last_spoke(last_spoke_s: int) -> None:
+    """A sleeper speaks only at its wakes; lockstep's and the event platform's GCS hear it at different ones.
+    An order at 637.05 s changes its drain from the fleet's next step (638 s): the belief runs the old duty to
+    the order (the anchor) and the new one after it, so every last report gives the truth (bay-capacity
+    keep_alive seed 2 planned on 0.788 against a true 0.811 when it had last heard the sleeper at 583 s)."""
+    old, new, battery = DRAIN_PER_S / 20, DRAIN_PER_S, 0.83
+    order_us, now_us = 637_050_000, 700 * MODEL_STEP_US
+    truth = battery - 637 * old - (700 - 637) * new  # old duty up to the step at 637 s, the new one from 638 s
+    heard = view(MusselState.ACTIVE, battery - last_spoke_s * old, last_spoke_s * MODEL_STEP_US)
+    anchor = (order_us, foreseen_battery(heard, order_us, old, CHARGE, THETA))
+    assert foreseen_battery(heard, now_us, new, CHARGE, THETA, None, anchor) == pytest.approx(truth, abs=1e-12)
+    assert foreseen_battery(heard, 637_900_000, new, CHARGE, THETA, None, anchor) == anchor[1]  # no step yet
+    later = view(MusselState.ACTIVE, 0.5, 650 * MODEL_STEP_US)  # a report after the order: the report counts
+    assert foreseen_battery(later, now_us, new, CHARGE, THETA, None, anchor) == pytest.approx(0.5 - 50 * new)
