@@ -7,6 +7,13 @@ constraint (`add_circuit`) over the aPad, the candidates and an open end reached
 a candidate's self-loop taken means it is skipped. The routing library's local search finds a
 route 10 m longer than the best in some draws of 10 aMussels; CP-SAT on these <= 26 nodes is
 exact in tens of milliseconds.
+
+A pool far larger than that (stress240: 100 and more candidates) makes a model of tens of thousands of
+arcs that CP-SAT cannot prove within its work limit: every plan then took the whole limit (4 s here, 7
+minutes of planning in a 40-minute mission) and gave its best so far, no optimum either. So at most
+`MAX_CANDIDATES` are offered: those that could gain the most, a prize less the shortest leg that could
+reach it (from the aPad or another candidate). Every other shipped scenario's pools stay under it (20 at
+most, bay24 and bay120), so their plans are the exact ones.
 """
 
 from __future__ import annotations
@@ -22,6 +29,7 @@ SCALE = 100  # the solver works in integers: centimetres
 # A safety bound only (the search proves the optimum long before), then its best so far. In CP-SAT's
 # deterministic time, not wall time: a loaded machine must not change a plan (sweeps repeat rows exactly).
 WORK_LIMIT = 5.0
+MAX_CANDIDATES = 24  # the model stays exact and fast (<= 26 nodes); a larger pool is cut to its likeliest gains
 
 
 def metres_matrix(lat_deg: NDArray[np.float64], lon_deg: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -50,6 +58,8 @@ def best_route(start: tuple[float, float], lat_deg: NDArray[np.float64], lon_deg
     keep = np.flatnonzero(prize_m > 0)
     if capacity <= 0 or keep.size == 0:
         return []
+    if keep.size > MAX_CANDIDATES:
+        keep = likeliest(start, lat_deg, lon_deg, prize_m, keep)
     n = len(keep)
     metres = np.rint(metres_matrix(np.concatenate(([start[0]], lat_deg[keep])),
                                    np.concatenate(([start[1]], lon_deg[keep]))) * SCALE).astype(int)
@@ -85,3 +95,14 @@ def best_route(start: tuple[float, float], lat_deg: NDArray[np.float64], lon_deg
         route.append(int(keep[node - 1]))
         node = succ[node]
     return route
+
+
+def likeliest(start: tuple[float, float], lat_deg: NDArray[np.float64], lon_deg: NDArray[np.float64],
+               prize_m: NDArray[np.float64], keep: NDArray[np.intp]) -> NDArray[np.intp]:
+    """The `MAX_CANDIDATES` of `keep` that could gain the most: each one's prize less the shortest leg into it
+    (from the aPad or another candidate), the most first (ties: the lower index), in index order."""
+    metres = metres_matrix(np.concatenate(([start[0]], lat_deg[keep])), np.concatenate(([start[1]], lon_deg[keep])))
+    into = metres[:, 1:] + np.vstack([np.zeros(len(keep)), np.diag(np.full(len(keep), np.inf))])  # no self-loop
+    gain = prize_m[keep] - into.min(axis=0)
+    best = np.argsort(-gain, kind="stable")[:MAX_CANDIDATES]
+    return keep[np.sort(best)]

@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from gcs.strategies import COLLECT, STRATEGIES, CostWeights, Outlook, PlanInput, plan, route_length_m, traits
+from gcs.strategies import COLLECT, STRATEGIES, CostWeights, Outlook, PlanInput, plan, route_length_m, routing, traits
 from gcs.strategies.routing import best_route, metres_matrix
 from mussel_sim.battery import charge_profile, discharge_profile, step_battery
 from mussel_sim.geo import LocalFrame
@@ -94,6 +94,41 @@ def test_the_route_is_exact_against_every_ordered_load(seed: int) -> None:
 
     best = min(cost(r) for k in range(capacity + 1) for r in itertools.permutations(range(n), k))
     assert cost(tuple(best_route(start, lat, lon, prize, capacity))) == pytest.approx(best, abs=0.02)
+
+
+def test_a_pool_past_the_exact_models_size_is_cut_to_its_likeliest_gains() -> None:
+    """100 candidates (stress240's pools): the route is the exact one over the `MAX_CANDIDATES` that could gain
+    the most (a prize less the shortest leg into it), which keep the near, valuable ones and drop the far,
+    cheap ones; a pool within the size is solved whole."""
+    rng = np.random.default_rng(7)
+    n = 100
+    x, y = rng.uniform(-60, 60, n), rng.uniform(-60, 60, n)
+    lat, lon = FRAME.to_geodetic(x, y)
+    prize = rng.uniform(1, 200, n)
+    prize[0], x[0], y[0] = 200.0, 1.0, 1.0  # the best of all, beside the aPad
+    prize[1], x[1], y[1] = 1.0, 59.0, 59.0  # nearly worthless, in a far corner
+    lat, lon = FRAME.to_geodetic(x, y)
+    start = (43.94, 15.44)
+    kept = routing.likeliest(start, lat, lon, prize, np.arange(n))
+    assert len(kept) == routing.MAX_CANDIDATES and 0 in kept and 1 not in kept
+    route = best_route(start, lat, lon, prize, 4)
+    only = np.zeros(n)
+    only[kept] = prize[kept]
+    assert route == best_route(start, lat, lon, only, 4) and 0 in route  # the exact route over those offered
+    few = np.where(np.isin(np.arange(n), kept), prize, 0.0)
+    assert routing.likeliest(start, lat, lon, few, np.flatnonzero(few > 0)).tolist() == sorted(kept.tolist())
+
+
+def test_the_likeliest_gain_counts_the_leg_from_the_apad_and_from_each_other_candidate(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(routing, "MAX_CANDIDATES", 2)
+    # A: a small prize a metre from the aPad; B, C: larger prizes, each 60 m from everything.
+    lat, lon = FRAME.to_geodetic(np.array([1.0, 0.0, 0.0]), np.array([0.0, 60.0, -60.0]))
+    prize = np.array([10.0, 12.0, 11.5])
+    kept = routing.likeliest((43.94, 15.44), lat, lon, prize, np.arange(3))
+    assert kept.tolist() == [0, 1]  # A gains 9; B and C lose about 48: the larger prize of the two
+    near = FRAME.to_geodetic(np.array([1.0, 60.0, 61.0]), np.array([0.0, 0.0, 0.0]))  # B and C a metre apart
+    assert routing.likeliest((43.94, 15.44), *near, prize, np.arange(3)).tolist() == [1, 2]
 
 
 def test_route_optimal_prefers_a_compact_load_among_equals() -> None:
