@@ -66,6 +66,7 @@ class Outcome:
     cost: float
     dockings: int
     depleted: int
+    home_charges: int  # the aPads' charges at their home chargers, summed
     first_plan: tuple[tuple[int, tuple[int, ...]], ...]  # each aPad's first collection plan, by aPad
     wall_s: float
     rss_mb: float
@@ -91,8 +92,9 @@ def run_job(job: Job) -> Outcome:
                     plans.setdefault(e.get("apad", 0), tuple(e.get("route", ())))
                 dockings += e["event"] == "docked"
     depleted = sum(1 for m in raw.mussels if m.first_depleted_s is not None)
+    home_charges = sum(int(a.get("home_charges", 0)) for a in raw.apads)
     rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    return Outcome(job, raw.uptime["avg"], raw.uptime["min"], raw.cost_m, dockings, depleted,
+    return Outcome(job, raw.uptime["avg"], raw.uptime["min"], raw.cost_m, dockings, depleted, home_charges,
                    tuple(sorted(plans.items())), wall, rss_mb)
 
 
@@ -178,7 +180,8 @@ def long_runs(console: Console, seeds: int, n_jobs: int) -> None:
     jobs = [Job(sc, None, seed, DAY, p) for sc in LONG_SCENARIOS for seed in range(1, seeds + 1) for p in PLATFORMS]
     done = run_all(jobs, n_jobs)
     table = Table(title=f"{seeds} seeds of {DAY} (the scenarios' own strategies)")
-    for column in ("scenario", "mean avg % L / E (diff)", "depleted L / E (verdict)", "wall s L / E", "ratio"):
+    for column in ("scenario", "mean avg % L / E (diff)", "avg % range L / E", "depleted L / E (verdict)",
+                   "home charges L / E", "wall s L / E", "ratio"):
         table.add_column(column, justify="left" if column == "scenario" else "right")
     for sc in LONG_SCENARIOS:
         lo = [o for o in done if o.job.scenario == sc and o.job.platform == "lockstep"]
@@ -187,8 +190,10 @@ def long_runs(console: Console, seeds: int, n_jobs: int) -> None:
         dep = [sum(o.depleted for o in r) for r in (lo, ev)]
         wall = [sum(o.wall_s for o in r) for r in (lo, ev)]
         verdict = (dep[0] == 0) == (dep[1] == 0)
+        spans = " / ".join(f"{min(o.avg for o in r):.2f}-{max(o.avg for o in r):.2f}" for r in (lo, ev))
+        charges = " / ".join(str(sum(o.home_charges for o in r)) for r in (lo, ev))
         table.add_row(sc, f"{avg[0]:.2f} / {avg[1]:.2f} ({avg[1] - avg[0]:+.2f}){mark(abs(avg[1] - avg[0]) <= DAY_PP)}",
-                      f"{dep[0]} / {dep[1]}{mark(verdict)}", f"{wall[0]:.1f} / {wall[1]:.1f}",
+                      spans, f"{dep[0]} / {dep[1]}{mark(verdict)}", charges, f"{wall[0]:.1f} / {wall[1]:.1f}",
                       f"{wall[0] / wall[1]:.0f}x" if wall[1] else "")
     console.print(table)
 
