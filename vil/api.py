@@ -65,7 +65,7 @@ def run(
     None: $VIL_SIGNING_KEY if set, as `vil run`. `resume`: continue the newest folder of this run that
     holds a checkpoint (after a crash), with the options it was started with. `platform`: "lockstep"
     (every MAVLink byte on the wire, the reference) or "event" (discrete events over an ideal link, no .tlog;
-    3 to 6 times as fast so far; the wire's options are refused there: docs/platforms.md).
+    3 to 8 times as fast so far; the wire's options are refused there: docs/platforms.md).
     """
     base = of if isinstance(of, Scenario) else scenario(of)
     given: dict[str, Any] = dict(

@@ -26,7 +26,7 @@ class Platform(StrEnum):
 
 DEFAULT_PLATFORM = Platform.LOCKSTEP
 PLATFORM_HELP = ("lockstep (default: every MAVLink byte on the wire, the reference) or event (discrete "
-                 "events over an ideal link, no .tlog; 3 to 6 times as fast so far: docs/platforms.md)")
+                 "events over an ideal link, no .tlog; 3 to 8 times as fast so far: docs/platforms.md)")
 
 
 def platform_title(platform: Platform) -> str:
