@@ -23,13 +23,12 @@ with each physics step's `dt_s`.
 
 from __future__ import annotations
 
-import math
 from collections import Counter
 from collections.abc import Iterable
 from dataclasses import replace
 
 from apad_sitl.energy_counters import EnergyCounters
-from apad_sitl.home_charger import HOME_STILL_MPS, home_charge_wh, volts_after
+from apad_sitl.home_charger import could_charge, home_charge_wh, volts_after
 from apad_sitl.host import invalid_reason
 from apad_sitl.state import ApadState
 from apad_sitl.vehicle import BATTERY_FULL_V
@@ -91,8 +90,7 @@ class EnergyMeter:
     def step(self, dt_s: float) -> float:
         """Home charging over the last `dt_s` seconds; returns the Wh it charged."""
         state, p = self.apad.state, self.apad.params
-        home = math.hypot(state.x_m, state.y_m) <= p.home_radius_m and state.ground_speed_mps < HOME_STILL_MPS
-        charging = home and p.home_charge_w > 0.0 and state.battery_v < BATTERY_FULL_V
+        charging = could_charge(state, p) and state.battery_v < BATTERY_FULL_V
         if charging and not self.apad.energy.charging:
             self.apad.energy.home_charges += 1
         self.apad.energy.charging = charging
@@ -105,9 +103,7 @@ class EnergyMeter:
 
     def could_charge(self) -> bool:
         """Whether the hull is where and as still as home charging needs (a rest there would charge)."""
-        state, p = self.apad.state, self.apad.params
-        return (p.home_charge_w > 0.0 and math.hypot(state.x_m, state.y_m) <= p.home_radius_m
-                and state.ground_speed_mps < HOME_STILL_MPS)
+        return could_charge(self.apad.state, self.apad.params)
 
     def _latched(self) -> set[int]:
         """The aMussels on a slot: latched, or being let go (what they reported up to the release was charged

@@ -7,10 +7,19 @@ charger (`apad_sitl.rest.ChargingRest`) make the same floats.
 
 from __future__ import annotations
 
+import math
+
 from apad_sitl.params import ApadParams
-from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V, VOLT_RANGE
+from apad_sitl.vehicle import BATTERY_EMPTY_V, BATTERY_FULL_V, VOLT_RANGE, VehicleState
 
 HOME_STILL_MPS = 0.05  # slower than this over ground: the hull can be plugged in
+
+
+def could_charge(state: VehicleState, params: ApadParams) -> bool:
+    """A charger at home, the hull within its reach and slow enough to be plugged in: a step would charge a
+    battery below full (`energy.EnergyMeter`, and a busy hull's track ahead, `track`)."""
+    return (params.home_charge_w > 0.0 and math.hypot(state.x_m, state.y_m) <= params.home_radius_m
+            and state.ground_speed_mps < HOME_STILL_MPS)
 
 
 def home_charge_wh(battery_v: float, params: ApadParams, dt_s: float) -> float:

@@ -25,13 +25,12 @@ Pure: no clock, no I/O. Only on the ideal link (`SitlVehicle(ideal_link=True)`):
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 
 from apad_sitl import primitives as prim
 from apad_sitl import vehicle as veh
 from apad_sitl.energy_counters import EnergyCounters
-from apad_sitl.home_charger import HOME_STILL_MPS
+from apad_sitl.home_charger import could_charge
 from apad_sitl.latch_hold import timers_only
 from apad_sitl.params import ApadParams
 from apad_sitl.primitives import MusselFix, PrimitiveState
@@ -89,7 +88,7 @@ def found(origin: VehicleState, primitive: PrimitiveState, params: ApadParams, c
         if before.battery_v <= BATTERY_EMPTY_V:
             break
         state = veh.step(before, prim.velocity_setpoint(current, before, p), p, current_mps, dt_s)
-        if at_rest(before, state) or _could_charge(state, p):
+        if at_rest(before, state) or could_charge(state, p):
             break
         new = prim.step(current, state.x_m, state.y_m, mussels, p, dt_s)
         if new is not current and not timers_only(current, new):
@@ -100,9 +99,3 @@ def found(origin: VehicleState, primitive: PrimitiveState, params: ApadParams, c
     if len(states) < MIN_STEPS:
         return None
     return Track(origin, primitive, states, primitives, dt_s, fixes, key)
-
-
-def _could_charge(state: VehicleState, p: ApadParams) -> bool:
-    """Where and as still as the home charger needs (`energy.EnergyMeter.could_charge`, of a hull ahead)."""
-    return p.home_charge_w > 0.0 and math.hypot(state.x_m, state.y_m) <= p.home_radius_m \
-        and state.ground_speed_mps < HOME_STILL_MPS

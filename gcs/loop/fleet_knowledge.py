@@ -221,11 +221,6 @@ class FleetKnowledge:
         scenario's fleet, takes the scenario's default)."""
         return self.settings.duties.get(mussel_id, self._default_duty)
 
-    def heard_now_and_then(self, mussel_id: int) -> bool:
-        """Heard only now and then (acoustically, or a real aMussel): a belief runs down between reports."""
-        return mussel_id in self.api.mussels and (
-            self.acoustic is not None if self.api.mussels[mussel_id].simulated else self.real is not None)
-
     def drain_per_s(self, mussel_id: int) -> float:
         return self.duty(mussel_id).drain_per_s(self.settings.mission.theta)
 

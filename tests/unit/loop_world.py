@@ -126,9 +126,6 @@ class ScriptedKnowledge:
         default = Duty(discharge_profile(self.settings.mussel_discharge).rate_per_min)
         return self.settings.duties.get(mussel_id, default)
 
-    def heard_now_and_then(self, mussel_id: int) -> bool:
-        return mussel_id in self.world.real
-
     def drain_per_s(self, mussel_id: int) -> float:
         return self.duty(mussel_id).drain_per_s(self.settings.mission.theta)
 
