@@ -32,8 +32,9 @@ def _vil(cwd: Path, *args: str) -> subprocess.CompletedProcess[str]:
 
 
 def test_ctrl_c_of_vil_run_is_one_line_with_the_command_that_resumes_it(tmp_path: Path) -> None:
-    # 40 minutes: a run lasts a second or so, so the signal lands in it on a loaded machine too.
-    args = ["run", "pool12", "--strategy", "greedy", "--duration", "40min", "--out", "out"]
+    # 3 h: the Ctrl-C comes at the first checkpoint past 300 s, and the run must still be going when it lands,
+    # on an idle machine too (40 minutes left it about a second: the margin two siblings lost, d1f6f01).
+    args = ["run", "pool12", "--strategy", "greedy", "--duration", "3h", "--out", "out"]
     folder = RunFolder(tmp_path / "out" / "pool12-greedy-seed1-run1")
     code, err = ctrl_c_after_checkpoint([*VIL, *args], tmp_path, {**os.environ, "PYTHONPATH": str(ROOT)},
                                         folder.checkpoint, 300.0, WALL_TIMEOUT_S)  # well into the mission
