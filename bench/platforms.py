@@ -98,16 +98,20 @@ def run_job(job: Job) -> Outcome:
                    tuple(sorted(plans.items())), wall, rss_mb)
 
 
+def pool_of(n_jobs: int, max_tasks_per_child: int | None = None) -> ProcessPoolExecutor:
+    """Worker processes that import `vil` afresh (spawned, not forked from a parent that ran missions)."""
+    return ProcessPoolExecutor(n_jobs, mp_context=multiprocessing.get_context("spawn"),
+                               max_tasks_per_child=max_tasks_per_child)
+
+
 def run_all(jobs: list[Job], n_jobs: int) -> list[Outcome]:
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(n_jobs, mp_context=context) as pool:
+    with pool_of(n_jobs) as pool:
         return list(pool.map(run_job, jobs))
 
 
 def run_fresh(job: Job) -> Outcome:
     """In a process of its own (its peak RSS is its own)."""
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(1, mp_context=context, max_tasks_per_child=1) as pool:
+    with pool_of(1, max_tasks_per_child=1) as pool:
         return pool.submit(run_job, job).result()
 
 
@@ -131,8 +135,7 @@ def agreement(console: Console, scenarios: list[str], strategies: list[str], see
     done: dict[tuple[str, str], list[Outcome]] = {pair: [] for pair in pairs}
     rows: dict[tuple[str, str], list[str]] = {}
     start = time.perf_counter()
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(n_jobs, mp_context=context) as pool:
+    with pool_of(n_jobs) as pool:
         for future in as_completed([pool.submit(run_job, job) for job in jobs]):
             outcome = future.result()
             pair = (outcome.job.scenario, outcome.job.strategy or "")

@@ -69,13 +69,18 @@ def test_a_track_is_the_ticks_own_stepping_and_stops_where_a_tick_must_act(
         assert found.state() == state and found.primitive() == stepped, n  # to the bit
     # Where it stopped (or why none was found): the next tick changes the primitive beyond its timers,
     # comes to rest, could charge at home, or the track ran its length.
-    after, next_primitive = _stepped(state, stepped, params, current, fixes)
-    home = home_w > 0.0 and math.hypot(after.x_m, after.y_m) <= params.home_radius_m \
+    none_worth_it = found is None and _short(origin, primitive, params, current, fixes)
+    assert _tick_acts(state, stepped, params, current, fixes) or steps == track.MAX_STEPS or none_worth_it
+
+
+def _tick_acts(state: VehicleState, primitive: PrimitiveState, params: ApadParams, current: tuple[float, float],
+               fixes: dict[int, MusselFix]) -> bool:
+    """Whether the next tick from here does what a track cannot hold: changes the primitive beyond its timers,
+    comes to rest, or could charge at home (the rule written out again here, not read from `track`)."""
+    after, new = _stepped(state, primitive, params, current, fixes)
+    home = params.home_charge_w > 0.0 and math.hypot(after.x_m, after.y_m) <= params.home_radius_m \
         and after.ground_speed_mps < HOME_STILL_MPS
-    acts = (next_primitive is not stepped and not timers_only(stepped, next_primitive)) or at_rest(state, after) \
-        or home
-    assert acts or steps == track.MAX_STEPS or (found is None and steps == 0 and _short(origin, primitive, params,
-                                                                                         current, fixes))
+    return (new is not primitive and not timers_only(primitive, new)) or at_rest(state, after) or home
 
 
 def _short(origin: VehicleState, primitive: PrimitiveState, params: ApadParams, current: tuple[float, float],
@@ -83,12 +88,9 @@ def _short(origin: VehicleState, primitive: PrimitiveState, params: ApadParams, 
     """None found: a tick acts within `track.MIN_STEPS` steps."""
     state, stepped = origin, primitive
     for _ in range(track.MIN_STEPS):
-        after, new = _stepped(state, stepped, params, current, fixes)
-        if (new is not stepped and not timers_only(stepped, new)) or at_rest(state, after) or (
-                params.home_charge_w > 0.0 and math.hypot(after.x_m, after.y_m) <= params.home_radius_m
-                and after.ground_speed_mps < HOME_STILL_MPS):
+        if _tick_acts(state, stepped, params, current, fixes):
             return True
-        state, stepped = after, new
+        state, stepped = _stepped(state, stepped, params, current, fixes)
     return False
 
 
