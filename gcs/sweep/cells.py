@@ -82,10 +82,12 @@ def make_cells(spec: SweepSpec) -> list[Cell]:
                                       source_of(strategy), spec.platform))
     seen: dict[str, Cell] = {}
     for cell in cells:
-        if cell.key in seen:
+        if cell.key in seen and spec.sensitivity is None:
             raise spec.fail(f"the same mission twice: {seen[cell.key].label} and {cell.label}")
-        seen[cell.key] = cell
-    return cells
+        seen.setdefault(cell.key, cell)
+    # A sensitivity sample may hold a point twice (an integer field rounded alike): one mission, which the
+    # analysis finds for both by their values (`gcs.sweep.sensitivity`).
+    return [replace(c, index=i) for i, c in enumerate(seen.values())] if spec.sensitivity is not None else cells
 
 
 def _scenario_toml(spec: SweepSpec, ref: str) -> tuple[Path, dict[str, Any]]:

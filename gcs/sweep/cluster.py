@@ -23,6 +23,9 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from gcs.sweep.cells import Cell, run_cell
 
+# What a worker does with a cell: (cell, runs_dir) -> {"result": result.json's dict, "series": the active count}.
+CellRunner = Callable[[Cell, str | None], dict[str, Any]]
+
 CONNECT_TIMEOUT_S = 20.0
 QUIET_BOUND_S = 2.0  # how long a Ctrl-C's closing waits for the workers to mute their heartbeat log
 
@@ -135,17 +138,18 @@ def describe(client: Client) -> str:
 
 def run_cells(
     client: Client, cells: list[Cell], runs_dir: str | None, on_done: Callable[[Cell, dict[str, Any]], None],
-    console: Console,
+    console: Console, runner: CellRunner = run_cell,
 ) -> Outcome:
     """Every cell on the cluster; `on_done` gets each result as it comes, in any order. A cell whose
-    mission raised is listed in the outcome, not written, so the next run tries it again."""
+    mission raised is listed in the outcome, not written, so the next run tries it again. `runner`: what a
+    worker does with a cell (a mission; a test function of known answer, to check the path around it)."""
     outcome = Outcome()
     columns = (TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
                TextColumn("missions"), TimeElapsedColumn(), TextColumn("eta"), TimeRemainingColumn())
     with Progress(*columns, console=console, transient=False) as progress:
         task = progress.add_task("sweep", total=len(cells))
         futures = {
-            client.submit(run_cell, cell, runs_dir, key=f"vil-sweep-{cell.key}", retries=0,
+            client.submit(runner, cell, runs_dir, key=f"vil-sweep-{cell.key}", retries=0,
                           priority=_work(cell)): cell
             for cell in cells
         }

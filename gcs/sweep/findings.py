@@ -62,7 +62,16 @@ def platforms_of(rows: pd.DataFrame) -> str:
 
 
 def write_report(folder: Path, console: Console | None = None) -> list[Path]:
-    """Tables and plots of the sweep in `folder`; prints the table to `console` if given."""
+    """Tables and plots of the sweep in `folder`; prints the table to `console` if given. A sensitivity
+    sweep's are its indices (`gcs.sweep.sensitivity`): a summary per point would be thousands of rows."""
+    if "sensitivity" in store.read_sweep(folder):
+        from gcs.sweep.sensitivity import AnalysisError
+        from gcs.sweep.sensitivity import write_report as sensitivity_report
+
+        try:
+            return sensitivity_report(folder, console)
+        except AnalysisError as exc:
+            raise ReportError(str(exc)) from None
     meta, rows, active = load(folder)
     out = folder / REPORT
     out.mkdir(parents=True, exist_ok=True)

@@ -9,8 +9,8 @@ from pathlib import Path
 from rich.console import Console
 
 from gcs.sweep import store
-from gcs.sweep.cells import Cell
-from gcs.sweep.cluster import Failure, dask_client, describe, run_cells, ship_strategies
+from gcs.sweep.cells import Cell, run_cell
+from gcs.sweep.cluster import CellRunner, Failure, dask_client, describe, run_cells, ship_strategies
 from gcs.sweep.spec import SweepSpec
 
 FAILED = "failed.txt"  # the tracebacks of the missions that failed in the last run
@@ -27,11 +27,12 @@ class SweepOutcome:
 
 def sweep(
     spec: SweepSpec, cells: list[Cell], out: Path, console: Console, scheduler: str | None = None,
-    workers: int | None = None, keep_runs: bool = False, processes: bool = True,
+    workers: int | None = None, keep_runs: bool = False, processes: bool = True, runner: CellRunner = run_cell,
 ) -> SweepOutcome:
     """Run what is missing of `cells` into `out` and write the results of every finished one.
 
-    `processes=False` runs a local cluster's workers as threads of this process (tests)."""
+    `processes=False` runs a local cluster's workers as threads of this process (tests); `runner`: what a
+    worker does with a cell (`cluster.run_cells`)."""
     done = store.finished(out)
     todo = [c for c in cells if c.key not in done]
     outcome = SweepOutcome(len(cells), len(cells) - len(todo))
@@ -44,7 +45,8 @@ def sweep(
             console.print(f"on {describe(client)}")
             if scheduler is not None:  # workers elsewhere: a strategy file goes to them
                 todo = ship_strategies(client, todo)
-            ran = run_cells(client, todo, runs_dir, lambda cell, result: store.write_cell(out, cell, result), console)
+            ran = run_cells(client, todo, runs_dir, lambda cell, result: store.write_cell(out, cell, result), console,
+                            runner)
         outcome.ran, outcome.failed = ran.ran, ran.failed
         console.print(f"ran {ran.ran} missions in {time.perf_counter() - started:.0f} s"
                       + (f", {len(ran.failed)} failed" if ran.failed else ""))

@@ -26,6 +26,12 @@
     mission.theta = {min = 10, max = 60}    # uniform in [min, max] (integers if both are)
     apad.speed_mps = [0.3, 0.5]             # a list: one of these
 
+    [sensitivity]                     # or SALib's sample for a sensitivity study, alone (no [grid], no
+    method = "sobol"                  # [sample]): gcs.sweep.sensitivity_design, docs/sensitivity.md
+    n = 256
+    mission.pool_threshold = {min = 0.6, max = 0.9}
+    apad.speed_mps = {min = 0.3, max = 0.8}
+
 A field is TABLE.FIELD of a scenario file; under `[[apad]]` (several aPads) it is set on each.
 Nothing here runs a mission: `gcs.sweep.cells` turns a spec into the missions, checking each one.
 """
@@ -43,6 +49,8 @@ import numpy as np
 
 from gcs.mission.platform import DEFAULT_PLATFORM, Platform, platform_of
 from gcs.scenario.reader import SEED_MAX, read_toml
+from gcs.sweep import sensitivity_design
+from gcs.sweep.sensitivity_design import Design
 
 MAX_CELLS = 100_000  # more is a typo in a range, not a sweep this machine should start
 MAX_SAMPLE = 10_000
@@ -73,6 +81,7 @@ class SweepSpec:
     swept: tuple[str, ...]  # the fields that vary, grid first, then sample
     points: tuple[dict[str, Value], ...]  # one dict of swept values per point (one empty point if none)
     platform: Platform = DEFAULT_PLATFORM
+    sensitivity: Design | None = None  # a [sensitivity] study: its points are SALib's sample, in order
 
     def fail(self, what: str) -> SpecError:
         return SpecError(f"{self.path}: {what}")
@@ -91,9 +100,9 @@ def load_spec(path: str | Path) -> SweepSpec:
     def fail(what: str) -> SpecError:
         return SpecError(f"{path}: {what}")
 
-    unknown = sorted(set(data) - {"sweep", "set", "grid", "sample"})
+    unknown = sorted(set(data) - {"sweep", "set", "grid", "sample", "sensitivity"})
     if unknown:
-        raise fail(f"[{unknown[0]}]: unknown table (known: [sweep], [set], [grid], [sample])")
+        raise fail(f"[{unknown[0]}]: unknown table (known: [sweep], [set], [grid], [sample], [sensitivity])")
     top = _table(data, "sweep", fail)
     for key in sorted(set(top) - {"name", "scenarios", "strategies", "seeds", "draw_fleet", "platform"}):
         raise fail(f"sweep.{key}: unknown field")
@@ -116,6 +125,9 @@ def load_spec(path: str | Path) -> SweepSpec:
         raise fail(f"sweep.platform: {exc}") from None
 
     fixed = _fields(_table(data, "set", fail), "set", fail)
+    if "sensitivity" in data:
+        return _sensitivity_spec(path, data, fixed, fail, (name, tuple(scenarios), strategies, seeds, draw_fleet),
+                                 platform)
     blocks = _grids(data.get("grid", {}), fail)
     grid = blocks[0]
     sample_table = dict(_table(data, "sample", fail))
@@ -135,6 +147,26 @@ def load_spec(path: str | Path) -> SweepSpec:
         raise fail(f"{n_cells} missions is more than {MAX_CELLS}; narrow the grid or the seeds")
     return SweepSpec(path.resolve(), name, tuple(scenarios), strategies, seeds, draw_fleet, fixed, swept,
                      tuple(points), platform)
+
+
+def _sensitivity_spec(path: Path, data: dict[str, Any], fixed: dict[str, Value], fail: Any,
+                      head: tuple[str, tuple[str, ...], tuple[str, ...] | None, tuple[int, ...], bool],
+                      platform: Platform) -> SweepSpec:
+    """A spec whose points are a [sensitivity] table's sample (with neither [grid] nor [sample])."""
+    for other in ("grid", "sample"):
+        if other in data:
+            raise fail(f"[{other}]: a [sensitivity] study samples its own points; drop [{other}] or split the spec")
+    design = sensitivity_design.parse(_table(data, "sensitivity", fail),
+                                      lambda table, where: _fields(table, where, fail), fail)
+    twice = sorted(set(fixed) & set(design.names))
+    if twice:
+        raise fail(f"{twice[0]}: set in both [set] and [sensitivity]")
+    name, scenarios, strategies, seeds, draw_fleet = head
+    n_cells = len(scenarios) * design.size() * (len(strategies) if strategies is not None else 1) * len(seeds)
+    if n_cells > MAX_CELLS:
+        raise fail(f"{n_cells} missions is more than {MAX_CELLS}; lower sensitivity.n or the seeds")
+    return SweepSpec(path.resolve(), name, scenarios, strategies, seeds, draw_fleet, fixed, design.names,
+                     tuple(design.points()), platform, design)
 
 
 def _table(data: dict[str, Any], key: str, fail: Any) -> dict[str, Any]:

@@ -92,9 +92,12 @@ def read_cell(out: Path, key: str) -> dict[str, Any]:
 
 
 def write_sweep(out: Path, spec: SweepSpec, cells: list[Cell]) -> None:
-    meta = {"name": spec.name, "spec": str(spec.path), "swept": list(spec.swept),
+    meta: dict[str, Any] = {"name": spec.name, "spec": str(spec.path), "swept": list(spec.swept),
             "scenarios": list(dict.fromkeys(c.scenario.name for c in cells)),
             "strategies": list(dict.fromkeys(c.strategy for c in cells)), "cells": len(cells)}
+    if spec.sensitivity is not None:  # what `gcs.sweep.sensitivity` analyses the rows with
+        meta["sensitivity"] = spec.sensitivity.to_json()
+        meta["points"] = list(spec.points)  # the sample as run, in its order (a later SALib may draw others)
     with atomic(out / SWEEP) as tmp:
         tmp.write_text(json.dumps(meta, indent=1) + "\n", encoding="utf-8")
 
