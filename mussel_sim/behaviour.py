@@ -135,11 +135,16 @@ def always_on(discharge: str = DEFAULT_DISCHARGE, charge: str = DEFAULT_CHARGE) 
     return BehaviourProfile(ALWAYS_ON, discharge_profile(discharge), charge_profile(charge))
 
 
-def hourly_wake(charge: str = SLEEP_CHARGE) -> BehaviourProfile:
+def hourly_wake(charge: str = SLEEP_CHARGE, interval_s: float = HOURLY_WAKE_INTERVAL_S,
+                awake_s: float = HOURLY_WAKE_AWAKE_S) -> BehaviourProfile:
     """Table I's sleeping aMussel: awake ~10 s every hour, 14,057 min to empty; charge by default the
-    primary battery's, waking hourly (398 min)."""
-    return BehaviourProfile(HOURLY_WAKE, discharge_profile(SLEEP_DISCHARGE), charge_profile(charge),
-                            HOURLY_WAKE_INTERVAL_S, HOURLY_WAKE_AWAKE_S)
+    primary battery's, waking hourly (398 min). Another schedule (a scenario's `fleet.wake_interval_s`,
+    `fleet.awake_s`) drains by the duty-cycle model (the module's docstring), as a sleep order's does."""
+    if (interval_s, awake_s) == (HOURLY_WAKE_INTERVAL_S, HOURLY_WAKE_AWAKE_S):
+        discharge = discharge_profile(SLEEP_DISCHARGE)
+    else:
+        discharge = DischargeProfile(f"duty:{interval_s:g}s/{awake_s:g}s", duty_cycle_rate_per_min(interval_s, awake_s))
+    return BehaviourProfile(HOURLY_WAKE, discharge, charge_profile(charge), interval_s, awake_s)
 
 
 MAX_TABLE = 64  # profiles a table holds before the ones nobody uses any more are dropped
@@ -195,10 +200,12 @@ class ProfileTable:
 
 
 def shipped_table(discharge: str = DEFAULT_DISCHARGE, charge: str = DEFAULT_CHARGE,
-                  sleep_charge: str = SLEEP_CHARGE) -> ProfileTable:
+                  sleep_charge: str = SLEEP_CHARGE, wake_interval_s: float = HOURLY_WAKE_INTERVAL_S,
+                  awake_s: float = HOURLY_WAKE_AWAKE_S) -> ProfileTable:
     """The shipped profiles (`BEHAVIOURS` order): always_on with the scenario's discharge and charge
-    models (eq. (1) and (2) by default), hourly_wake with its charge model (primary, waking hourly)."""
-    return ProfileTable((always_on(discharge, charge), hourly_wake(sleep_charge)))
+    models (eq. (1) and (2) by default), hourly_wake with its charge model (primary, waking hourly) and
+    its wake schedule (Table I's by default)."""
+    return ProfileTable((always_on(discharge, charge), hourly_wake(sleep_charge, wake_interval_s, awake_s)))
 
 
 def step_battery_profiles(

@@ -32,6 +32,8 @@ from mussel_sim.battery import (
 from mussel_sim.behaviour import (
     BEHAVIOURS,
     DEFAULT_BEHAVIOUR,
+    HOURLY_WAKE_AWAKE_S,
+    HOURLY_WAKE_INTERVAL_S,
     SLEEP_CHARGE,
     ProfileTable,
     shipped_table,
@@ -81,6 +83,8 @@ class FleetParams:
     profile: str = DEFAULT_BEHAVIOUR  # every aMussel's behaviour profile (mussel_sim.behaviour.BEHAVIOURS) ...
     profile_ids: tuple[tuple[str, tuple[int, ...]], ...] = ()  # ... but these: (profile name, aMussel ids)
     sleep_charge_profile: str = SLEEP_CHARGE  # hourly_wake's charge, a name in battery.CHARGE_PROFILES
+    wake_interval_s: float = HOURLY_WAKE_INTERVAL_S  # hourly_wake's schedule, simulated s (Table I's: 3600 / 10)
+    awake_s: float = HOURLY_WAKE_AWAKE_S
     _discharge: DischargeProfile = field(init=False, repr=False, compare=False)
     _charge: ChargeProfile = field(init=False, repr=False, compare=False)
     _profiles: ProfileTable = field(init=False, repr=False, compare=False)
@@ -93,7 +97,8 @@ class FleetParams:
         object.__setattr__(self, "_discharge", discharge_profile(self.discharge_profile))
         object.__setattr__(self, "_charge", charge_profile(self.charge_profile))
         object.__setattr__(self, "_profiles", shipped_table(self.discharge_profile, self.charge_profile,
-                                                            self.sleep_charge_profile))
+                                                            self.sleep_charge_profile, self.wake_interval_s,
+                                                            self.awake_s))
         seen: dict[int, str] = {}
         for name in (self.profile, *(name for name, _ in self.profile_ids)):
             if name not in BEHAVIOURS:

@@ -14,7 +14,7 @@ from gcs.belief.energy_budget import EnergyBudget
 from gcs.records.events import EventLog
 from gcs.scenario.reader import MissionConfig
 from missiontime import Clock
-from mussel_sim.battery import DEFAULT_CHARGE, DEFAULT_DISCHARGE
+from mussel_sim.battery import DEFAULT_CHARGE, DEFAULT_DISCHARGE, DischargeProfile, discharge_profile
 
 if TYPE_CHECKING:
     from gcs.belief.duty import Duty
@@ -93,7 +93,9 @@ class LoopSettings:
     poll_s: float = 0.5  # how often waits look again (mission time)
     apad_speed_mps: float = 0.5  # the aPad's cruise speed: how long a Go To may take before it is sent again
     mussel_surfacing_s: float = 20.0  # how long an aMussel takes to rise once called up (the fleet's)
-    mussel_discharge: str = DEFAULT_DISCHARGE  # the fleet's battery profiles (strategies plan with them)
+    # The fleet's battery profiles (strategies plan with them): fleet.profile's discharge (a named model, or a
+    # wake schedule's duty cycle) and charge.
+    mussel_discharge: DischargeProfile = field(default_factory=lambda: discharge_profile(DEFAULT_DISCHARGE))
     mussel_charge: str = DEFAULT_CHARGE
     # Each simulated aMussel's scenario profile (gcs.belief.duty): its own drain and wake schedule; an
     # aMussel not in it (a real one) is planned on mussel_discharge, always on.

@@ -32,7 +32,7 @@ from gcs.results.accounting import SURFACE_DEPTH_M
 from gcs.strategies import Outlook, traits
 from gcs.swarm.shares import FleetShares, orphans
 from missiontime import US_PER_S, Clock, seconds_to_us
-from mussel_sim.battery import ChargeProfile, charge_profile, discharge_profile, sim_minutes
+from mussel_sim.battery import ChargeProfile, charge_profile, sim_minutes
 from mussel_sim.geo import pair_distance_m
 from mussel_sim.vocabulary import MusselState
 
@@ -55,7 +55,7 @@ def outlook(settings: LoopSettings, now_s: float) -> Outlook:
     mission = settings.mission
     return Outlook(
         time_left_s=max(mission.duration_s - now_s, 0.0),
-        drain_per_s=discharge_profile(settings.mussel_discharge).rate_per_min * sim_minutes(mission.theta, 1.0),
+        drain_per_s=settings.mussel_discharge.rate_per_min * sim_minutes(mission.theta, 1.0),
         charge=charge_profile(settings.mussel_charge),
         theta=mission.theta,
         speed_mps=settings.apad_speed_mps,
@@ -100,7 +100,7 @@ class FleetKnowledge:
         self.real = real
         self.acoustic = acoustic
         self.orders = orders if orders is not None else OrdersSent()
-        self._default_duty = Duty(discharge_profile(settings.mussel_discharge).rate_per_min)
+        self._default_duty = Duty(settings.mussel_discharge.rate_per_min)
         self._default_charge = charge_profile(settings.mussel_charge)
         self._beliefs = FleetBeliefs(api, clock, self.orders, acoustic is not None, self.drain_per_s, self.battery)
         self._news: dict[Reads, tuple[Hashable, Hashable]] = {}  # reads -> (the registry's marks, the news)

@@ -378,7 +378,7 @@ def loop_settings(s: Scenario, a: ApadConfig, ids: list[int]) -> LoopSettings:
         apad_speed_mps=a.speed_mps,
         mussel_surfacing_s=s.fleet.surfacing_time_s,
         surfacing_timeout_s=call_up_wait_s(s, LoopSettings.surfacing_timeout_s),  # sleepers wake first
-        mussel_discharge=planning_profile(s).discharge.name,  # fleet.profile's battery models
+        mussel_discharge=planning_profile(s).discharge,  # fleet.profile's battery models
         mussel_charge=planning_profile(s).charge.name,
         duties=scenario_duties(s, ids),  # each aMussel's own profile
         energy=EnergyBudget.of(apad_params(s, a), a.speed_mps),

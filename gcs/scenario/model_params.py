@@ -149,6 +149,8 @@ def fleet_params(scenario: Scenario) -> FleetParams:
         profile=f.profile,
         profile_ids=f.profiles,
         sleep_charge_profile=f.sleep_charge,
+        wake_interval_s=f.wake_interval_s,
+        awake_s=f.awake_s,
     )
 
 

@@ -23,7 +23,13 @@ from gcs.strategies import COLLECT, REDEPLOY, RedeployStrategy, StrategyError, l
 from missiontime.durations import MAX_MISSION_S
 from missiontime.durations import parse_duration_s as parse_duration_s
 from mussel_sim.battery import CHARGE_PROFILES, DISCHARGE_PROFILES
-from mussel_sim.behaviour import BEHAVIOURS, DEFAULT_BEHAVIOUR, SLEEP_CHARGE
+from mussel_sim.behaviour import (
+    BEHAVIOURS,
+    DEFAULT_BEHAVIOUR,
+    HOURLY_WAKE_AWAKE_S,
+    HOURLY_WAKE_INTERVAL_S,
+    SLEEP_CHARGE,
+)
 from mussel_sim.report_policy import STATUS_KEEPALIVE_S
 
 MISSIONS_DIR = Path(__file__).resolve().parents[2] / "missions"
@@ -59,6 +65,8 @@ class FleetConfig:
     profile: str = DEFAULT_BEHAVIOUR
     profiles: tuple[tuple[str, tuple[int, ...]], ...] = ()
     sleep_charge: str = SLEEP_CHARGE  # hourly_wake's charge profile
+    wake_interval_s: float = HOURLY_WAKE_INTERVAL_S  # hourly_wake's schedule (simulated s): Table I's by default
+    awake_s: float = HOURLY_WAKE_AWAKE_S
 
 
 @dataclass(frozen=True)
@@ -257,7 +265,15 @@ def read_scenario(root: Fields, path: Path) -> Scenario:
         profiles=_profiles(f),
         sleep_charge=f.text("sleep_charge", SLEEP_CHARGE, tuple(CHARGE_PROFILES),
                             about="the hourly_wake profile's charge model (primary_sleep: Table I, 398 min)"),
+        wake_interval_s=f.number("wake_interval_s", HOURLY_WAKE_INTERVAL_S, lo=60.0, hi=86400.0,
+                                 about="the hourly_wake profile's wake interval, simulated seconds (Table I: 3600); "
+                                       "another schedule than Table I's drains by the duty-cycle model "
+                                       "(docs/long_term.md)"),
+        awake_s=f.number("awake_s", HOURLY_WAKE_AWAKE_S, lo=1.0, hi=1800.0,
+                         about="the hourly_wake profile's time awake at each wake, simulated seconds (Table I: 10)"),
     )
+    if fleet.awake_s >= fleet.wake_interval_s:
+        raise f.fail("awake_s", f"expected less than wake_interval_s ({fleet.wake_interval_s:g} s)")
     if not 0.0 <= fleet.battery_min <= fleet.battery_max <= 1.0:
         raise f.fail("start_battery", "expected 0 <= min <= max <= 1")
     f.done()

@@ -24,7 +24,7 @@ from gcs.scenario.reader import Scenario
 from gcs.strategies import Outlook
 from gcs.swarm.shares import FleetShares
 from missiontime import VirtualClock
-from mussel_sim.battery import ChargeProfile, charge_profile, discharge_profile
+from mussel_sim.battery import ChargeProfile, charge_profile
 from mussel_sim.geo import pair_distance_m
 from mussel_sim.vocabulary import MusselState
 
@@ -123,7 +123,7 @@ class ScriptedKnowledge:
         return ordered if ordered is not None else self.profile_duty(mussel_id)
 
     def profile_duty(self, mussel_id: int) -> Duty:
-        default = Duty(discharge_profile(self.settings.mussel_discharge).rate_per_min)
+        default = Duty(self.settings.mussel_discharge.rate_per_min)
         return self.settings.duties.get(mussel_id, default)
 
     def drain_per_s(self, mussel_id: int) -> float:

@@ -273,3 +273,30 @@ def test_the_scenario_picks_profiles_for_all_and_per_amussel() -> None:
 ])
 def test_a_bad_profile_field_is_one_line_naming_it(fleet: dict[str, Any], message: str) -> None:
     assert _error(_pool12(**fleet)).startswith(message)
+
+
+def test_a_scenario_sets_the_sleepers_wake_schedule_and_table_is_is_the_default() -> None:
+    """fleet.wake_interval_s / fleet.awake_s: Table I's schedule unless set (the same profile, bit for bit);
+    another drains by the duty-cycle model and wakes at its own interval, in the fleet step."""
+    assert FleetParams(profile="hourly_wake").profile_table.profiles[1] == hourly_wake()
+    half_hour = FleetParams(theta=60.0, drift_half_width_m=0.0, profile="hourly_wake", wake_interval_s=1800.0,
+                            awake_s=10.0)
+    sleeper = half_hour.profile_table.profiles[1]
+    assert sleeper.name == "hourly_wake" and (sleeper.wake_interval_s, sleeper.awake_s) == (1800.0, 10.0)
+    assert sleeper.discharge.rate_per_min == duty_cycle_rate_per_min(1800.0, 10.0) > 1 / TABLE1_DISCHARGE_SLEEP_MIN
+    state = _run(_fleet(half_hour, [1, 2], 1.0), half_hour, 120)  # two simulated hours: four wakes each
+    assert state.battery_frac == pytest.approx(1.0 - 120 * duty_cycle_rate_per_min(1800.0, 10.0), abs=1e-12)
+    assert list(state.samples_taken) == [4, 4]
+
+
+@pytest.mark.parametrize(("fields", "said"), [
+    ({"wake_interval_s": 600, "awake_s": 600}, "fleet.awake_s: expected less than wake_interval_s (600 s)"),
+    ({"wake_interval_s": 10}, "fleet.wake_interval_s"),
+    ({"awake_s": 0}, "fleet.awake_s"),
+])
+def test_a_bad_wake_schedule_is_one_line(fields: dict[str, Any], said: str) -> None:
+    data = tomllib.loads((MISSIONS / "bay-capacity.toml").read_text())
+    data["fleet"] |= fields
+    with pytest.raises(ScenarioError) as caught:
+        scenario_from_data(MISSIONS / "bay-capacity.toml", data)
+    assert said in str(caught.value) and "\n" not in str(caught.value)
