@@ -60,6 +60,8 @@ COMMANDS = (
             "run"),
     Command("sweep", "many headless missions over strategies, seeds and scenario fields, on Dask", "gcs.cli.sweep",
             "add_arguments", "run"),
+    Command("tune", "search a policy's parameters and sleep schedule for an objective (Optuna, on Dask)",
+            "gcs.cli.tune", "add_arguments", "run"),
     Command("scenario", "check scenario files (schema and reader), or write a new one from an area",
             "gcs.cli.scenario", "add_arguments", "run"),
     Command("modem", "a nanomodem v3 emulated on a pty (or serial device) over the acoustic channel model",

@@ -115,7 +115,7 @@ def load_spec(path: str | Path) -> SweepSpec:
     if len(set(scenarios)) != len(scenarios):
         raise fail(f"sweep.scenarios: a scenario twice in {scenarios}")
     strategies = _strategies(top.get("strategies", "all"), fail)
-    seeds = _seeds(top.get("seeds", [1]), fail)
+    seeds = seeds_of(top.get("seeds", [1]), fail)
     draw_fleet = top.get("draw_fleet", True)
     if not isinstance(draw_fleet, bool):
         raise fail(f"sweep.draw_fleet: expected true or false, got {draw_fleet!r}")
@@ -124,7 +124,7 @@ def load_spec(path: str | Path) -> SweepSpec:
     except (ValueError, TypeError) as exc:
         raise fail(f"sweep.platform: {exc}") from None
 
-    fixed = _fields(_table(data, "set", fail), "set", fail)
+    fixed = fields_of(_table(data, "set", fail), "set", fail)
     if "sensitivity" in data:
         return _sensitivity_spec(path, data, fixed, fail, (name, tuple(scenarios), strategies, seeds, draw_fleet),
                                  platform)
@@ -157,7 +157,7 @@ def _sensitivity_spec(path: Path, data: dict[str, Any], fixed: dict[str, Value],
         if other in data:
             raise fail(f"[{other}]: a [sensitivity] study samples its own points; drop [{other}] or split the spec")
     design = sensitivity_design.parse(_table(data, "sensitivity", fail),
-                                      lambda table, where: _fields(table, where, fail), fail)
+                                      lambda table, where: fields_of(table, where, fail), fail)
     twice = sorted(set(fixed) & set(design.names))
     if twice:
         raise fail(f"{twice[0]}: set in both [set] and [sensitivity]")
@@ -182,7 +182,7 @@ def _grids(value: Any, fail: Any) -> list[dict[str, Value]]:
     tables = value if isinstance(value, list) else [value]
     if not tables or not all(isinstance(t, dict) for t in tables):
         raise fail("grid: expected a table [grid] or tables [[grid]]")
-    blocks = [_fields(t, "grid", fail) for t in tables]
+    blocks = [fields_of(t, "grid", fail) for t in tables]
     for block in blocks:
         for key, values in block.items():
             if not isinstance(values, list) or not values:
@@ -193,7 +193,7 @@ def _grids(value: Any, fail: Any) -> list[dict[str, Value]]:
     return [{k: block[k] for k in blocks[0]} for block in blocks]  # one column order
 
 
-def _fields(table: dict[str, Any], where: str, fail: Any) -> dict[str, Value]:
+def fields_of(table: dict[str, Any], where: str, fail: Any) -> dict[str, Value]:
     """Scenario fields as "table.field" keys: `mission.theta = 1` and `"mission.theta" = 1` alike."""
     out: dict[str, Value] = {}
     for key, value in table.items():
@@ -221,7 +221,7 @@ def _strategies(value: Any, fail: Any) -> tuple[str, ...] | None:
     return tuple(value)
 
 
-def _seeds(value: Any, fail: Any) -> tuple[int, ...]:
+def seeds_of(value: Any, fail: Any) -> tuple[int, ...]:
     if isinstance(value, str):
         match = _SEED_RANGE.match(value)
         if not match or int(match.group(1)) > int(match.group(2)):
@@ -257,7 +257,7 @@ def _sample(table: dict[str, Any], fail: Any) -> list[dict[str, Value]]:
             fields |= {f"{key}.{sub}": v for sub, v in value.items()}
         else:
             fields[key] = value
-    fields = _fields(fields, "sample", fail)
+    fields = fields_of(fields, "sample", fail)
     if not fields:
         raise fail("sample: no field to sample (add e.g. mission.theta = {min = 10, max = 60})")
     for key, value in fields.items():

@@ -1,0 +1,174 @@
+"""`vil tune`: Optuna's trials as real missions on a real Dask cluster, the study kept in SQLite through a
+SIGKILL, the best policy as a scenario `vil run` runs, the held-out table, and bad specs in one line."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import optuna
+import pandas as pd
+import pytest
+from testkit import MISSIONS
+
+from gcs.cli.main import main
+from gcs.tune.spec import load_tune_spec
+from gcs.tune.study import STUDY_DB, distributions, open_study
+
+REPO = MISSIONS.parent
+
+# pool12 on the event platform for 10 minutes: a trial (two seeds) takes a fraction of a second.
+SPEC = """
+[tune]
+name = "tiny"
+scenario = "pool12"
+strategy = "cautious"
+baseline = "greedy"
+objective = "uptime_avg"
+trials = {trials}
+seeds = [1, 2]
+held_out = "101-102"
+sampler_seed = 7
+[set]
+mission.duration = "10m"
+mission.theta = 60
+[search]
+mission.pool_threshold = {{min = 0.6, max = 0.95}}
+mission.min_pool = {{min = 1, max = 4}}
+"""
+KILL_TIMEOUT_S = 120.0  # the killed run must have finished two trials by then (it takes seconds)
+
+
+def study_of(out: Path) -> optuna.Study:
+    return optuna.load_study(study_name="tiny", storage=f"sqlite:///{out / STUDY_DB}")
+
+
+def complete(out: Path) -> list[optuna.trial.FrozenTrial]:
+    if not (out / STUDY_DB).exists():
+        return []
+    try:
+        return study_of(out).get_trials(states=(optuna.trial.TrialState.COMPLETE,))
+    except KeyError:  # the study is being made
+        return []
+
+
+def test_a_study_killed_with_sigkill_goes_on_where_it_stopped(tmp_path: Path,
+                                                               capsys: pytest.CaptureFixture[str]) -> None:
+    spec = tmp_path / "tiny.toml"
+    spec.write_text(SPEC.format(trials=12))
+    out = tmp_path / "study"
+    run = subprocess.Popen([sys.executable, "-m", "gcs.cli.main", "tune", str(spec), "--out", str(out),
+                            "--workers", "1", "--no-held-out"], cwd=REPO, stdout=subprocess.DEVNULL,
+                           stderr=subprocess.DEVNULL, start_new_session=True)
+    try:
+        deadline = time.monotonic() + KILL_TIMEOUT_S
+        while len(complete(out)) < 2 and run.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert run.poll() is None, "the study ended before it could be killed"
+        os.killpg(run.pid, signal.SIGKILL)  # the command, its cluster and its workers, mid-trial
+        run.wait()
+    finally:
+        if run.poll() is None:
+            os.killpg(run.pid, signal.SIGKILL)
+            run.wait()
+    before = {t.number: t.value for t in complete(out)}
+    left_running = [t.number for t in study_of(out).get_trials(states=(optuna.trial.TrialState.RUNNING,))]
+    assert 2 <= len(before) < 12
+    best_before = max(before.values())
+
+    assert main(["tune", str(spec), "--out", str(out), "--workers", "2", "--no-held-out"]) == 0
+    printed = capsys.readouterr().out
+    assert f"tiny: {len(before)} of 12 trials done" in printed  # the count was kept
+    after = complete(out)
+    assert len(after) == 12
+    assert {t.number: t.value for t in after if t.number in before} == before  # every trial kept as it was
+    assert max(t.value for t in after) >= best_before
+    states = [t.state for t in study_of(out).get_trials()]
+    again = [t for t in study_of(out).get_trials() if "again_of" in t.user_attrs]
+    # A trial killed while running was failed and its policy asked again, not lost and not counted twice.
+    assert states.count(optuna.trial.TrialState.RUNNING) == 0
+    assert sorted(t.user_attrs["again_of"] for t in again) == left_running
+    for trial in again:
+        lost = study_of(out).trials[trial.user_attrs["again_of"]]
+        assert lost.state == optuna.trial.TrialState.FAIL and lost.params == trial.params
+
+
+def test_a_trial_left_running_is_failed_and_its_policy_asked_again_first(tmp_path: Path) -> None:
+    spec = load_tune_spec(_spec_file(tmp_path, 3))
+    out = tmp_path / "study"
+    out.mkdir()
+    study = open_study(spec, out)
+    study.tell(study.ask(distributions(spec)), 50.0)
+    killed = study.ask(distributions(spec))  # what a killed run leaves: RUNNING for ever
+    reopened = open_study(spec, out)
+    lost = reopened.trials[killed.number]
+    assert lost.state == optuna.trial.TrialState.FAIL
+    retried = reopened.ask(distributions(spec))
+    assert retried.params == killed.params and retried.user_attrs["again_of"] == killed.number
+    assert [t.value for t in reopened.get_trials(states=(optuna.trial.TrialState.COMPLETE,))] == [50.0]
+
+
+def _spec_file(tmp_path: Path, trials: int) -> Path:
+    spec = tmp_path / "tiny.toml"
+    spec.write_text(SPEC.format(trials=trials))
+    return spec
+
+
+def test_the_best_policy_is_a_scenario_vil_run_runs_and_the_held_out_table(tmp_path: Path,
+                                                                          capsys: pytest.CaptureFixture[str]) -> None:
+    spec = tmp_path / "tiny.toml"
+    spec.write_text(SPEC.format(trials=4))
+    out = tmp_path / "study"
+    assert main(["tune", str(spec), "--out", str(out), "--workers", "2"]) == 0
+    printed = capsys.readouterr().out
+    assert "4 trials: best uptime_avg" in printed and "2 held-out seeds (101-102)" in printed
+    best = max(complete(out), key=lambda t: (t.value, -t.number))
+    # vil run on best.toml, seed 1 with its fleet drawn (as the study's missions), gives the trial's value.
+    assert main(["run", str(out / "best.toml"), "--seed", "1", "--draw-fleet", "--platform", "event",
+                 "--json", str(tmp_path / "r.json")]) == 0
+    ran = json.loads((tmp_path / "r.json").read_text())
+    runs = ran.get("runs", [ran])
+    assert runs[0]["strategy"] == "cautious" and runs[0]["uptime"]["avg"] == best.user_attrs["per_seed"][0]
+    table = pd.read_csv(out / "held_out.csv")
+    assert list(table["output"])[:2] == ["uptime_min", "uptime_avg"]
+    values = table.set_index("output")[["tuned", "baseline"]]
+    assert values.drop(index="samples_taken_pct").notna().all().all()
+    assert values.loc["samples_taken_pct"].isna().all()  # pool12 is always on: no sample is scheduled
+    assert (out / "held_out.md").read_text().count("\n") == len(table) + 4
+    # Run again: the study is done and every held-out mission is in DIR/cells: nothing runs.
+    assert main(["tune", str(spec), "--out", str(out), "--workers", "1"]) == 0
+    assert "4 of 4 trials done" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(("change", "said"), [
+    (("objective = \"uptime_avg\"", "objective = \"joy\""), "tune.objective: 'joy' is not an output"),
+    (('held_out = "101-102"', "held_out = [2]"), "tune.held_out: seed 2 is also a tuning seed"),
+    (("{min = 0.6, max = 0.95}", "{min = 0.95, max = 0.6}"), "search.mission.pool_threshold: expected {min = A"),
+    (("[search]", "[search]\nmission.theta = [30]\n[x]"), "[x]: unknown table"),
+    (('scenario = "pool12"', 'scenario = "nowhere"'), "nowhere"),
+    (("mission.theta = 60", "mission.theta = -1"), "mission.theta: -1 is outside"),
+])
+def test_a_bad_tune_spec_is_one_line_and_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                change: tuple[str, str], said: str) -> None:
+    spec = tmp_path / "bad.toml"
+    spec.write_text(SPEC.format(trials=3).replace(*change))
+    assert main(["tune", str(spec), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and said in err, err
+    assert not (tmp_path / "out" / STUDY_DB).exists()
+
+
+def test_a_study_held_by_a_run_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from gcs.tune.study import study_lock
+
+    spec = tmp_path / "tiny.toml"
+    spec.write_text(SPEC.format(trials=2))
+    assert load_tune_spec(spec).trials == 2
+    with study_lock(tmp_path / "study"):
+        assert main(["tune", str(spec), "--out", str(tmp_path / "study"), "--workers", "1"]) == 1
+    assert "another vil tune is running this study" in capsys.readouterr().err
