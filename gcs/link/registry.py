@@ -272,6 +272,13 @@ class VehicleRegistry:
         view.boot_us = boot_us
         view.held_at_last_status = view.held()
 
+    def __getstate__(self) -> dict[str, object]:
+        """A checkpoint keeps what was heard, not the live world's hooks (the battery thresholds its waits read,
+        the ideal link's positions): the world that restores makes its own (`restore` takes only the data)."""
+        state = self.__dict__.copy()
+        state["_battery_watch"], state["refresh_positions"] = {}, None
+        return state
+
     def restore(self, saved: VehicleRegistry) -> None:
         """Take what a saved registry knew (a mission resumed from its checkpoint), in place: whoever
         holds this registry, its vehicle dict or its aMussel table keeps them."""

@@ -23,7 +23,7 @@ from gcs.loop.phases import (
     redeploy,
 )
 from gcs.loop.sleep_orders import reschedule
-from gcs.loop.trip_energy import needs_home
+from gcs.loop.trip_energy import covers_loaded, home_now, needs_home, needs_home_loaded
 from gcs.loop.wake_times import any_charged_look_by, earliest
 from gcs.strategies import traits
 
@@ -54,14 +54,23 @@ def rounds(crew: Crew) -> None:
 
 def rolling(crew: Crew) -> None:
     """Wait until an aMussel on board is charged or a free slot has a candidate the strategy takes;
-    put back the charged ones (nearest first), then fetch what the strategy plans for the free slots."""
+    put back the charged ones (nearest first), then fetch what the strategy plans for the free slots.
+    First, when the battery would no longer cover putting back everyone on board and the way home: all of
+    them back, charged or not, and home to charge (without it a rolling aPad ran flat at work)."""
     knows, act, strategy = crew.knows, crew.act, crew.status.strategy
+    if needs_home_loaded(knows):  # it always carries someone, so `recharged` alone would never send it home
+        crew.log("home_first", on_board=sorted(knows.docked().values()), battery_v=round(knows.battery_v() or 0, 3))
+        redeploy(crew, plan_redeployment(crew))
+    if recharged(crew):
+        return
     act.set_phase(Phase.IDLE_WAIT)
     act.hold()
     next_look_s = 0.0
 
     def work() -> bool:
         nonlocal next_look_s
+        if home_now(knows):  # the battery: home (next turn), not another wait
+            return True
         if any(knows.charged(m, strategy) for m in knows.docked().values()):
             return True
         if knows.clock.time() < next_look_s or not knows.free_slots() or knows.too_late_to_call_up():
@@ -75,12 +84,18 @@ def rolling(crew: Crew) -> None:
                                  if t is not None])
 
     act.wait_until(work, look_by=look_by)
+    if home_now(knows):
+        return
     done = {m for m in knows.docked().values() if knows.charged(m, strategy)}
     if done:
         redeploy(crew, plan_redeployment(crew, only=done))
         crew.status.cycles += 1
     if knows.free_slots() and not knows.too_late_to_call_up():
-        route = within_energy(crew, plan_collection(crew))
+        planned = plan_collection(crew)
+        if knows.docked():  # with some on board, the longest start of the route that leaves the way home
+            route = planned[:next((k for k in range(len(planned), 0, -1) if covers_loaded(knows, planned[:k])), 0)]
+        else:
+            route = within_energy(crew, planned)
         if route:
             collect(crew, route)
 

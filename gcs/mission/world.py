@@ -31,6 +31,7 @@ from gcs.link.router import Link
 from gcs.loop.control import LoopControl, LoopSettings, LoopStatus
 from gcs.loop.energy_sharing import EnergySharingLoop
 from gcs.loop.telemetry_pace import MISSION_TELEMETRY_HZ
+from gcs.loop.trip_energy import home_now
 from gcs.mission.platform import Platform
 from gcs.records.events import EventLog
 from gcs.records.run_folder import RunFolder
@@ -152,6 +153,8 @@ class World:
         api = self.api if clock is self.clock else self.api.on_clock(clock)
         loop = EnergySharingLoop(api, clock, settings, self.homes, a.system_id, self.events, control, shares,
                                  self.real, status, self.acoustic)
+        if settings.energy is not None:  # a rolling wait reads whether to head home (`trip_energy.home_now`)
+            registry.watch_battery(a.system_id, "home", functools.partial(home_now, loop.knows))
         if self.acoustic is not None:
             self.acoustic.plans(a.system_id, loop.knows)  # belief against truth, as this loop plans with it
         return loop

@@ -3,10 +3,12 @@
     python -m gcs.sweep.capacity sweeps/capacity --figure docs/capacity.png
 
 Reads the sweep's cell files (DIR/cells/*.json: a sweep still running, or resumed, reports what it has),
-one row per mission: its profile and fleet size, strategy and seed; whether every aMussel lived through
-it (none depleted at any time), how many depleted, uptime, samples taken against scheduled, the aPad's
-dockings (one charge each) and rounds per day of mission time, and its hours home at the charger. The table gives,
-per profile and strategy, the largest fleet swept that every seed kept alive, and what the aPad did for it.
+one row per mission: its profile and fleet size, strategy and seed; whether it kept every aMussel alive (none
+depleted at any time, and the mission ran its whole duration: one ended early by the aPad's battery kept no
+one), how many depleted, uptime, samples taken against scheduled, the aPad's dockings (one charge each),
+rounds and energy passed into aMussels per day of mission time, and its hours home at the charger. The table
+gives, per profile and strategy, the largest fleet kept alive in at least KEPT_SHARE of its seeds, and at that
+size what the aPad did for it, with the spread over the seeds.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ import pandas as pd
 from gcs.sweep.store import read_cells
 
 DAY_S = 86400.0
+KEPT_SHARE = 0.9  # "kept alive": no aMussel depleted in at least 9 of 10 seeds
 
 
 def mission_row(record: dict[str, Any]) -> dict[str, Any]:
@@ -36,7 +39,8 @@ def mission_row(record: dict[str, Any]) -> dict[str, Any]:
         "count": int(values.get("fleet.count", len(mussels))),
         "strategy": record["strategy"],
         "seed": record["seed"],
-        "alive": all(m["state_s"].get("depleted", 0.0) == 0.0 for m in mussels),
+        "alive": result["end_reason"] == "mission time"
+                 and all(m["state_s"].get("depleted", 0.0) == 0.0 for m in mussels),
         "depleted": sum(1 for m in mussels if m["state_s"].get("depleted", 0.0) > 0.0),
         "uptime_avg": result["uptime"]["avg"],
         "uptime_min": result["uptime"]["min"],
@@ -44,6 +48,7 @@ def mission_row(record: dict[str, Any]) -> dict[str, Any]:
         "samples_scheduled": sum(m.get("samples_scheduled", 0) for m in mussels),
         "dockings_per_day": dockings / days,
         "rounds_per_day": result["cycles"] / days,
+        "passed_wh_per_day": sum(a.get("passed_wh") or 0.0 for a in apads) / len(apads) / days,
         "home_h": round(sum(a.get("phase_s", {}).get("home charge", 0.0) for a in apads) / 3600.0, 2),  # charging
         "days": days,
         "sim_days": days * result["theta"],  # the aMussels' days (theta 30: a mission day is 30)
@@ -58,58 +63,80 @@ def read_missions(folder: Path) -> pd.DataFrame:
 
 
 def capacity_table(rows: pd.DataFrame) -> pd.DataFrame:
-    """Per profile and strategy: the largest fleet swept that every seed kept alive ("< N": not even the
-    smallest, N), the sizes swept, and at that size (else the smallest) the aPad's dockings and rounds per
-    day, uptime and samples taken of scheduled."""
+    """Per profile and strategy: the largest fleet swept that at least KEPT_SHARE of its seeds kept alive ("< N":
+    not even the smallest, N), the seeds that did at that size, the sizes swept, and at that size (else the
+    smallest) the aPad's dockings (charging cycles), rounds and energy passed per day, uptime and samples taken
+    of scheduled, each a mean over the seeds (uptime: with its standard deviation)."""
     out = []
     for (profile, strategy), group in rows.groupby(["profile", "strategy"], sort=True):
         by_count = group.groupby("count").agg(
-            alive=("alive", "all"), depleted=("depleted", "mean"), uptime_avg=("uptime_avg", "mean"),
-            uptime_min=("uptime_min", "mean"), dockings_per_day=("dockings_per_day", "mean"),
-            rounds_per_day=("rounds_per_day", "mean"), home_h=("home_h", "mean"),
+            alive=("alive", "mean"), kept=("alive", "sum"), depleted=("depleted", "mean"),
+            uptime_avg=("uptime_avg", "mean"), uptime_avg_sd=("uptime_avg", "std"),
+            uptime_min=("uptime_min", "mean"), uptime_min_sd=("uptime_min", "std"),
+            dockings_per_day=("dockings_per_day", "mean"), rounds_per_day=("rounds_per_day", "mean"),
+            passed_wh_per_day=("passed_wh_per_day", "mean"), home_h=("home_h", "mean"),
             taken=("samples_taken", "sum"), scheduled=("samples_scheduled", "sum"), seeds=("seed", "nunique"))
-        kept = by_count.index[by_count["alive"]]
+        kept = by_count.index[by_count["alive"] >= KEPT_SHARE - 1e-9]
         at = int(kept.max()) if len(kept) else int(by_count.index.min())
         r = by_count.loc[at]
         out.append({
             "profile": profile, "strategy": strategy,
             "largest kept alive": str(at) if len(kept) else f"< {at}",
+            "seeds kept": f"{int(r['kept'])}/{int(r['seeds'])}",
             "sizes swept": " ".join(str(int(c)) for c in by_count.index),
             "dockings / day": round(float(r["dockings_per_day"]), 1),
             "rounds / day": round(float(r["rounds_per_day"]), 1),
+            "Wh passed / day": round(float(r["passed_wh_per_day"]), 1),
             "hours home": round(float(r["home_h"]), 1),
-            "uptime avg %": round(float(r["uptime_avg"]), 1), "uptime min %": round(float(r["uptime_min"]), 1),
+            "uptime avg %": _mean_sd(r["uptime_avg"], r["uptime_avg_sd"]),
+            "uptime min %": _mean_sd(r["uptime_min"], r["uptime_min_sd"]),
             "samples taken %": round(100.0 * float(r["taken"]) / float(r["scheduled"]), 1) if r["scheduled"] else None,
-            "seeds": int(r["seeds"]),
         })
     return pd.DataFrame(out)
 
 
+def _mean_sd(mean: float, sd: float) -> str:
+    return f"{mean:.1f}" if pd.isna(sd) else f"{mean:.1f} ± {sd:.1f}"
+
+
 def figure(rows: pd.DataFrame, path: Path) -> None:
-    """Per profile (columns): aMussels depleted and the aPad's dockings per day against the fleet's size,
-    a line per strategy (the mean over seeds)."""
+    """Per profile (columns), against the fleet's size, a line per strategy (the mean over seeds, the band its
+    spread: min to max for aMussels depleted, one standard deviation for the others): aMussels depleted,
+    minimum uptime, samples taken of scheduled, and the aPad's dockings per day."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     profiles = sorted(rows["profile"].unique())
-    fig, axes = plt.subplots(2, len(profiles), figsize=(5.2 * len(profiles), 6.4), squeeze=False, sharex="col")
+    panels = (("depleted", "aMussels depleted"), ("uptime_min", "minimum uptime %"),
+              ("samples_pct", "samples taken of scheduled %"), ("dockings_per_day", "dockings (charges) per day"))
+    rows = rows.assign(samples_pct=100.0 * rows["samples_taken"] / rows["samples_scheduled"].where(
+        rows["samples_scheduled"] > 0))
+    fig, axes = plt.subplots(len(panels), len(profiles), figsize=(5.4 * len(profiles), 2.6 * len(panels)),
+                             squeeze=False, sharex="col")
     for col, profile in enumerate(profiles):
         mine = rows[rows["profile"] == profile]
         for strategy, group in mine.groupby("strategy", sort=True):
-            means = group.groupby("count")[["depleted", "dockings_per_day"]].mean()
-            axes[0][col].plot(means.index, means["depleted"], marker="o", label=strategy)
-            axes[1][col].plot(means.index, means["dockings_per_day"], marker="o", label=strategy)
+            for row, (key, _) in enumerate(panels):
+                stats = group.groupby("count")[key].agg(["mean", "std", "min", "max"])
+                if stats["mean"].isna().all():
+                    continue
+                ax = axes[row][col]
+                line = ax.plot(stats.index, stats["mean"], marker="o", markersize=3, label=strategy)[0]
+                low, high = ((stats["min"], stats["max"]) if key == "depleted"
+                             else (stats["mean"] - stats["std"].fillna(0), stats["mean"] + stats["std"].fillna(0)))
+                ax.fill_between(stats.index, low, high, color=line.get_color(), alpha=0.15, linewidth=0)
         counts = sorted(mine["count"].unique())
         axes[0][col].plot(counts, counts, color="0.7", linestyle=":", label="the whole fleet")
         hours, sim_days = 24 * float(mine["days"].max()), float(mine["sim_days"].max())
-        axes[0][col].set_title(f"{profile}: one aPad, {hours:g} h ({sim_days:g} sim. days)")
-        axes[1][col].set_xticks(counts)
-        axes[0][col].set_ylabel("aMussels depleted")
-        axes[1][col].set_ylabel("dockings (charges) per day")
-        axes[1][col].set_xlabel("aMussels in the fleet")
-        axes[0][col].legend(fontsize=8)
+        seeds = int(mine["seed"].nunique())
+        axes[0][col].set_title(f"{profile}: one aPad, {hours:g} h ({sim_days:g} sim. days), {seeds} seeds")
+        for row, (_, label) in enumerate(panels):
+            axes[row][col].set_ylabel(label)
+        axes[-1][col].set_xticks(counts)
+        axes[-1][col].set_xlabel("aMussels in the fleet")
+        axes[0][col].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

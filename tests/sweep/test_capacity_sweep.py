@@ -50,6 +50,7 @@ def test_a_tiny_capacity_sweep_gives_its_table_and_figure(tmp_path: Path) -> Non
 
     table = capacity_table(rows)
     assert list(table["largest kept alive"]) == ["2", "2", "6", "6"]
+    assert list(table["seeds kept"]) == ["1/1"] * 4
     assert list(zip(table["profile"], table["strategy"], strict=True)) == [
         ("always_on", "cautious"), ("always_on", "keep_alive"), ("hourly_wake", "cautious"),
         ("hourly_wake", "keep_alive")]
@@ -62,17 +63,34 @@ def test_a_tiny_capacity_sweep_gives_its_table_and_figure(tmp_path: Path) -> Non
     assert set(frame["fleet.count"]) == {2, 6} and set(frame["fleet.profile"]) == {"always_on", "hourly_wake"}
 
 
-def test_the_largest_fleet_kept_alive_is_the_largest_size_every_seed_kept() -> None:
+def test_the_largest_fleet_kept_alive_is_the_largest_size_nine_seeds_in_ten_kept() -> None:
     def mission(count: int, seed: int, alive: bool, strategy: str = "keep_alive") -> dict[str, object]:
         return {"profile": "always_on", "count": count, "strategy": strategy, "seed": seed, "alive": alive,
-                "depleted": 0 if alive else 1, "uptime_avg": 80.0, "uptime_min": 70.0, "samples_taken": 5,
+                "depleted": 0 if alive else 1, "uptime_avg": 80.0 + seed, "uptime_min": 70.0, "samples_taken": 5,
                 "samples_scheduled": 10, "dockings_per_day": 8.0 * count, "rounds_per_day": 2.0 * count,
-                "home_h": 1.0, "days": 0.25, "sim_days": 7.5, "end": "mission time"}
+                "passed_wh_per_day": 30.0 * count, "home_h": 1.0, "days": 0.25, "sim_days": 7.5,
+                "end": "mission time"}
 
-    rows = pd.DataFrame([mission(2, 1, True), mission(2, 2, True), mission(4, 1, True), mission(4, 2, False),
-                         mission(2, 1, False, "cautious"), mission(4, 1, False, "cautious")])
+    ten = range(1, 11)
+    rows = pd.DataFrame([mission(2, s, True) for s in ten] + [mission(4, s, s != 3) for s in ten]
+                        + [mission(6, s, s > 2) for s in ten]
+                        + [mission(2, s, s != 1, "cautious") for s in ten[:5]] + [mission(4, 1, False, "cautious")])
     table = capacity_table(rows).set_index("strategy")
-    assert table.loc["keep_alive", "largest kept alive"] == "2"  # 4 lost one in seed 2
-    assert table.loc["keep_alive", "dockings / day"] == 16.0 and table.loc["keep_alive", "samples taken %"] == 50.0
-    assert table.loc["cautious", "largest kept alive"] == "< 2"
+    assert table.loc["keep_alive", "largest kept alive"] == "4"  # 9 of 10 at 4; 6 lost two seeds
+    assert table.loc["keep_alive", "seeds kept"] == "9/10"
+    assert table.loc["keep_alive", "dockings / day"] == 32.0 and table.loc["keep_alive", "Wh passed / day"] == 120.0
+    assert table.loc["keep_alive", "samples taken %"] == 50.0
+    assert table.loc["keep_alive", "uptime avg %"] == "85.5 ± 3.0"
+    assert table.loc["cautious", "largest kept alive"] == "< 2"  # 4 of 5 seeds is not 9 in 10
     assert table.loc["cautious", "sizes swept"] == "2 4"
+
+
+def test_a_mission_ended_early_kept_no_one_alive() -> None:
+    from gcs.sweep.capacity import mission_row
+
+    result = {"mussels": [{"state_s": {"depleted": 0.0}, "dockings": []}], "duration_s": 86400.0, "apads": [{}],
+              "uptime": {"avg": 97.0, "min": 95.0}, "cycles": 3, "theta": 30.0, "end_reason": "aPad battery"}
+    record = {"result": result, "values": {"fleet.count": 1}, "strategy": "rolling", "seed": 1}
+    assert not mission_row(record)["alive"]
+    result["end_reason"] = "mission time"
+    assert mission_row(record)["alive"]
