@@ -45,6 +45,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seeds", type=flags.integer_in(1, MAX_CELLS), metavar="N",
                         help="only the spec's first N seeds (a quick try of a big spec; the same cells as the "
                              "whole spec's, so a later run of all of them keeps these)")
+    parser.add_argument("--base-samples", type=flags.integer_in(1, 65_536), metavar="N",
+                        help="a [sensitivity] study on its first N base samples (a power of 2 for Sobol): the same "
+                             "missions as the whole study's first, so a later run of all of them keeps these")
     parser.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                         help="run on this Dask scheduler's workers (default: a local cluster, a worker per core)")
     parser.add_argument("--workers", type=flags.integer_in(1, MAX_WORKERS), metavar="N",
@@ -70,6 +73,8 @@ def run(args: argparse.Namespace) -> int:
         spec = load_spec(args.spec)
         if args.seeds is not None:
             spec = spec.first_seeds(args.seeds)
+        if args.base_samples is not None:
+            spec = spec.first_base_samples(args.base_samples)
         cells = make_cells(spec)
     except SpecError as exc:
         return _bad(str(exc))

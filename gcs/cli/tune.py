@@ -13,7 +13,8 @@ the same command continues it (complete trials and the best value kept; each mis
 DIR/cells). At the end: DIR/best.toml, the best policy as a scenario (`vil run DIR/best.toml`), and
 DIR/held_out.csv / .md, the best policy and the baseline on the held-out seeds.
 
-Exit status: 0 done; 1 missions failed (listed; run again to retry them); 2 bad input; 130 interrupted.
+Exit status: 0 done; 1 trials failed (a mission raised, or the objective had no value: listed) or no trial
+completed; 2 bad input; 130 interrupted.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from rich.console import Console
 from gcs.cli import flags
 from gcs.cli.sweep import MAX_WORKERS
 from gcs.cli.tables import output_console
+from gcs.scenario.reader import ScenarioError
 from gcs.sweep.cluster import ClusterError, dask_client
 from gcs.sweep.spec import SpecError
 from gcs.tune import held_out as ho
@@ -58,7 +60,8 @@ def run(args: argparse.Namespace) -> int:
         spec = load_tune_spec(args.spec)
         if args.trials is not None:
             spec = _with_trials(spec, args.trials)
-        ho.held_out_cells(spec, {})  # the scenario, the baseline and [set] checked before any cluster starts
+        ho.held_out_cells(spec, spec.corner())  # the scenario, [set], [search] and the baseline checked before
+        # any cluster starts
     except SpecError as exc:
         return _bad(str(exc))
     out = Path(args.out)
@@ -82,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
                 table.to_csv(out / ho.TABLE_CSV, index=False)
                 (out / ho.TABLE_MD).write_text(ho.markdown(table, title), encoding="utf-8")
                 console.print(ho.rich_table(table, title))
-    except (StudyError, ClusterError) as exc:
+    except (StudyError, ClusterError, ScenarioError) as exc:
         print(f"vil tune: {exc}", file=sys.stderr)
         return EXIT_FAILED
     except OSError as exc:

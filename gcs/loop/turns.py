@@ -61,6 +61,8 @@ def rolling(crew: Crew) -> None:
     if needs_home_loaded(knows):  # it always carries someone, so `recharged` alone would never send it home
         crew.log("home_first", on_board=sorted(knows.docked().values()), battery_v=round(knows.battery_v() or 0, 3))
         redeploy(crew, plan_redeployment(crew))
+        go_home_and_charge(crew, [])
+        return
     if recharged(crew):
         return
     act.set_phase(Phase.IDLE_WAIT)
@@ -76,7 +78,12 @@ def rolling(crew: Crew) -> None:
         if knows.clock.time() < next_look_s or not knows.free_slots() or knows.too_late_to_call_up():
             return False
         next_look_s = knows.clock.time() + LOOK_S
-        return bool(act.link_up() and (knows.orphans() or collection_route(crew).route))
+        if not act.link_up():
+            return False
+        if knows.orphans():
+            return True
+        route = collection_route(crew).route  # with some on board, a candidate only if the way home stays
+        return bool(route) and (not knows.docked() or covers_loaded(knows, route[:1]))
 
     def look_by() -> float | None:  # a charge done, or the next look for a free slot
         looks = [next_look_s] if knows.free_slots() else []

@@ -21,9 +21,9 @@ from typing import Any
 
 import pandas as pd
 
+from gcs.sweep.outputs import DAY_S, ran_flat
 from gcs.sweep.store import read_cells
 
-DAY_S = 86400.0
 KEPT_SHARE = 0.9  # "kept alive": no aMussel depleted in at least 9 of 10 seeds
 
 
@@ -41,7 +41,7 @@ def mission_row(record: dict[str, Any]) -> dict[str, Any]:
         "seed": record["seed"],
         "alive": result["end_reason"] == "mission time"
                  and all(m["state_s"].get("depleted", 0.0) == 0.0 for m in mussels),
-        "depleted": sum(1 for m in mussels if m["state_s"].get("depleted", 0.0) > 0.0),
+        "depleted": ran_flat(result),
         "uptime_avg": result["uptime"]["avg"],
         "uptime_min": result["uptime"]["min"],
         "samples_taken": sum(m.get("samples_taken", 0) for m in mussels),
@@ -115,6 +115,7 @@ def figure(rows: pd.DataFrame, path: Path) -> None:
         rows["samples_scheduled"] > 0))
     fig, axes = plt.subplots(len(panels), len(profiles), figsize=(5.4 * len(profiles), 2.6 * len(panels)),
                              squeeze=False, sharex="col")
+    colour = {strategy: f"C{k}" for k, strategy in enumerate(sorted(rows["strategy"].unique()))}  # one per panel
     for col, profile in enumerate(profiles):
         mine = rows[rows["profile"] == profile]
         for strategy, group in mine.groupby("strategy", sort=True):
@@ -123,7 +124,8 @@ def figure(rows: pd.DataFrame, path: Path) -> None:
                 if stats["mean"].isna().all():
                     continue
                 ax = axes[row][col]
-                line = ax.plot(stats.index, stats["mean"], marker="o", markersize=3, label=strategy)[0]
+                line = ax.plot(stats.index, stats["mean"], marker="o", markersize=3, label=strategy,
+                               color=colour[strategy])[0]
                 low, high = ((stats["min"], stats["max"]) if key == "depleted"
                              else (stats["mean"] - stats["std"].fillna(0), stats["mean"] + stats["std"].fillna(0)))
                 ax.fill_between(stats.index, low, high, color=line.get_color(), alpha=0.15, linewidth=0)
@@ -158,13 +160,46 @@ def markdown(table: pd.DataFrame) -> str:
     return "\n".join(line.rstrip() for line in text.getvalue().splitlines()).strip() + "\n"
 
 
+AGREE_KEYS = ["profile", "count", "strategy", "seed"]
+
+
+def agreement(event: pd.DataFrame, reference: pd.DataFrame) -> pd.DataFrame:
+    """Each mission of `reference` (a lockstep sweep of some of the points) beside the same mission of `event`:
+    uptime, depleted aMussels and the kept-alive verdict on both platforms."""
+    both = reference.merge(event, on=AGREE_KEYS, suffixes=(" L", " E"), how="left", validate="one_to_one")
+    if both["alive E"].isna().any():
+        missing = both[both["alive E"].isna()].iloc[0]
+        raise ValueError(f"the event sweep has no mission {', '.join(f'{k} {missing[k]}' for k in AGREE_KEYS)}")
+    out = both[AGREE_KEYS].copy()
+    for key in ("uptime_avg", "uptime_min", "depleted", "alive"):
+        out[f"{key} L"], out[f"{key} E"] = both[f"{key} L"], both[f"{key} E"]
+    return out
+
+
+def agreement_summary(table: pd.DataFrame) -> str:
+    same = int((table["alive L"] == table["alive E"]).sum())
+    d_avg = (table["uptime_avg L"] - table["uptime_avg E"]).abs().max()
+    d_min = (table["uptime_min L"] - table["uptime_min E"]).abs().max()
+    d_dep = (table["depleted L"] - table["depleted E"]).abs().max()
+    return (f"{len(table)} missions in both: the same kept-alive verdict in {same}; largest differences: "
+            f"{d_avg:.2f} pp of average uptime, {d_min:.2f} pp of minimum uptime, {d_dep:g} aMussels depleted")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m gcs.sweep.capacity", description=__doc__.splitlines()[0])
     parser.add_argument("folder", type=Path, help="the capacity sweep's folder (vil sweep ... --out DIR)")
     parser.add_argument("--figure", type=Path, help="write the figure here (PNG)")
+    parser.add_argument("--against", type=Path, metavar="DIR",
+                        help="a sweep of some of the same missions on the other platform (lockstep): each beside "
+                             "its own, and how far apart")
     args = parser.parse_args(argv)
     try:
         rows = read_missions(args.folder)
+        if args.against is not None:
+            table = agreement(rows, read_missions(args.against))
+            print(markdown(table))
+            print(agreement_summary(table))
+            return 0
     except (OSError, ValueError, KeyError) as exc:
         print(f"capacity: {exc}", file=sys.stderr)
         return 2

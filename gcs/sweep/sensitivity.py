@@ -26,36 +26,17 @@ from rich.console import Console
 from rich.table import Table
 
 from gcs.sweep import store
+from gcs.sweep.outputs import output_values
 from gcs.sweep.sensitivity_design import Design, Method
 
-DAY_S = 86400.0
 RESAMPLES = 1000  # SALib's bootstrap resamples for the confidence intervals
 CONF_LEVEL = 0.95
-CSV, FIGURE = "sensitivity.csv", "sensitivity.png"
+CSV, PAIRS_CSV, FIGURE = "sensitivity.csv", "sensitivity-pairs.csv", "sensitivity.png"
+PAIRS_SHOWN = 3  # the strongest pairs printed per output
 
 
 class AnalysisError(ValueError):
     """One line for the user: the folder and what is missing."""
-
-
-def output_values(result: dict[str, Any]) -> dict[str, float]:
-    """Every output a study can explain (`sensitivity_design.OUTPUTS`), from one mission's result.json."""
-    mussels = result.get("mussels") or []
-    days = result.get("days") or []
-    mission_days = max(float(result.get("duration_s", 0.0)) / DAY_S, 1e-9)
-    apads = result.get("apads") or []
-    taken = sum(m.get("samples_taken", 0) for m in mussels)
-    scheduled = sum(m.get("samples_scheduled", 0) for m in mussels)
-    alive = days[-1]["alive"] if days else sum(1 for m in mussels if not m.get("state_s", {}).get("depleted"))
-    drawn = [a["drawn_wh"] for a in apads if a.get("drawn_wh") is not None]
-    return {
-        "uptime_min": float(result["uptime"]["min"]),
-        "uptime_avg": float(result["uptime"]["avg"]),
-        "alive_at_end": float(alive),
-        "apad_wh_per_day": float(np.mean(drawn)) / mission_days if drawn else math.nan,
-        "samples_taken_pct": 100.0 * taken / scheduled if scheduled else math.nan,
-        "dockings_per_day": sum(len(m.get("dockings", [])) for m in mussels) / mission_days,
-    }
 
 
 def responses(design: Design, points: list[dict[str, Any]], records: list[dict[str, Any]]
@@ -81,32 +62,41 @@ def responses(design: Design, points: list[dict[str, Any]], records: list[dict[s
     return out
 
 
-def indices(design: Design, x: NDArray[np.float64], y: NDArray[np.float64]) -> pd.DataFrame:
-    """One output's indices, a row per field: SALib's, with 95 % intervals. A constant output (nothing changed
-    it) has no indices to give: NaN, not SALib's division by zero."""
-    problem = design.problem()
+PAIR_COLUMNS = ["field_a", "field_b", "S2", "S2_conf"]
+
+
+def indices(design: Design, x: NDArray[np.float64], y: NDArray[np.float64]) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """One output's indices with 95 % intervals, SALib's: a row per field (S1 and ST, or mu* and sigma), and with
+    second order a row per pair of fields (S2: what the two explain together beyond each alone). A constant
+    output (nothing changed it) has no indices to give: NaN, not SALib's division by zero."""
+    problem, names = design.problem(), design.names
+    pairs = pd.DataFrame(columns=PAIR_COLUMNS)
     if not np.all(np.isfinite(y)) or np.ptp(y) == 0.0:
-        nan = [math.nan] * len(design.names)
+        nan = [math.nan] * len(names)
         cols = ("S1", "S1_conf", "ST", "ST_conf") if design.method is Method.SOBOL else ("mu_star", "mu_star_conf",
                                                                                           "sigma")
-        return pd.DataFrame({"field": design.names, **{c: nan for c in cols}})
+        return pd.DataFrame({"field": names, **{c: nan for c in cols}}), pairs
     if design.method is Method.SOBOL:
         from SALib.analyze import sobol
 
         s = sobol.analyze(problem, y, calc_second_order=design.second_order, num_resamples=RESAMPLES,
                           conf_level=CONF_LEVEL, seed=design.seed)
-        return pd.DataFrame({"field": design.names, "S1": s["S1"], "S1_conf": s["S1_conf"], "ST": s["ST"],
-                             "ST_conf": s["ST_conf"]})
+        if design.second_order:
+            pairs = pd.DataFrame([(names[i], names[j], s["S2"][i, j], s["S2_conf"][i, j])
+                                  for i in range(len(names)) for j in range(i + 1, len(names))], columns=PAIR_COLUMNS)
+        return pd.DataFrame({"field": names, "S1": s["S1"], "S1_conf": s["S1_conf"], "ST": s["ST"],
+                             "ST_conf": s["ST_conf"]}), pairs
     from SALib.analyze import morris
 
     m = morris.analyze(problem, x, y, num_resamples=RESAMPLES, conf_level=CONF_LEVEL, num_levels=design.levels,
                        seed=design.seed)
-    return pd.DataFrame({"field": design.names, "mu_star": m["mu_star"], "mu_star_conf": m["mu_star_conf"],
-                         "sigma": m["sigma"]})
+    return pd.DataFrame({"field": names, "mu_star": m["mu_star"], "mu_star_conf": m["mu_star_conf"],
+                         "sigma": m["sigma"]}), pairs
 
 
-def analyse(folder: Path) -> tuple[Design, pd.DataFrame]:
-    """Every output's indices for each scenario and strategy of the sweep in `folder`."""
+def analyse(folder: Path) -> tuple[Design, pd.DataFrame, pd.DataFrame]:
+    """Every output's indices for each scenario and strategy of the sweep in `folder`: per field, and per pair
+    of fields (second order). Only the sweep's own missions: a folder may hold others' (a spec changed)."""
     meta = store.read_sweep(folder)
     if "sensitivity" not in meta:
         raise AnalysisError(f"{folder}: not a sensitivity sweep (its spec has no [sensitivity] table)")
@@ -116,15 +106,19 @@ def analyse(folder: Path) -> tuple[Design, pd.DataFrame]:
         records = store.read_cells(folder)
     except FileNotFoundError as exc:
         raise AnalysisError(str(exc)) from None
-    frames = []
+    if "keys" in meta:
+        mine = set(meta["keys"])
+        records = [r for r in records if r["key"] in mine]
+    frames: list[pd.DataFrame] = []
+    pair_frames: list[pd.DataFrame] = []
     for (scenario, strategy), (x, ys) in responses(design, points, records).items():
         for output, y in ys.items():
-            table = indices(design, x, y)
-            table.insert(0, "output", output)
-            table.insert(0, "strategy", strategy)
-            table.insert(0, "scenario", scenario)
-            frames.append(table)
-    return design, pd.concat(frames, ignore_index=True)
+            for frame, found in zip((frames, pair_frames), indices(design, x, y), strict=True):
+                found.insert(0, "output", output)
+                found.insert(0, "strategy", strategy)
+                found.insert(0, "scenario", scenario)
+                frame.append(found)
+    return design, pd.concat(frames, ignore_index=True), pd.concat(pair_frames, ignore_index=True)
 
 
 def rich_table(design: Design, table: pd.DataFrame, title: str) -> Table:
@@ -180,18 +174,35 @@ def figure(design: Design, table: pd.DataFrame, path: Path) -> None:
 
 
 def write_report(folder: Path, console: Console | None = None) -> list[Path]:
-    """DIR/report/sensitivity.csv and .png; the table printed to `console` if given."""
-    design, table = analyse(folder)
+    """DIR/report/sensitivity.csv (and -pairs.csv with second order) and .png; the tables printed to `console`."""
+    design, table, pairs = analyse(folder)
     out = folder / "report"
     out.mkdir(parents=True, exist_ok=True)
     written = [out / CSV, out / FIGURE]
     table.to_csv(written[0], index=False)
     figure(design, table, written[1])
+    if len(pairs):
+        written.append(out / PAIRS_CSV)
+        pairs.to_csv(written[-1], index=False)
     if console is not None:
         n = len(store.read_sweep(folder).get("points") or design.points())
         console.print(rich_table(design, table, f"{design.method} indices over {len(design.names)} fields, "
                                                 f"{n} points (n = {design.n})"))
+        if len(pairs):
+            console.print(pairs_table(pairs))
     return written
+
+
+def pairs_table(pairs: pd.DataFrame) -> Table:
+    """The strongest PAIRS_SHOWN pairs (S2) of each output."""
+    out = Table(title="second order: the strongest pairs", box=box.SIMPLE_HEAD, pad_edge=False)
+    for name in ("scenario", "strategy", "output", "fields", "S2"):
+        out.add_column(name, justify="right" if name == "S2" else "left", no_wrap=True)
+    for _, group in pairs.groupby(["scenario", "strategy", "output"], sort=False):
+        for _, r in group.sort_values("S2", ascending=False, na_position="last").head(PAIRS_SHOWN).iterrows():
+            out.add_row(str(r["scenario"]), str(r["strategy"]), str(r["output"]),
+                        f"{r['field_a']} x {r['field_b']}", _pm(r["S2"], r["S2_conf"]))
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:

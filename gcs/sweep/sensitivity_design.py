@@ -14,7 +14,8 @@
 The sample is SALib's (the field's library for it, not a hand-rolled one): each point is a mission per seed
 of `[sweep] seeds`, run as any grid's cells are (Dask, resumable, Parquet), and the analysis
 (`gcs.sweep.sensitivity`) takes the mean over the seeds at each point. A field with integer bounds is rounded
-to the nearest integer at each point: the indices then say what its rounded values explain.
+to the nearest integer at each point (drawn over [min - 0.5, max + 0.5], so every value is as likely): the
+indices then say what its rounded values explain (Morris's effects are divided by the unrounded step).
 """
 
 from __future__ import annotations
@@ -28,11 +29,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from gcs.sweep.outputs import DEFAULT_OUTPUTS, OUTPUTS
+
 MAX_BASE = 65_536
 MAX_LEVELS = 64
-# What the analysis can explain (`gcs.sweep.sensitivity.output_values` computes them from each mission's result).
-OUTPUTS = ("uptime_min", "uptime_avg", "alive_at_end", "apad_wh_per_day", "samples_taken_pct", "dockings_per_day")
-DEFAULT_OUTPUTS = ("uptime_min", "alive_at_end", "apad_wh_per_day")
 
 
 class Method(StrEnum):
@@ -55,8 +55,11 @@ class Design:
     outputs: tuple[str, ...] = DEFAULT_OUTPUTS
 
     def problem(self) -> dict[str, Any]:
-        """SALib's problem definition."""
-        return {"num_vars": len(self.names), "names": list(self.names), "bounds": [list(b) for b in self.bounds]}
+        """SALib's problem definition. An integer field is drawn over [min - 0.5, max + 0.5] and rounded, so each
+        of its values is as likely as the next (its ends too)."""
+        bounds = [[lo - 0.5, hi + 0.5] if whole else [lo, hi] for (lo, hi), whole in zip(self.bounds, self.integer,
+                                                                                           strict=True)]
+        return {"num_vars": len(self.names), "names": list(self.names), "bounds": bounds}
 
     def sample(self) -> NDArray[np.float64]:
         """The points as SALib draws them `(points, D)` (before rounding)."""
@@ -73,8 +76,8 @@ class Design:
         """One dict of field values per point, in the sample's order (the analysis needs it)."""
         out = []
         for row in self.sample():
-            out.append({name: int(np.rint(v)) if whole else float(f"{v:.9g}")
-                        for name, v, whole in zip(self.names, row, self.integer, strict=True)})
+            out.append({name: int(np.clip(np.rint(v), lo, hi)) if whole else float(f"{v:.9g}")
+                        for name, v, whole, (lo, hi) in zip(self.names, row, self.integer, self.bounds, strict=True)})
         return out
 
     def size(self) -> int:

@@ -91,6 +91,18 @@ class SweepSpec:
         spec's cell, so a later sweep of every seed into the same folder keeps them."""
         return replace(self, seeds=self.seeds[:n])
 
+    def first_base_samples(self, n: int) -> SweepSpec:
+        """A [sensitivity] study on its first `n` base samples (`vil sweep --base-samples N`): Saltelli's and
+        Morris's samples of n are the first points of the whole spec's, so a later run of all of them keeps
+        these. SpecError if the spec has no such study or `n` does not fit it."""
+        design = self.sensitivity
+        if design is None:
+            raise self.fail("--base-samples: the spec has no [sensitivity] table")
+        if n > design.n or (design.method == "sobol" and n & (n - 1)):
+            raise self.fail(f"--base-samples: {n} is not a power of 2 up to the spec's n = {design.n}")
+        smaller = replace(design, n=n)
+        return replace(self, sensitivity=smaller, points=tuple(smaller.points()))
+
 
 def load_spec(path: str | Path) -> SweepSpec:
     """Read a sweep spec and check its shape (fields are checked against each scenario by `cells`)."""
@@ -103,7 +115,7 @@ def load_spec(path: str | Path) -> SweepSpec:
     unknown = sorted(set(data) - {"sweep", "set", "grid", "sample", "sensitivity"})
     if unknown:
         raise fail(f"[{unknown[0]}]: unknown table (known: [sweep], [set], [grid], [sample], [sensitivity])")
-    top = _table(data, "sweep", fail)
+    top = table_of(data, "sweep", fail)
     for key in sorted(set(top) - {"name", "scenarios", "strategies", "seeds", "draw_fleet", "platform"}):
         raise fail(f"sweep.{key}: unknown field")
     name = top.get("name", path.stem)
@@ -124,13 +136,13 @@ def load_spec(path: str | Path) -> SweepSpec:
     except (ValueError, TypeError) as exc:
         raise fail(f"sweep.platform: {exc}") from None
 
-    fixed = fields_of(_table(data, "set", fail), "set", fail)
+    fixed = fields_of(table_of(data, "set", fail), "set", fail)
     if "sensitivity" in data:
         return _sensitivity_spec(path, data, fixed, fail, (name, tuple(scenarios), strategies, seeds, draw_fleet),
                                  platform)
     blocks = _grids(data.get("grid", {}), fail)
     grid = blocks[0]
-    sample_table = dict(_table(data, "sample", fail))
+    sample_table = dict(table_of(data, "sample", fail))
     sampled = _sample(sample_table, fail) if sample_table else []
     sampled_keys = list(sampled[0]) if sampled else []
     twice = sorted((set(fixed) & {*grid, *sampled_keys}) | (set(grid) & set(sampled_keys)))
@@ -156,7 +168,7 @@ def _sensitivity_spec(path: Path, data: dict[str, Any], fixed: dict[str, Value],
     for other in ("grid", "sample"):
         if other in data:
             raise fail(f"[{other}]: a [sensitivity] study samples its own points; drop [{other}] or split the spec")
-    design = sensitivity_design.parse(_table(data, "sensitivity", fail),
+    design = sensitivity_design.parse(table_of(data, "sensitivity", fail),
                                       lambda table, where: fields_of(table, where, fail), fail)
     twice = sorted(set(fixed) & set(design.names))
     if twice:
@@ -169,7 +181,7 @@ def _sensitivity_spec(path: Path, data: dict[str, Any], fixed: dict[str, Value],
                      tuple(design.points()), platform, design)
 
 
-def _table(data: dict[str, Any], key: str, fail: Any) -> dict[str, Any]:
+def table_of(data: dict[str, Any], key: str, fail: Any) -> dict[str, Any]:
     value = data.get(key, {})
     if not isinstance(value, dict):
         raise fail(f"{key}: expected a table [{key}]")

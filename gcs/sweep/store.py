@@ -98,6 +98,7 @@ def write_sweep(out: Path, spec: SweepSpec, cells: list[Cell]) -> None:
     if spec.sensitivity is not None:  # what `gcs.sweep.sensitivity` analyses the rows with
         meta["sensitivity"] = spec.sensitivity.to_json()
         meta["points"] = list(spec.points)  # the sample as run, in its order (a later SALib may draw others)
+        meta["keys"] = [c.key for c in cells]  # its missions: the folder may hold others' (a spec changed)
     with atomic(out / SWEEP) as tmp:
         tmp.write_text(json.dumps(meta, indent=1) + "\n", encoding="utf-8")
 

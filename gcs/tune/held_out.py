@@ -21,7 +21,7 @@ from rich.table import Table
 
 from gcs.scenario.reader import load_scenario
 from gcs.sweep.cells import Cell, make_cells, patched
-from gcs.sweep.sensitivity import output_values
+from gcs.sweep.outputs import output_values, ran_flat
 from gcs.sweep.spec import Value
 from gcs.sweep.stats import mean_ci
 from gcs.tune.spec import TuneSpec
@@ -31,20 +31,22 @@ SHOWN = ("uptime_min", "uptime_avg", "alive_at_end", "samples_taken_pct", "docki
 
 
 def best_scenario(spec: TuneSpec, params: dict[str, Value], out: Path) -> Path:
-    """Write DIR/best.toml: the tuned policy as a scenario file (`vil run DIR/best.toml`)."""
+    """Write DIR/best.toml: the tuned policy as a scenario file. The study's missions drew their fleets from their
+    seeds, so it names no saved start: `vil run DIR/best.toml --seed N` is the study's mission of seed N."""
     base = load_scenario(spec.path.parent / spec.scenario if (spec.path.parent / spec.scenario).is_file()
                          else spec.scenario)
     raw = tomllib.loads(base.path.read_text(encoding="utf-8"))
     data = patched(raw, {**spec.fixed, **params, "mission.collect_strategy": spec.strategy})
-    data["scenario"]["name"] = f"{base.name}-{spec.name}"
-    data["fleet"]["area"] = _relative(base.fleet.area, out)
-    if base.fleet.start_config is not None:
-        data["fleet"]["start_config"] = _relative(base.fleet.start_config, out)
+    data.setdefault("scenario", {})["name"] = f"{base.name}-{spec.name}"
+    fleet = data.setdefault("fleet", {})
+    fleet["area"] = _relative(base.fleet.area, out)
+    fleet.pop("start_config", None)
     path = out / BEST
     header = (f"# The best policy of `vil tune {spec.path.name}` ({spec.name}): {spec.strategy} with "
-              + ", ".join(f"{k} = {v}" for k, v in params.items()) + ".\n# vil run " + str(path) + "\n")
+              + ", ".join(f"{k} = {v}" for k, v in params.items())
+              + f".\n# vil run {path} --seed N --platform {spec.platform}   (seed N's fleet, as the study's)\n")
     path.write_text(header + tomli_w.dumps(data), encoding="utf-8")
-    load_scenario(path)  # what `vil run` will read: checked now, not found broken later
+    load_scenario(path)  # what `vil run` will read: checked now (ScenarioError), not found broken later
     return path
 
 
@@ -66,7 +68,7 @@ def held_out_table(cells: dict[str, list[Cell]], results: dict[str, dict[str, An
     per = {policy: pd.DataFrame([output_values(results[c.key]) for c in policy_cells], index=[c.seed for c in
                                                                                                  policy_cells])
            for policy, policy_cells in cells.items()}
-    depleted = {policy: sum(1 for c in policy_cells if _any_depleted(results[c.key]))
+    depleted = {policy: sum(1 for c in policy_cells if ran_flat(results[c.key]))
                 for policy, policy_cells in cells.items()}
     rows = []
     for output in SHOWN:
@@ -79,10 +81,6 @@ def held_out_table(cells: dict[str, list[Cell]], results: dict[str, dict[str, An
     rows.append({"output": "missions with an aMussel run flat", "tuned": float(depleted["tuned"]),
                  "baseline": float(depleted["baseline"])})
     return pd.DataFrame(rows)
-
-
-def _any_depleted(result: dict[str, Any]) -> bool:
-    return any(m.get("state_s", {}).get("depleted", 0.0) > 0.0 for m in result.get("mussels", []))
 
 
 def rich_table(table: pd.DataFrame, title: str) -> Table:

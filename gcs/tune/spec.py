@@ -5,7 +5,8 @@
     scenario = "bay-capacity"      # a name in missions/ or a file beside the spec
     strategy = "cautious"          # the tuned policy's strategy; its parameters are mission fields below
     baseline = "cautious"          # what the tuned policy is held against: the scenario with [set] alone
-    objective = "uptime_min"       # an output of a mission (gcs.sweep.sensitivity_design.OUTPUTS), maximised
+    objective = "uptime_min"       # an output of a mission (gcs.sweep.outputs.OUTPUTS)
+    direction = "maximize"         # or "minimize" (e.g. apad_wh_per_day)
     no_depleted = true             # a trial in which any aMussel ran flat is infeasible (Optuna's constraints)
     trials = 40                    # complete trials the study holds when it is done
     seeds = "1-3"                  # tuning seeds: a trial's value is its objective's mean over them
@@ -33,8 +34,8 @@ from typing import Any
 
 from gcs.mission.platform import Platform, platform_of
 from gcs.scenario.reader import SEED_MAX, read_toml
-from gcs.sweep.sensitivity_design import OUTPUTS
-from gcs.sweep.spec import SpecError, SweepSpec, Value, fields_of, seeds_of
+from gcs.sweep.outputs import OUTPUTS
+from gcs.sweep.spec import SpecError, SweepSpec, Value, fields_of, seeds_of, table_of
 
 MAX_TRIALS = 10_000
 
@@ -57,6 +58,7 @@ class TuneSpec:
     strategy: str
     baseline: str
     objective: str
+    direction: str  # Optuna's: "maximize" or "minimize"
     no_depleted: bool
     trials: int
     seeds: tuple[int, ...]
@@ -65,6 +67,11 @@ class TuneSpec:
     sampler_seed: int
     fixed: dict[str, Value]
     search: dict[str, Range]
+
+    def corner(self) -> dict[str, Value]:
+        """One policy of the search space (each field's low bound or first choice): checked before a study
+        starts, so a misspelt field is one line, not a hundred failed trials."""
+        return {k: r.choices[0] if r.choices else (int(r.low) if r.integer else r.low) for k, r in self.search.items()}
 
     def sweep(self, point: dict[str, Value], seeds: tuple[int, ...], strategy: str | None = None) -> SweepSpec:
         """The missions of one policy (`point`: searched fields' values) on `seeds`, as a sweep spec, so the
@@ -87,8 +94,8 @@ def load_tune_spec(path: str | Path) -> TuneSpec:
     top = data.get("tune")
     if not isinstance(top, dict):
         raise fail("[tune]: missing (the study's scenario, strategy, objective and seeds)")
-    known = {"name", "scenario", "strategy", "baseline", "objective", "no_depleted", "trials", "seeds", "held_out",
-             "platform", "sampler_seed"}
+    known = {"name", "scenario", "strategy", "baseline", "objective", "direction", "no_depleted", "trials", "seeds",
+             "held_out", "platform", "sampler_seed"}
     for key in sorted(set(top) - known):
         raise fail(f"tune.{key}: unknown field")
     texts = {}
@@ -104,6 +111,9 @@ def load_tune_spec(path: str | Path) -> TuneSpec:
     objective = top.get("objective", "uptime_min")
     if objective not in OUTPUTS:
         raise fail(f"tune.objective: {objective!r} is not an output (known: {', '.join(OUTPUTS)})")
+    direction = top.get("direction", "maximize")
+    if direction not in ("maximize", "minimize"):
+        raise fail(f"tune.direction: expected \"maximize\" or \"minimize\", got {direction!r}")
     no_depleted = top.get("no_depleted", True)
     if not isinstance(no_depleted, bool):
         raise fail(f"tune.no_depleted: expected true or false, got {no_depleted!r}")
@@ -122,23 +132,16 @@ def load_tune_spec(path: str | Path) -> TuneSpec:
         platform = platform_of(top.get("platform", "event"))
     except (ValueError, TypeError) as exc:
         raise fail(f"tune.platform: {exc}") from None
-    fixed = fields_of(_table(data, "set", fail), "set", fail)
-    search = {key: _range(key, value, fail) for key, value in fields_of(_table(data, "search", fail), "search",
+    fixed = fields_of(table_of(data, "set", fail), "set", fail)
+    search = {key: _range(key, value, fail) for key, value in fields_of(table_of(data, "search", fail), "search",
                                                                           fail).items()}
     if not search:
         raise fail("[search]: nothing to search (add e.g. mission.pool_threshold = {min = 0.5, max = 0.95})")
     twice = sorted(set(fixed) & set(search))
     if twice:
         raise fail(f"{twice[0]}: set in both [set] and [search]")
-    return TuneSpec(path.resolve(), name, texts["scenario"], texts["strategy"], baseline, objective, no_depleted,
-                    trials, seeds, held_out, platform, sampler_seed, fixed, search)
-
-
-def _table(data: dict[str, Any], key: str, fail: Any) -> dict[str, Any]:
-    value = data.get(key, {})
-    if not isinstance(value, dict):
-        raise fail(f"{key}: expected a table [{key}]")
-    return value
+    return TuneSpec(path.resolve(), name, texts["scenario"], texts["strategy"], baseline, objective, direction,
+                    no_depleted, trials, seeds, held_out, platform, sampler_seed, fixed, search)
 
 
 def _range(key: str, value: Any, fail: Any) -> Range:

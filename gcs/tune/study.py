@@ -35,7 +35,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from gcs.sweep import store
 from gcs.sweep.cells import Cell, make_cells, run_cell
 from gcs.sweep.cluster import CellRunner, describe, run_cells
-from gcs.sweep.sensitivity import output_values
+from gcs.sweep.outputs import output_values, ran_flat
 from gcs.sweep.spec import SpecError, Value
 from gcs.tune.spec import TuneSpec
 
@@ -62,7 +62,7 @@ class TuneOutcome:
     complete: int = 0  # complete trials in the study now
     ran: int = 0  # missions run by this call
     reused: int = 0  # missions found in DIR/cells
-    failed: list[str] = field(default_factory=list)  # trials whose missions raised (tried again next run)
+    failed: list[str] = field(default_factory=list)  # failed trials: a mission raised, or no objective value
     best: Best | None = None
 
 
@@ -101,22 +101,27 @@ def study_lock(out: Path) -> Iterator[None]:
 def open_study(spec: TuneSpec, out: Path) -> optuna.Study:
     """The study in `out` (made on first use), its interrupted trials failed and their policies queued again."""
     optuna.logging.set_verbosity(optuna.logging.WARNING)  # our progress line says what a trial's log would
-    study = optuna.create_study(study_name=spec.name, storage=f"sqlite:///{out / STUDY_DB}", direction="maximize",
-                                load_if_exists=True)
+    study = optuna.create_study(study_name=spec.name, storage=f"sqlite:///{out / STUDY_DB}",
+                                direction=spec.direction, load_if_exists=True)
     for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
         study.enqueue_trial(trial.params, user_attrs={"again_of": trial.number})
         study.tell(trial.number, state=TrialState.FAIL)
-    # Seeded by the trials so far: a resumed study does not draw its first random policies again. Optuna calls
-    # constraints experimental (since 3.0, unchanged): said once in docs/tuning.md, not at every run.
+    # Seeded by the trials so far: a resumed study does not draw its first random policies again. Several
+    # trials run at once: each asked while others run assumes their worst (the constant liar), and the fields
+    # are drawn together (multivariate: the thresholds, the interval and the awake time go in pairs). Optuna
+    # calls these and constraints experimental (since 3.0, unchanged): said once in docs/tuning.md.
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-        study.sampler = optuna.samplers.TPESampler(seed=spec.sampler_seed + len(study.trials),
+        study.sampler = optuna.samplers.TPESampler(seed=spec.sampler_seed + len(study.trials), multivariate=True,
+                                                   constant_liar=True,
                                                    constraints_func=_constraint if spec.no_depleted else None)
     return study
 
 
 def count_complete(spec: TuneSpec, out: Path) -> int:
-    """Complete trials of the study in `out`, read without touching it (0: none there yet)."""
+    """Complete trials of the study in `out`, its trials left as they are (0: none there yet)."""
+    if not (out / STUDY_DB).exists():
+        return 0
     try:
         return len(complete_trials(optuna.load_study(study_name=spec.name, storage=f"sqlite:///{out / STUDY_DB}")))
     except KeyError:  # no such study yet
@@ -127,14 +132,15 @@ def complete_trials(study: optuna.Study) -> list[FrozenTrial]:
     return study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
 
 
-def best_trial(study: optuna.Study) -> Best | None:
-    """The best complete trial, a feasible one if any (ties: the earliest)."""
+def best_trial(study: optuna.Study, no_depleted: bool = True) -> Best | None:
+    """The best complete trial (ties: the earliest); with `no_depleted`, a feasible one if any."""
     trials = complete_trials(study)
     if not trials:
         return None
-    feasible = [t for t in trials if _constraint(t)[0] <= 0]
+    feasible = [t for t in trials if _constraint(t)[0] <= 0] if no_depleted else trials
     pool = feasible or trials
-    top = max(pool, key=lambda t: (t.value if t.value is not None else -math.inf, -t.number))
+    sign = 1.0 if study.direction == optuna.study.StudyDirection.MAXIMIZE else -1.0
+    top = max(pool, key=lambda t: (sign * (t.value if t.value is not None else -math.inf), -t.number))
     return Best(top.number, float(top.value or 0.0), dict(top.params), _constraint(top)[0], bool(feasible))
 
 
@@ -155,7 +161,7 @@ def run_study(spec: TuneSpec, out: Path, console: Console, client: Client, runne
     console.print(f"{spec.name}: {outcome.complete} of {spec.trials} trials done; on {describe(client)}")
     if outcome.complete < spec.trials:
         _drive(spec, out, study, distributions(spec), client, console, outcome, runner)
-    outcome.best = best_trial(study)
+    outcome.best = best_trial(study, spec.no_depleted)
     return outcome
 
 
@@ -182,7 +188,8 @@ def _drive(spec: TuneSpec, out: Path, study: optuna.Study, space: dict[str, Base
     columns = (TextColumn("[progress.description]{task.description}"), BarColumn(), MofNCompleteColumn(),
                TextColumn("trials  best {task.fields[best]}"), TimeElapsedColumn())
     with Progress(*columns, console=console) as progress:
-        task = progress.add_task("tune", total=spec.trials, completed=outcome.complete, best=_best_text(study))
+        task = progress.add_task("tune", total=spec.trials, completed=outcome.complete, best=_best_text(study, spec))
+
         def asking() -> bool:
             return outcome.complete + len(running) < spec.trials and len(outcome.failed) < MAX_FAILED
 
@@ -208,7 +215,9 @@ def _drive(spec: TuneSpec, out: Path, study: optuna.Study, space: dict[str, Base
                         job.results[cell.key] = store.read_cell(out, cell.key)["result"]
                         outcome.reused += 1
                     else:
-                        future = client.submit(runner, cell, None, key=f"vil-tune-{cell.key}", retries=0, pure=False)
+                        # Keyed by the trial too: two trials asking the same policy at once each get their own.
+                        future = client.submit(runner, cell, None, key=f"vil-tune-{trial.number}-{cell.key}",
+                                               retries=0, pure=False)
                         owner[future] = (trial.number, cell)
                         pending.add(future)
                 if len(job.results) == len(cells):
@@ -223,34 +232,37 @@ def _drive(spec: TuneSpec, out: Path, study: optuna.Study, space: dict[str, Base
                 outcome.failed.append(f"trial {number}, {cell.label}: {type(raised).__name__}: {raised}")
                 if job_or_none is not None:
                     study.tell(running.pop(number).trial, state=TrialState.FAIL)
-            elif job_or_none is not None:
+            else:  # kept even if its trial failed meanwhile: a mission is never run twice
                 record = future.result()
                 store.write_cell(out, cell, record)
                 outcome.ran += 1
-                job_or_none.results[cell.key] = record["result"]
-                if len(job_or_none.results) == len(job_or_none.cells):
-                    _finish(study, running.pop(number), spec, outcome)
+                if job_or_none is not None:
+                    job_or_none.results[cell.key] = record["result"]
+                    if len(job_or_none.results) == len(job_or_none.cells):
+                        _finish(study, running.pop(number), spec, outcome)
             future.release()
-            progress.update(task, completed=outcome.complete, best=_best_text(study))
+            progress.update(task, completed=outcome.complete, best=_best_text(study, spec))
 
 
 def _finish(study: optuna.Study, job: _Running, spec: TuneSpec, outcome: TuneOutcome) -> None:
-    """A trial whose missions all ended: its value (the objective's mean over the seeds) and its constraint."""
-    values = [output_values(job.results[c.key]) for c in job.cells]  # in the seeds' order
-    depleted = max(_depleted(r) for r in job.results.values())
-    job.trial.set_user_attr("depleted", float(depleted))
-    job.trial.set_user_attr("per_seed", [v[spec.objective] for v in values])
-    study.tell(job.trial, float(np.mean([v[spec.objective] for v in values])))
+    """A trial whose missions all ended: its value (the objective's mean over the seeds) and its constraint. An
+    objective with no value (NaN: samples of a fleet that schedules none) fails the trial, said in its attrs."""
+    results = [job.results[c.key] for c in job.cells]  # in the seeds' order
+    per_seed = [output_values(r)[spec.objective] for r in results]
+    job.trial.set_user_attr("depleted", float(max(ran_flat(r) for r in results)))
+    job.trial.set_user_attr("per_seed", per_seed)
+    value = float(np.mean(per_seed))
+    if not math.isfinite(value):
+        job.trial.set_user_attr("why", f"{spec.objective} has no value in these missions")
+        study.tell(job.trial, state=TrialState.FAIL)
+        outcome.failed.append(f"trial {job.trial.number}: {spec.objective} has no value in its missions")
+        return
+    study.tell(job.trial, value)
     outcome.complete += 1
 
 
-def _depleted(result: dict[str, Any]) -> int:
-    """aMussels that ran flat at any time of the mission."""
-    return sum(1 for m in result.get("mussels", []) if m.get("state_s", {}).get("depleted", 0.0) > 0.0)
-
-
-def _best_text(study: optuna.Study) -> str:
-    best = best_trial(study)
+def _best_text(study: optuna.Study, spec: TuneSpec) -> str:
+    best = best_trial(study, spec.no_depleted)
     if best is None:
         return "-"
     return f"{best.value:.2f} (trial {best.number}{'' if best.feasible else ', none feasible yet'})"

@@ -53,6 +53,10 @@ CLUSTER_LONG = ("a scheduler, a worker and a client start for 8 s of CPU; `dask 
                 "`vil sweep --scheduler` are tests/sweep/test_sweep_cluster.py's too, in the default run")
 CAPACITY_LONG = ("a local Dask cluster and four missions (8-15 s of CPU); the same path, a tiny capacity sweep, "
                  "its table and figure, is tests/sweep/test_capacity_sweep.py's in the default run")
+SENSITIVITY_LONG = ("a local Dask cluster and 36 missions (10 s of CPU); the shipped study's short form, its report "
+                    "and Ishigami through the same path are tests/sweep/test_sensitivity.py's, in the default run")
+TUNE_LONG = ("a local Dask cluster and its trials (8-12 s of CPU); a study of real missions, its SIGKILL and resume, "
+             "best.toml run by vil run and the held-out table are tests/sweep/test_tune.py's, in the default run")
 ACOUSTIC_LONG = ("a local Dask cluster and its missions (8-12 s of CPU); the spec's cells run and the table is "
                  "made from them in tests/sweep/test_acoustic_compare.py, in the default run")
 MODEM_LONG = ("two processes on the wall clock for a minute; the same path (vil modem --sea as a process, the "
@@ -205,19 +209,40 @@ REGISTRY: dict[str, Entry] = {
     # docs/capacity.md
     swp.CAPACITY_SWEEP: Entry("sweeps", swp.run_capacity, full=False,
                               ci=f"vil sweep {swp.CAPACITY_TINY} --out capacity-tiny --workers 1",
-                              why="12 missions of 24 h are hours of CPU: the same shape, one size per profile, "
-                                  "3 minutes each", long_only=CAPACITY_LONG),
-    swp.CAPACITY_6H: Entry("sweeps", swp.run_capacity, full=False,
-                           ci=f"vil sweep {swp.CAPACITY_TINY} --out capacity-tiny --workers 1",
-                           why="12 missions of 6 h (an hour of CPU): as the 24-h one's", long_only=CAPACITY_LONG),
+                              why="520 missions of 24 h are half an hour on 2 cores: the same shape, the smallest "
+                                  "size per profile, one seed, 3 minutes each", long_only=CAPACITY_LONG),
     swp.CAPACITY_REPORT: Entry("sweeps", swp.run_capacity, full=False,
                                ci="python -m gcs.sweep.capacity capacity-tiny --figure capacity.png",
                                why="DIR: the tiny sweep above; the figure written beside it, not over the doc's",
                                long_only=CAPACITY_LONG),
-    swp.CAPACITY_REPORT_24H: Entry("sweeps", swp.run_capacity, full=False,
-                                   ci="python -m gcs.sweep.capacity capacity-tiny --figure capacity.png",
-                                   why="DIR: the tiny sweep above (the same report as the 6-h one's, of another "
-                                       "folder); the figure written beside it", long_only=CAPACITY_LONG),
+    swp.CAPACITY_LOCKSTEP: Entry("sweeps", swp.run_capacity, full=False,
+                                 ci=f"vil sweep {swp.CAPACITY_LOCKSTEP_TINY} --out capacity-lockstep-tiny --workers 1",
+                                 why="24-h lockstep missions are minutes each: the same shape in short form",
+                                 long_only=CAPACITY_LONG),
+    swp.CAPACITY_AGREE: Entry("sweeps", swp.run_capacity, full=False,
+                              ci="python -m gcs.sweep.capacity capacity-tiny --against capacity-lockstep-tiny",
+                              why="the two tiny sweeps above", long_only=CAPACITY_LONG),
+    # docs/sensitivity.md
+    swp.SENSITIVITY_SWEEP: Entry("sweeps", swp.run_sensitivity, full=False,
+                                 ci=f"vil sweep {swp.SENSITIVITY_TINY} --out sensitivity-tiny --workers 1",
+                                 why="4,608 missions of 6 h are an hour and more on 2 cores: the same fields, bounds "
+                                     "and outputs, n = 2 (36 missions) of 3 minutes", long_only=SENSITIVITY_LONG),
+    swp.SENSITIVITY_FIRST: Entry("sweeps", swp.run_sensitivity, full=False,
+                                 ci=f"vil sweep {swp.SENSITIVITY_TINY} --out sensitivity-tiny --workers 1 "
+                                    "--base-samples 1",
+                                 why="the tiny study's first base sample, then the whole tiny study keeps it",
+                                 long_only=SENSITIVITY_LONG),
+    swp.SENSITIVITY_REPORT: Entry("sweeps", swp.run_sensitivity, full=False,
+                                  ci="vil sweep report sensitivity-tiny", why="DIR: the tiny study above",
+                                  long_only=SENSITIVITY_LONG),
+    # docs/tuning.md
+    swp.TUNE: Entry("sweeps", swp.run_tuning, full=False,
+                    ci=f"vil tune {swp.TUNE_TINY} --out tune/cautious-40 --workers 1",
+                    why="40 trials of three 24-h missions and 40 held-out ones are 15 minutes on 2 cores: 3 trials of "
+                        "one 10-minute mission, 2 held-out seeds", long_only=TUNE_LONG),
+    swp.TUNE_RUN: Entry("sweeps", swp.run_tuning, full=False,
+                        ci="vil run tune/cautious-40/best.toml --duration 10m --platform event",
+                        why="the tiny study's best policy, for as long as its missions", long_only=TUNE_LONG),
     # docs/acoustic.md
     run.ACOUSTIC_FIGURES: Entry("runs", run.run_acoustic_figures, full=False,
                                 ci="python docs/acoustic_figures.py --figure acoustic-delivery.png",

@@ -147,39 +147,82 @@ def run_slack_sweep(w: Work) -> None:
 
 
 CAPACITY_SWEEP = "vil sweep missions/sweeps/capacity.toml --out sweeps/capacity --workers 2"
-CAPACITY_6H = "vil sweep missions/sweeps/capacity-6h.toml --out sweeps/capacity-6h --workers 2"
-CAPACITY_REPORT = "python -m gcs.sweep.capacity sweeps/capacity-6h --figure docs/capacity.png"
-CAPACITY_REPORT_24H = "python -m gcs.sweep.capacity sweeps/capacity --figure docs/capacity-24h.png"
-CAPACITY_TINY = "capacity-tiny.toml"
+CAPACITY_REPORT = "python -m gcs.sweep.capacity sweeps/capacity --figure docs/capacity.png"
+CAPACITY_LOCKSTEP = "vil sweep missions/sweeps/capacity-lockstep.toml --out sweeps/capacity-lockstep --workers 2"
+CAPACITY_AGREE = "python -m gcs.sweep.capacity sweeps/capacity --against sweeps/capacity-lockstep"
+CAPACITY_TINY, CAPACITY_LOCKSTEP_TINY = "capacity-tiny.toml", "capacity-lockstep-tiny.toml"
 
 
 def write_capacity_tiny(w: Work) -> None:
-    """The shipped capacity spec's shape (bay-capacity, [[grid]] per profile, both strategies) on 3-minute
-    missions, one size per profile: the CI variant of both capacity sweeps."""
-    spec = (w.path / "missions/sweeps/capacity-6h.toml").read_text()
-    spec = spec.replace('mission.duration = "6h"', 'mission.duration = "3m"')
-    spec = re.sub(r"fleet\.count = \[2, 4\]", "fleet.count = [2]", spec)
-    spec = re.sub(r"fleet\.count = \[24, 48\]", "fleet.count = [6]", spec)
-    (w.path / CAPACITY_TINY).write_text(spec.replace('"bay-capacity"', f'"{w.path}/missions/bay-capacity.toml"'))
+    """The shipped capacity specs' shape (bay-capacity, [[grid]] per profile, their strategies and platforms)
+    on 3-minute missions, the smallest size of each profile, one seed: the CI variant of both sweeps."""
+    for name, tiny in (("capacity", CAPACITY_TINY), ("capacity-lockstep", CAPACITY_LOCKSTEP_TINY)):
+        spec = (w.path / f"missions/sweeps/{name}.toml").read_text()
+        spec = re.sub(r'mission\.duration = "24h"', 'mission.duration = "3m"', spec)
+        spec = re.sub(r"seeds = \S+", "seeds = [1]", spec)
+        spec = re.sub(r"fleet\.count = \[(\d+)[^]]*\]", r"fleet.count = [\1]", spec)
+        (w.path / tiny).write_text(spec.replace('"bay-capacity"', f'"{w.path}/missions/bay-capacity.toml"'))
 
 
 def run_capacity(w: Work) -> None:
-    """docs/capacity.md's study: the 24-h and 6-h specs hold the same grid (profiles, sizes, strategies),
-    a sweep of their shape runs on a local Dask cluster, and the capacity report prints the table and
-    writes the figure from its cells."""
+    """docs/capacity.md's study: the lockstep spec's points are some of the event spec's, a sweep of each
+    shape runs on a local Dask cluster, the capacity report prints the table and writes the figure from its
+    cells, and --against sets each lockstep mission beside its event twin."""
     from gcs.sweep.spec import load_spec
 
-    day, six = (load_spec(w.path / f"missions/sweeps/{name}.toml") for name in ("capacity", "capacity-6h"))
-    assert day.points == six.points and day.strategies == six.strategies and day.seeds == six.seeds
-    assert (day.fixed, six.fixed) == ({"mission.duration": "24h"}, {"mission.duration": "6h"})
+    event, lockstep = (load_spec(w.path / f"missions/sweeps/{name}.toml") for name in ("capacity", "capacity-lockstep"))
+    assert (str(event.platform), str(lockstep.platform)) == ("event", "lockstep")
+    assert all(p in event.points for p in lockstep.points) and set(lockstep.seeds) <= set(event.seeds)
+    assert set(lockstep.strategies or ()) <= set(event.strategies or ())
     write_capacity_tiny(w)
-    for command in (CAPACITY_SWEEP, CAPACITY_6H):
+    for command in (CAPACITY_SWEEP, CAPACITY_LOCKSTEP):
         w.sh(w.line(command), timeout_s=3600)
     report = w.line(CAPACITY_REPORT)
     printed = words(w.sh(report, timeout_s=600).stdout)
     assert "largest kept alive" in printed and "keep_alive" in printed and "hourly_wake" in printed, printed
     figure = w.path / report.split("--figure ")[1].split()[0]
     assert figure.read_bytes()[:4] == b"\x89PNG"
+    assert "the same kept-alive verdict in" in words(w.sh(w.line(CAPACITY_AGREE), timeout_s=600).stdout)
+
+
+SENSITIVITY_SWEEP = "vil sweep missions/sweeps/sensitivity.toml --out sweeps/sensitivity --workers 2"
+SENSITIVITY_REPORT = "vil sweep report sweeps/sensitivity"
+SENSITIVITY_FIRST = "vil sweep missions/sweeps/sensitivity.toml --out sweeps/sensitivity --workers 2 --base-samples 64"
+SENSITIVITY_TINY = "sensitivity-tiny.toml"
+
+
+def run_sensitivity(w: Work) -> None:
+    """docs/sensitivity.md's study in short form (its fields, bounds and outputs; n = 2, 3-minute missions) on
+    a local Dask cluster, then its report again: the indices of every field for every output."""
+    spec = (w.path / "missions/sweeps/sensitivity.toml").read_text()
+    spec = spec.replace("n = 256", "n = 2").replace('mission.duration = "6h"', 'mission.duration = "3m"')
+    (w.path / SENSITIVITY_TINY).write_text(spec.replace('"bay-capacity"', f'"{w.path}/missions/bay-capacity.toml"'))
+    first = words(w.sh(w.line(SENSITIVITY_FIRST), timeout_s=3600).stdout)
+    assert "sobol indices over 8 fields, 18 points (n = 1)" in first, first
+    whole = words(w.sh(w.line(SENSITIVITY_SWEEP), timeout_s=3600).stdout)
+    assert "36 missions, 18 already in" in whole and "sobol indices over 8 fields, 36 points" in whole, whole
+    again = words(w.sh(w.line(SENSITIVITY_REPORT), timeout_s=600).stdout)
+    assert "apad.home_charge_w" in again and "uptime_min" in again, again
+
+
+TUNE = "vil tune missions/tune/cautious-40.toml --out tune/cautious-40 --workers 2"
+TUNE_RUN = "vil run tune/cautious-40/best.toml --duration 24h --platform event"
+TUNE_TINY = "tune-tiny.toml"
+
+
+def run_tuning(w: Work) -> None:
+    """docs/tuning.md's example in short form (its scenario, strategy, search space and objective; 3 trials of
+    one 10-minute mission, 2 held-out seeds): the study, best.toml, the held-out table, and `vil run` of the
+    best policy."""
+    spec = (w.path / "missions/tune/cautious-40.toml").read_text()
+    spec = (spec.replace("trials = 40", "trials = 3").replace('seeds = "1-3"', "seeds = [1]")
+            .replace('held_out = "101-120"', 'held_out = "101-102"')
+            .replace('mission.duration = "24h"', 'mission.duration = "10m"'))
+    (w.path / TUNE_TINY).write_text(spec.replace('"bay-capacity"', f'"{w.path}/missions/bay-capacity.toml"'))
+    printed = words(w.sh(w.line(TUNE), timeout_s=3600).stdout)
+    assert "3 trials: best uptime_min" in printed and "2 held-out seeds (101-102)" in printed, printed
+    ran = words(w.sh(w.line(TUNE_RUN), timeout_s=600).stdout)
+    assert "bay-capacity-cautious-40" in ran and "cautious" in ran, ran
 
 
 ACOUSTIC_SWEEP = "vil sweep missions/sweeps/acoustic.toml --out sweeps/acoustic --workers 2"

@@ -4,63 +4,70 @@
 from __future__ import annotations
 
 import io
+import re
 from pathlib import Path
 
 import pandas as pd
 from rich.console import Console
 
-from gcs.sweep.capacity import capacity_table, main, read_missions
+from gcs.sweep.capacity import agreement, capacity_table, main, read_missions
 from gcs.sweep.cells import make_cells
 from gcs.sweep.runner import sweep
 from gcs.sweep.spec import load_spec
 
 MISSIONS = Path(__file__).resolve().parents[2] / "missions"
-TINY = f"""
-[sweep]
-scenarios = ["{MISSIONS / 'bay-capacity.toml'}"]
-strategies = ["cautious", "keep_alive"]
-seeds = [1]
-[set]
-mission.duration = "3m"
-[[grid]]
-fleet.profile = ["always_on"]
-fleet.count = [2]
-[[grid]]
-fleet.profile = ["hourly_wake"]
-fleet.count = [6]
-"""
+
+
+def tiny_of_shipped() -> str:
+    """missions/sweeps/capacity.toml in short form: its strategies, profiles and platform, the smallest size of
+    each profile, one seed, 3-minute missions (docs/capacity.md's study, as the suite runs it)."""
+    spec = (MISSIONS / "sweeps/capacity.toml").read_text()
+    spec = spec.replace('mission.duration = "24h"', 'mission.duration = "3m"').replace('seeds = "1-10"', "seeds = [1]")
+    spec = re.sub(r"fleet\.count = \[(\d+), [^]]*\]", r"fleet.count = [\1]", spec)
+    return spec.replace('"bay-capacity"', '"' + str(MISSIONS / "bay-capacity.toml") + '"')
 
 
 def test_a_tiny_capacity_sweep_gives_its_table_and_figure(tmp_path: Path) -> None:
-    (tmp_path / "tiny.toml").write_text(TINY)
+    (tmp_path / "tiny.toml").write_text(tiny_of_shipped())
     spec = load_spec(tmp_path / "tiny.toml")
     cells = make_cells(spec)
     out = tmp_path / "out"
-    done = sweep(spec, cells, out, Console(file=io.StringIO(), width=200), workers=1, processes=False)
-    assert (done.cells, done.ran, done.failed) == (4, 4, [])
+    done = sweep(spec, cells, out, Console(file=io.StringIO(), width=200), workers=2, processes=False)
+    assert (done.cells, done.ran, done.failed) == (8, 8, [])
 
     rows = read_missions(out)
+    strategies = ["cautious", "greedy", "keep_alive", "rolling"]
     assert sorted(zip(rows["profile"], rows["count"], rows["strategy"], strict=True)) == [
-        ("always_on", 2, "cautious"), ("always_on", 2, "keep_alive"),
-        ("hourly_wake", 6, "cautious"), ("hourly_wake", 6, "keep_alive")]
+        *(("always_on", 1, s) for s in strategies), *(("hourly_wake", 28, s) for s in strategies)]
     assert (rows["days"] == 180 / 86400).all() and rows["alive"].all()  # 3 minutes: nobody empties
     sleepers = rows[rows["profile"] == "hourly_wake"]
     assert (sleepers["samples_scheduled"] > 0).all()
     assert (sleepers["samples_taken"] <= sleepers["samples_scheduled"]).all()
 
     table = capacity_table(rows)
-    assert list(table["largest kept alive"]) == ["2", "2", "6", "6"]
-    assert list(table["seeds kept"]) == ["1/1"] * 4
+    assert list(table["largest kept alive"]) == ["1"] * 4 + ["28"] * 4
+    assert list(table["seeds kept"]) == ["1/1"] * 8
     assert list(zip(table["profile"], table["strategy"], strict=True)) == [
-        ("always_on", "cautious"), ("always_on", "keep_alive"), ("hourly_wake", "cautious"),
-        ("hourly_wake", "keep_alive")]
+        *(("always_on", s) for s in strategies), *(("hourly_wake", s) for s in strategies)]
 
     figure = tmp_path / "capacity.png"
     assert main([str(out), "--figure", str(figure)]) == 0
     assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and figure.stat().st_size > 10_000
     assert main([str(tmp_path / "nothing")]) == 2  # no sweep there: one line, exit 2
     frame = pd.read_parquet(out / "results.parquet")
-    assert set(frame["fleet.count"]) == {2, 6} and set(frame["fleet.profile"]) == {"always_on", "hourly_wake"}
+    assert set(frame["fleet.count"]) == {1, 28} and set(frame["fleet.profile"]) == {"always_on", "hourly_wake"}
+    assert set(frame["platform"]) == {"event"}
+
+    # The same missions again on the other platform: each beside its own (--against).
+    lockstep = tmp_path / "lockstep.toml"
+    lockstep.write_text(tiny_of_shipped().replace('platform = "event"', 'platform = "lockstep"').replace(
+        'strategies = ["cautious", "greedy", "keep_alive", "rolling"]', 'strategies = ["cautious"]'))
+    spec_l = load_spec(lockstep)
+    sweep(spec_l, make_cells(spec_l), tmp_path / "lock", Console(file=io.StringIO(), width=200), workers=1,
+          processes=False)
+    table_l = agreement(rows, read_missions(tmp_path / "lock"))
+    assert len(table_l) == 2 and (table_l["alive L"] == table_l["alive E"]).all()
+    assert (table_l["uptime_avg L"] - table_l["uptime_avg E"]).abs().max() < 0.5
 
 
 def test_the_largest_fleet_kept_alive_is_the_largest_size_nine_seeds_in_ten_kept() -> None:

@@ -85,3 +85,29 @@ def test_an_event_platform_sweep_gives_the_local_rows_on_a_separate_scheduler(tm
     assert len(rows) == 4 and (rows["cost_m"] > 0).all()
     platform = [c for c in rows.columns if c.endswith("platform")]
     assert platform and set(rows[platform[0]]) == {"event"}, list(rows.columns)
+
+
+def test_the_sensitivity_and_tuning_studies_run_unchanged_on_a_separate_scheduler(
+    tmp_path: Path, scheduler: str, capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Issue 38: the shipped sensitivity study (n = 2, 3-minute missions) and the tuning example (2 trials of one
+    10-minute mission, 1 held-out seed) on a separately started scheduler and workers, as on a local cluster."""
+    from testkit import MISSIONS
+
+    from gcs.cli.main import main
+
+    bay = '"' + str(MISSIONS / "bay-capacity.toml") + '"'
+    text = (MISSIONS / "sweeps/sensitivity.toml").read_text().replace('"6h"', '"3m"').replace('"bay-capacity"', bay)
+    (tmp_path / "s.toml").write_text(text)
+    assert main(["sweep", str(tmp_path / "s.toml"), "--out", str(tmp_path / "s"), "--scheduler", scheduler,
+                 "--base-samples", "2"]) == 0
+    assert "sobol indices over 8 fields, 36 points (n = 2)" in capsys.readouterr().out
+    text = (MISSIONS / "tune/cautious-40.toml").read_text()
+    text = (text.replace("trials = 40", "trials = 2").replace('seeds = "1-3"', "seeds = [1]")
+            .replace('held_out = "101-120"', "held_out = [101]").replace('"24h"', '"10m"')
+            .replace('"bay-capacity"', bay))
+    (tmp_path / "t.toml").write_text(text)
+    assert main(["tune", str(tmp_path / "t.toml"), "--out", str(tmp_path / "t"), "--scheduler", scheduler]) == 0
+    printed = capsys.readouterr().out
+    assert "2 trials: best uptime_min" in printed and "1 held-out seeds (101-101)" in printed
+    assert (tmp_path / "t" / "best.toml").is_file()
