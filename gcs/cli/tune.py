@@ -103,7 +103,7 @@ def _with_trials(spec: TuneSpec, trials: int) -> TuneSpec:
 
 def _say_best(console: Console, spec: TuneSpec, best: Best, complete: int) -> None:
     fields = ", ".join(f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}" for k, v in best.params.items())
-    verdict = "" if best.feasible else " (no trial kept every aMussel alive: the best of the infeasible)"
+    verdict = "" if best.feasible else "; no trial kept every aMussel alive: the best of the infeasible"
     console.print(f"{complete} trials: best {spec.objective} {best.value:.2f} (trial {best.number}{verdict}): {fields}")
 
 
