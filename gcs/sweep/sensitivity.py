@@ -75,6 +75,9 @@ def indices(design: Design, x: NDArray[np.float64], y: NDArray[np.float64]) -> t
         nan = [math.nan] * len(names)
         cols = ("S1", "S1_conf", "ST", "ST_conf") if design.method is Method.SOBOL else ("mu_star", "mu_star_conf",
                                                                                           "sigma")
+        if design.method is Method.SOBOL and design.second_order:
+            pairs = pd.DataFrame([(a, b, math.nan, math.nan) for i, a in enumerate(names) for b in names[i + 1:]],
+                                 columns=PAIR_COLUMNS)
         return pd.DataFrame({"field": names, **{c: nan for c in cols}}), pairs
     if design.method is Method.SOBOL:
         from SALib.analyze import sobol

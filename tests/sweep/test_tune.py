@@ -14,6 +14,7 @@ from pathlib import Path
 import optuna
 import pandas as pd
 import pytest
+from sqlalchemy.exc import SQLAlchemyError
 from testkit import MISSIONS
 
 from gcs.cli.main import main
@@ -53,7 +54,7 @@ def complete(out: Path) -> list[optuna.trial.FrozenTrial]:
         return []
     try:
         return study_of(out).get_trials(states=(optuna.trial.TrialState.COMPLETE,))
-    except KeyError:  # the study is being made
+    except (KeyError, SQLAlchemyError, optuna.exceptions.StorageInternalError):  # the study is being made
         return []
 
 

@@ -18,7 +18,7 @@ MAX_CHAIN = 8
 MAX_FOLDER_LINES = 4000
 # The folders of gcs/, lowest first: each may import those before it (and the packages outside gcs/).
 LAYERS = ("link", "strategies", "results", "scenario", "view", "records", "acoustic_net", "swarm", "belief",
-          "loop", "mission", "report", "console", "sweep", "cli")
+          "loop", "mission", "report", "console", "sweep", "tune", "cli")
 
 
 def module_of(path: Path) -> str:
