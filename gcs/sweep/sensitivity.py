@@ -167,6 +167,8 @@ def figure(design: Design, table: pd.DataFrame, path: Path) -> None:
         else:
             ax.barh(at, rows["mu_star"], 0.6, xerr=rows["mu_star_conf"], label="mu*", capsize=2)
             ax.set_xlabel("mu* (mean |elementary effect|)")
+        if rows.drop(columns=["scenario", "strategy", "output", "field"]).isna().all().all():
+            ax.text(0.5, 0.5, "the same in every mission: no index", transform=ax.transAxes, ha="center")
         ax.set_yticks(at, list(rows["field"]))
         ax.invert_yaxis()
         ax.set_title(f"{output}: {scenario}, {strategy}", fontsize=10)
