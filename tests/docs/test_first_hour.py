@@ -38,9 +38,12 @@ def test_the_runtime_only_install_is_pyprojects_dependencies_pinned_as_make_pins
     line = "python3 -m venv .venv && .venv/bin/pip install -c requirements.lock -e ."
     assert f"`{line}`" in prose(README)
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-    pinned = {re.split(r"[=<>\[ ]", p, maxsplit=1)[0].lower() for p in (ROOT / "requirements.lock").read_text()
-              .splitlines() if p.strip() and not p.startswith("#")}
-    runtime = {re.split(r"[=<>\[ ]", d, maxsplit=1)[0].lower() for d in project["dependencies"]}
+    def name(requirement: str) -> str:  # PEP 503: tomli-w and tomli_w are one package
+        return re.sub(r"[-_.]+", "-", re.split(r"[=<>\[ ]", requirement, maxsplit=1)[0]).lower()
+
+    pinned = {name(p) for p in (ROOT / "requirements.lock").read_text().splitlines() if p.strip()
+              and not p.startswith("#")}
+    runtime = {name(d) for d in project["dependencies"]}
     assert runtime <= pinned, runtime - pinned
     assert "-e ." in line and "[" not in line  # no extras: not test's pytest/playwright, not interop's MAVProxy/vtk
     make = (ROOT / "Makefile").read_text()
