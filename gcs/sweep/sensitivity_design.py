@@ -20,7 +20,6 @@ indices then say what its rounded values explain (Morris's effects are divided b
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from enum import StrEnum
@@ -29,6 +28,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from gcs.sweep.bounds import is_range, numeric_bounds
 from gcs.sweep.outputs import DEFAULT_OUTPUTS, OUTPUTS
 
 MAX_BASE = 65_536
@@ -129,14 +129,13 @@ def parse(table: dict[str, Any], fields_of: Callable[[dict[str, Any], str], dict
         raise fail("sensitivity: at least two fields to vary, each as TABLE.FIELD = {min = A, max = B}")
     bounds, integer = [], []
     for key, value in fields.items():
-        if not (isinstance(value, dict) and set(value) == {"min", "max"}):
+        if not is_range(value):
             raise fail(f"sensitivity.{key}: expected {{min = A, max = B}}, got {value!r}")
-        lo, hi = value["min"], value["max"]
-        if not all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in (lo, hi)) \
-                or not lo < hi:
+        found = numeric_bounds(value)
+        if found is None or not found[0] < found[1]:
             raise fail(f"sensitivity.{key}: expected {{min = A, max = B}} with numbers A < B, got {value!r}")
-        bounds.append((float(lo), float(hi)))
-        integer.append(isinstance(lo, int) and isinstance(hi, int))
+        bounds.append(found[:2])
+        integer.append(found[2])
     return Design(method, tuple(fields), tuple(bounds), tuple(integer), n, seed, second_order, levels, tuple(outputs))
 
 

@@ -39,7 +39,6 @@ Nothing here runs a mission: `gcs.sweep.cells` turns a spec into the missions, c
 from __future__ import annotations
 
 import itertools
-import math
 import re
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -50,6 +49,7 @@ import numpy as np
 from gcs.mission.platform import DEFAULT_PLATFORM, Platform, platform_of
 from gcs.scenario.reader import SEED_MAX, read_toml
 from gcs.sweep import sensitivity_design
+from gcs.sweep.bounds import is_range, numeric_bounds
 from gcs.sweep.sensitivity_design import Design
 
 MAX_CELLS = 100_000  # more is a typo in a range, not a sweep this machine should start
@@ -265,7 +265,7 @@ def _sample(table: dict[str, Any], fail: Any) -> list[dict[str, Value]]:
         raise fail(f"sample.seed: expected an integer in [0, {SEED_MAX}], got {seed!r}")
     fields: dict[str, Value] = {}
     for key, value in table.items():  # a {min, max} table is a range, not a scenario table
-        if "." not in key and isinstance(value, dict) and not _is_range(value):
+        if "." not in key and isinstance(value, dict) and not is_range(value):
             fields |= {f"{key}.{sub}": v for sub, v in value.items()}
         else:
             fields[key] = value
@@ -273,11 +273,9 @@ def _sample(table: dict[str, Any], fail: Any) -> list[dict[str, Value]]:
     if not fields:
         raise fail("sample: no field to sample (add e.g. mission.theta = {min = 10, max = 60})")
     for key, value in fields.items():
-        if _is_range(value):
-            lo, hi = value["min"], value["max"]
-            numbers = all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
-                          for v in (lo, hi))
-            if not numbers or lo > hi:
+        if is_range(value):
+            found = numeric_bounds(value)
+            if found is None or found[0] > found[1]:
                 raise fail(f"sample.{key}: expected {{min = A, max = B}} with numbers A <= B, got {value!r}")
         elif not isinstance(value, list) or not value:
             raise fail(f"sample.{key}: expected {{min = A, max = B}} or a non-empty list of values, got {value!r}")
@@ -287,7 +285,7 @@ def _sample(table: dict[str, Any], fail: Any) -> list[dict[str, Value]]:
         point: dict[str, Value] = {}
         for key in sorted(fields):  # a fixed order of draws: the same spec draws the same points
             value = fields[key]
-            if not _is_range(value):
+            if not is_range(value):
                 point[key] = value[int(rng.integers(len(value)))]
             elif isinstance(value["min"], int) and isinstance(value["max"], int):
                 point[key] = int(rng.integers(value["min"], value["max"] + 1))
@@ -295,7 +293,3 @@ def _sample(table: dict[str, Any], fail: Any) -> list[dict[str, Value]]:
                 point[key] = float(f"{rng.uniform(value['min'], value['max']):.6g}")  # readable in tables
         points.append({k: point[k] for k in fields})
     return points
-
-
-def _is_range(value: Any) -> bool:
-    return isinstance(value, dict) and set(value) == {"min", "max"}

@@ -27,13 +27,13 @@ a scenario) on the sweep's Dask cluster.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from gcs.mission.platform import Platform, platform_of
 from gcs.scenario.reader import SEED_MAX, read_toml
+from gcs.sweep.bounds import numeric_bounds
 from gcs.sweep.outputs import OUTPUTS
 from gcs.sweep.spec import SpecError, SweepSpec, Value, fields_of, seeds_of, table_of
 
@@ -147,9 +147,7 @@ def load_tune_spec(path: str | Path) -> TuneSpec:
 def _range(key: str, value: Any, fail: Any) -> Range:
     if isinstance(value, list) and value:
         return Range(choices=tuple(value))
-    if isinstance(value, dict) and set(value) == {"min", "max"}:
-        lo, hi = value["min"], value["max"]
-        if all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in (lo, hi)) \
-                and lo < hi:
-            return Range(float(lo), float(hi), isinstance(lo, int) and isinstance(hi, int))
+    found = numeric_bounds(value)
+    if found is not None and found[0] < found[1]:
+        return Range(*found)
     raise fail(f"search.{key}: expected {{min = A, max = B}} with numbers A < B, or a non-empty list, got {value!r}")
